@@ -1,0 +1,31 @@
+"""cadedge: edge grids for CAD curves by arc-length-deficit optimisation.
+
+Public API (see ../shared/CONTRACT.md): :func:`refine_curve`, :func:`refine_shape`, :class:`EdgeGrid`,
+:class:`ShapeGrid`, the curve adapters and the error hierarchy. OpenCASCADE is imported only when a
+shape is refined, so curve refinement works without it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .curves import Curve, Evaluator, FunctionCurve, SampledCurve
+from .errors import (CadedgeError, CadedgeWarning, CurveEvaluationError, GeometryError, InputError,
+                     MeshError)
+from .grid import EdgeGrid
+from .refine import refine_curve
+from .shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid
+
+__version__ = "0.1.0"
+
+
+def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
+                 max_length: float | None = None, max_growth: float | None = None) -> ShapeGrid:
+    """Refine every edge of a STEP file, cadquery/build123d shape or ``TopoDS_Shape`` (see the contract)."""
+    from .occt.shape import refine_shape as _refine_shape
+    return _refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth)
+
+
+__all__ = ["refine_curve", "refine_shape", "EdgeGrid", "ShapeGrid", "ShapeEdgeGrid", "VertexGrid", "Curve",
+           "FunctionCurve", "SampledCurve", "Evaluator", "CadedgeError", "InputError", "CurveEvaluationError",
+           "GeometryError", "MeshError", "CadedgeWarning", "__version__"]

@@ -1,0 +1,52 @@
+"""The ``cadedge`` command line: a thin shell over the API.
+
+``main(argv)`` is testable in-process. Each subcommand lives in its own module with
+``register(subparsers)``, which adds its parser and sets ``func(args) -> int``. Library errors become
+one line on stderr naming the file and the reason, with exit code 2 (bad input or usage); ``--debug``
+shows the traceback instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+from typing import Sequence
+
+from ..errors import CadedgeError
+
+SUBCOMMANDS = ("refine", "info", "mesh", "batch")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    import importlib
+
+    parser = argparse.ArgumentParser(prog="cadedge", description="Edge grids for CAD models by arc-length deficit.")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in SUBCOMMANDS:
+        importlib.import_module(f"{__name__}.{name}").register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the CLI; returns the exit code (0 ok, 1 some inputs failed, 2 bad input or usage)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
+        return int(exc.code or 0)
+    try:
+        return int(args.func(args))
+    except CadedgeError as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"cadedge {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"cadedge {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def entry() -> None:  # pragma: no cover - console-script shim
+    sys.exit(main())

@@ -1,0 +1,103 @@
+"""Edge grids of a whole B-rep shape: plain data, no OCCT.
+
+Filled by :func:`cadedge.refine_shape` (the OCCT layer) and consumed by the exporters, the mesher and
+the CLI. Ids are 1-based in ``TopExp::MapShapes`` order (see ../shared/CONTRACT.md).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+SCHEMA = "cadedge.edgegrid/1"
+
+
+@dataclass
+class VertexGrid:
+    """A B-rep vertex: its point and the spacing a surface mesher should use there."""
+
+    id: int
+    point: np.ndarray
+    spacing: float | None = None
+    tolerance: float = 0.0
+
+
+@dataclass
+class ShapeEdgeGrid:
+    """The grid on one B-rep edge. Degenerate edges carry their single point twice and no length."""
+
+    id: int
+    vertices: tuple[int, int]
+    curve: str
+    degenerate: bool
+    closed: bool
+    faces: list[int]
+    params: np.ndarray
+    points: np.ndarray
+    ald_estimate: float
+    evaluations: int = 0
+    tolerance: float = 0.0
+
+    @property
+    def segment_lengths(self) -> np.ndarray:
+        return np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+
+    @property
+    def length(self) -> float:
+        """Polyline length."""
+        return float(self.segment_lengths.sum())
+
+    @property
+    def segments(self) -> int:
+        return 0 if self.degenerate else len(self.params) - 1
+
+    @property
+    def spacing(self) -> tuple[float, float]:
+        """Lengths of the first and last segments."""
+        seg = self.segment_lengths
+        return (float(seg[0]), float(seg[-1])) if len(seg) and not self.degenerate else (0.0, 0.0)
+
+
+@dataclass
+class ShapeGrid:
+    """Edge grids of every edge of a shape, with vertices, adjacency, units and options.
+
+    ``shape`` keeps the OCCT ``TopoDS_Shape`` the grids were made from (for the mesher); it is not
+    exported. ``write(path)`` picks the format from the suffix (see :mod:`cadedge.exporters`).
+    """
+
+    source: str
+    units: str
+    options: dict[str, Any]
+    vertices: list[VertexGrid]
+    edges: list[ShapeEdgeGrid]
+    faces: int = 0
+    seconds: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+    shape: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def segments(self) -> int:
+        return sum(e.segments for e in self.edges)
+
+    @property
+    def max_ald_estimate(self) -> float:
+        vals = [e.ald_estimate for e in self.edges if not e.degenerate]
+        return float(max(vals)) if vals else 0.0
+
+    def summary(self) -> dict[str, Any]:
+        """The ``summary`` block of the JSON schema."""
+        return {"edges": len(self.edges), "segments": self.segments,
+                "max_ald_estimate": self.max_ald_estimate, "seconds": self.seconds}
+
+    def write(self, path: str | os.PathLike, *, format: str | None = None) -> None:
+        """Write atomically; ``format`` (a suffix such as ``"json"``) overrides the path's suffix."""
+        from .exporters import write
+        write(self, path, format=format)
+
+    def __repr__(self) -> str:
+        return (f"ShapeGrid(source={self.source!r}, edges={len(self.edges)}, vertices={len(self.vertices)}, "
+                f"segments={self.segments}, max_ald_estimate={self.max_ald_estimate:.3g})")
