@@ -107,7 +107,8 @@ def refine_paper(ev, a: float, b: float, *, local_delta: float | None = None,
         while level:
             us, ps, twos = golden_search(ev, np.array([s.ua for s in level]), np.array([s.ub for s in level]),
                                          np.array([s.pa for s in level]), np.array([s.pb for s in level]), tol)
-            level = [child for s, u, p, f in zip(level, us, ps, twos) for child in decide(s, float(u), p, float(f))]
+            level = [child for s, u, p, f in zip(level, us, ps, twos)
+                     for child in decide(s, float(u), p, float(f))]
     elif order == "depth":
         stack = [root]
         while stack:

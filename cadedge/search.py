@@ -17,6 +17,8 @@ from typing import Callable
 
 import numpy as np
 
+from .errors import InputError
+
 INV_PHI = (math.sqrt(5.0) - 1.0) / 2.0  # 0.618...: the golden ratio's reciprocal
 
 DEFAULT_SEARCH_TOL = 1e-4
@@ -28,7 +30,7 @@ def search_evaluations(tol: float) -> int:
     """Evaluations one search makes for relative tolerance ``tol``: the bracket after n evaluations
     is INV_PHI**(n - 1) of the segment's width, and it must reach ``tol``."""
     if not 0.0 < tol < 1.0:
-        raise ValueError(f"search tolerance must be in (0, 1), got {tol!r}")
+        raise InputError(f"search_tol must be in (0, 1), got {tol!r}")
     return 1 + max(1, math.ceil(math.log(tol) / math.log(INV_PHI) - 1e-12))
 
 

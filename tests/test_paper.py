@@ -165,3 +165,11 @@ def test_refine_paper_directly_on_a_3d_curve():
     params, points, estimate, notes = refine_paper(Evaluator(helix), 0.0, 2.0, local_delta=0.001)
     assert notes == [] and 0 < estimate < 0.002
     assert np.array_equal(points, helix.evaluate(params))
+
+
+def test_bad_order_or_tolerance_is_an_input_error():
+    from cadedge import InputError
+    with pytest.raises(InputError, match="order"):
+        refine_paper(Evaluator(circle()), 0.0, 1.0, local_delta=0.1, order="sideways")
+    with pytest.raises(InputError, match="search_tol"):
+        refine_paper(Evaluator(circle()), 0.0, 1.0, local_delta=0.1, search_tol=1.5)
