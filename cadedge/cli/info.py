@@ -1,0 +1,51 @@
+"""``cadedge info INPUT``: what is in a STEP file, edge by edge, before refining it.
+
+Counts (solids, shells, faces, edges, vertices), curve types, the worst edge tolerance and units,
+then one row per edge: id, curve type, degenerate/closed/seam flags, vertex and face ids,
+tolerance and OCCT's length. Ids are those of ``cadedge refine``'s output.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from ._table import format_table
+
+
+def _flag(value: bool) -> str:
+    return "yes" if value else "-"
+
+
+def _ids(ids: Any) -> str:
+    return ",".join(map(str, ids)) or "-"
+
+
+def register(subparsers: Any) -> None:
+    p = subparsers.add_parser("info", help="list the edges of a STEP file",
+                              description="List the edges of INPUT (ids as in cadedge refine's output) "
+                                          "with their curve type, flags, faces, tolerance and length.")
+    p.add_argument("input", metavar="INPUT", help="STEP file (.step/.stp)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..occt.describe import describe_shape
+
+    d = describe_shape(args.input)
+    for message in d.warnings:
+        print(f"cadedge info: warning: {message}", file=sys.stderr)
+    types = ", ".join(f"{name} {n}" for name, n in sorted(d.curve_types.items(), key=lambda kv: (-kv[1], kv[0])))
+    print(f"source: {d.source}")
+    print(f"units: {d.units}")
+    print(f"solids {d.solids}, shells {d.shells}, faces {d.faces}, edges {len(d.edges)}, vertices {d.vertices}")
+    print(f"curve types: {types}")
+    print(f"max edge tolerance: {d.max_tolerance:.3g} {d.units}")
+    print(f"total edge length: {sum(e.length for e in d.edges):.6g} {d.units}")
+    print()
+    rows = [[e.id, e.curve, _flag(e.degenerate), _flag(e.closed), _flag(e.seam), _ids(e.vertices), _ids(e.faces),
+             f"{e.tolerance:.3g}", f"{e.length:.6g}"] for e in d.edges]
+    print(format_table(["id", "curve", "degenerate", "closed", "seam", "vertices", "faces", "tolerance", "length"],
+                       rows, right=[True, False, False, False, False, False, False, True, True]))
+    return 0

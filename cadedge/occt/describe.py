@@ -1,0 +1,92 @@
+"""What ``cadedge info`` reports about a shape: per-edge curve type, flags, faces, tolerance and true
+length, without refining anything.
+
+Lengths are OCCT's (``GCPnts_AbscissaPoint::Length`` on the edge's ``BRepAdaptor_Curve``, i.e.
+Gauss integration to its default tolerance), so they are the reference the ALD is measured against.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any
+
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve
+from OCP.GCPnts import GCPnts_AbscissaPoint
+from OCP.Standard import Standard_Failure
+from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
+from OCP.TopExp import TopExp
+from OCP.TopTools import TopTools_IndexedMapOfShape
+
+from ..errors import GeometryError
+from .reader import load_shape
+from .topology import Topology
+
+
+@dataclass
+class EdgeDescription:
+    """One edge as ``cadedge info`` lists it (ids as in the JSON output)."""
+
+    id: int
+    curve: str
+    degenerate: bool
+    closed: bool
+    seam: bool
+    vertices: tuple[int, int]
+    faces: list[int]
+    tolerance: float
+    length: float
+
+
+@dataclass
+class ShapeDescription:
+    """Counts and per-edge facts of a shape."""
+
+    source: str
+    units: str
+    edges: list[EdgeDescription]
+    vertices: int
+    faces: int
+    shells: int
+    solids: int
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def curve_types(self) -> Counter[str]:
+        """Edges per curve type; degenerate edges counted as "(degenerate)"."""
+        return Counter("(degenerate)" if e.degenerate else e.curve for e in self.edges)
+
+    @property
+    def max_tolerance(self) -> float:
+        return max((e.tolerance for e in self.edges), default=0.0)
+
+
+def _count(shape: Any, kind: Any) -> int:
+    m = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, kind, m)
+    return m.Extent()
+
+
+def edge_length(topology: Topology, i: int) -> float:
+    """OCCT's length of edge ``i`` (0-based); 0 for a degenerate edge."""
+    if topology.is_degenerate(i):
+        return 0.0
+    try:
+        return float(GCPnts_AbscissaPoint.Length_s(BRepAdaptor_Curve(topology.edges[i])))
+    except Standard_Failure as exc:
+        raise GeometryError(f"edge {i + 1}: OCCT cannot measure its length: {exc}") from exc
+
+
+def describe_shape(source: Any) -> ShapeDescription:
+    """Load ``source`` (anything :func:`cadedge.occt.reader.load_shape` accepts) and describe its edges."""
+    loaded = load_shape(source)
+    topo = Topology(loaded.shape)
+    edges = [EdgeDescription(id=i + 1, curve=topo.curve_type(i), degenerate=topo.is_degenerate(i),
+                             closed=topo.is_closed(i), seam=topo.is_seam(i), vertices=topo.edge_vertices[i],
+                             faces=list(topo.edge_faces[i]), tolerance=float(BRep_Tool.Tolerance_s(edge)),
+                             length=edge_length(topo, i))
+             for i, edge in enumerate(topo.edges)]
+    return ShapeDescription(source=loaded.source, units=loaded.units, edges=edges, vertices=len(topo.vertices),
+                            faces=len(topo.faces), shells=_count(loaded.shape, TopAbs_SHELL),
+                            solids=_count(loaded.shape, TopAbs_SOLID), warnings=list(loaded.warnings))
