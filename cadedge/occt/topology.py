@@ -1,0 +1,102 @@
+"""The B-rep topology of a shape as plain lists, in ``TopExp::MapShapes`` order (id = index + 1).
+
+Works for solids, multi-solid compounds, open shells and loose wires/edges (no faces). ``MapShapes``
+lists a seam edge (used twice by one face, once per orientation) once; it is flagged by
+:meth:`Topology.is_seam`. Degenerate edges (a cone apex, a sphere pole) are listed and flagged.
+"""
+
+from __future__ import annotations
+
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve
+from OCP.Standard import Standard_Failure
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
+
+from ..errors import GeometryError
+
+#: The curve type names reported for edges, from ``GeomAbs_CurveType`` without the prefix.
+CURVE_TYPES = ("Line", "Circle", "Ellipse", "Hyperbola", "Parabola", "BezierCurve", "BSplineCurve",
+               "OffsetCurve", "OtherCurve")
+
+
+def forward(edge: TopoDS_Edge) -> TopoDS_Edge:
+    """The edge in FORWARD orientation: parameters run from its first vertex to its last."""
+    return TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
+
+
+def _indexed(shape: TopoDS_Shape, kind) -> TopTools_IndexedMapOfShape:
+    m = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, kind, m)
+    return m
+
+
+class Topology:
+    """Edges, vertices and faces of ``shape`` with edge -> faces and edge -> vertices adjacency.
+
+    ``edges``, ``vertices`` and ``faces`` are lists in ``MapShapes`` order (edges in their FORWARD
+    orientation); ``edge_faces[i]`` lists the face ids bounding edge ``i + 1``; ``edge_vertices[i]``
+    is (first, last) vertex id in that edge's parameter direction. Methods take 0-based indices.
+    """
+
+    def __init__(self, shape: TopoDS_Shape):
+        if shape is None or shape.IsNull():
+            raise GeometryError("null shape: nothing to take the topology of")
+        self.shape = shape
+        emap, vmap, fmap = (_indexed(shape, k) for k in (TopAbs_EDGE, TopAbs_VERTEX, TopAbs_FACE))
+        self.edges: list[TopoDS_Edge] = [forward(TopoDS.Edge_s(emap.FindKey(i)))
+                                         for i in range(1, emap.Extent() + 1)]
+        self.vertices: list[TopoDS_Vertex] = [TopoDS.Vertex_s(vmap.FindKey(i)) for i in range(1, vmap.Extent() + 1)]
+        self.faces: list[TopoDS_Face] = [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
+        ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+        TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
+        self.edge_faces: list[list[int]] = []
+        self.edge_vertices: list[tuple[int, int]] = []
+        self._seam: list[bool] = []
+        for i, edge in enumerate(self.edges):
+            ids: list[int] = []
+            seam = False
+            if ancestors.Contains(edge):
+                for face in ancestors.FindFromKey(edge):
+                    fid = fmap.FindIndex(face)
+                    if fid not in ids:
+                        ids.append(fid)
+                        seam = seam or BRep_Tool.IsClosed_s(edge, TopoDS.Face_s(face))
+            self.edge_faces.append(ids)
+            self._seam.append(seam)
+            first, last = TopExp.FirstVertex_s(edge), TopExp.LastVertex_s(edge)
+            if first.IsNull() or last.IsNull():
+                raise GeometryError(f"edge {i + 1} has no vertex at one end; cannot anchor its grid")
+            self.edge_vertices.append((vmap.FindIndex(first), vmap.FindIndex(last)))
+
+    def curve_type(self, i: int) -> str:
+        """OCCT's curve type name of edge ``i`` (0-based), e.g. "Line", "BSplineCurve".
+
+        Edges with only curves on surfaces (no 3-D curve) are typed by the adaptor's view of them.
+        """
+        try:
+            kind = BRepAdaptor_Curve(self.edges[i]).GetType()
+        except Standard_Failure as exc:
+            raise GeometryError(f"edge {i + 1}: OCCT cannot adapt its curve: {exc}") from exc
+        return str(kind).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
+
+    def is_degenerate(self, i: int) -> bool:
+        """True for an edge collapsed to a point (``BRep_Tool::Degenerated``)."""
+        return bool(BRep_Tool.Degenerated_s(self.edges[i]))
+
+    def is_closed(self, i: int) -> bool:
+        """True when the edge starts and ends at the same vertex (a full circle, a closed spline)."""
+        return self.edge_vertices[i][0] == self.edge_vertices[i][1]
+
+    def is_seam(self, i: int) -> bool:
+        """True when a face uses the edge twice (the seam of a periodic surface)."""
+        return self._seam[i]
+
+    def has_3d_curve(self, i: int) -> bool:
+        """True when the edge carries a 3-D curve (not only curves on surfaces)."""
+        return bool(BRep_Tool.IsGeometric_s(self.edges[i]))
+
+    def __repr__(self) -> str:
+        return f"Topology(edges={len(self.edges)}, vertices={len(self.vertices)}, faces={len(self.faces)})"
