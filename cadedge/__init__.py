@@ -7,7 +7,7 @@ shape is refined, so curve refinement works without it.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 from .curves import Curve, Evaluator, FunctionCurve, SampledCurve
 from .errors import (CadedgeError, CadedgeWarning, CurveEvaluationError, GeometryError, InputError,
@@ -20,10 +20,15 @@ __version__ = "0.1.0"
 
 
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
-                 max_length: float | None = None, max_growth: float | None = None) -> ShapeGrid:
-    """Refine every edge of a STEP file, cadquery/build123d shape or ``TopoDS_Shape`` (see the contract)."""
+                 max_length: float | None = None, max_growth: float | None = None,
+                 progress: Callable[[int, int], None] | None = None) -> ShapeGrid:
+    """Refine every edge of a STEP file, cadquery/build123d shape or ``TopoDS_Shape`` (see the contract).
+
+    ``progress(done, total)``, if given, is called after each edge (the CLI's progress bar).
+    """
     from .occt.shape import refine_shape as _refine_shape
-    return _refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth)
+    return _refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth,
+                         progress=progress)
 
 
 __all__ = ["refine_curve", "refine_shape", "EdgeGrid", "ShapeGrid", "ShapeEdgeGrid", "VertexGrid", "Curve",
