@@ -1,0 +1,114 @@
+"""``run_batch``: plan which inputs are due, run them on dask, record each outcome in the index."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+from ..errors import InputError
+from .index import INDEX_NAME, BatchIndex, IndexRow, options_key
+from .inputs import expand_inputs, output_names
+from .report import BatchProgress, BatchReport, FileResult
+from .runner import Job, Outcome, Task, connect, run_jobs
+from .task import refine_task
+
+DEFAULT_TIMEOUT = 600.0
+
+
+def _check_options(ald: float, min_length: float | None, max_length: float | None,
+                   max_growth: float | None, workers: int | None, scheduler: str | None,
+                   timeout: float) -> None:
+    def positive(name: str, value: float | None) -> None:
+        if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise InputError(f"{name} must be a positive number, got {value!r}")
+
+    positive("ald", ald)
+    if ald >= 1:
+        raise InputError(f"ald must be below 1, got {ald!r}")
+    positive("min_length", min_length)
+    positive("max_length", max_length)
+    positive("timeout", timeout)
+    if max_growth is not None and not (isinstance(max_growth, (int, float)) and max_growth > 1):
+        raise InputError(f"max_growth must be greater than 1, got {max_growth!r}")
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise InputError(f"workers must be a whole number of at least 1, got {workers!r}")
+    if workers is not None and scheduler is not None:
+        raise InputError("give workers (a local cluster) or scheduler (an existing one), not both")
+
+
+def _result(row: IndexRow) -> FileResult:
+    return FileResult(row.input, row.output, row.status, row.edges, row.segments, row.worst_ald,
+                      row.seconds, row.error)
+
+
+def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *, ald: float = 1e-3,
+              min_length: float | None = None, max_length: float | None = None,
+              max_growth: float | None = None, workers: int | None = None, scheduler: str | None = None,
+              timeout: float = DEFAULT_TIMEOUT, retry_failed: bool = False,
+              progress: Callable[[BatchProgress], None] | None = None,
+              task: Task | None = None) -> BatchReport:
+    """Refine many STEP files on dask.distributed into ``outdir/<name>.json``, resumably.
+
+    ``inputs``: files, folders (searched recursively for .step/.stp) or globs. Without ``scheduler``
+    a LocalCluster of ``workers`` processes (default: one per core) is started and closed; with it,
+    the scheduler at that address is used (its workers must import cadedge and see ``outdir``).
+    Each outcome is recorded in ``outdir/index.sqlite`` as it arrives. An input already ok there
+    (same size, mtime and options, output present) is skipped; one that failed is skipped unless
+    ``retry_failed``. A task that raises, kills its worker or runs over ``timeout`` seconds fails
+    alone. ``task(input, output, options) -> summary`` replaces the per-file work (default: refine
+    and write JSON). Raises :class:`InputError` for bad options, missing inputs or no inputs.
+    """
+    _check_options(ald, min_length, max_length, max_growth, workers, scheduler, timeout)
+    t0 = time.perf_counter()
+    paths = expand_inputs(inputs)
+    out = Path(outdir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: output exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    options: dict[str, Any] = {"ald": ald, "min_length": min_length, "max_length": max_length,
+                               "max_growth": max_growth}
+    opts = options_key(options)
+    report = BatchReport(outdir=out, index=out / INDEX_NAME)
+    with BatchIndex(report.index) as index:
+        names = output_names(paths, index.names())
+        todo: list[Job] = []
+        stats = {}
+        for path in paths:
+            st = path.stat()
+            stats[str(path)] = st
+            row = index.get(str(path))
+            same = row is not None and (row.size, row.mtime_ns, row.options) == (st.st_size, st.st_mtime_ns, opts)
+            if same and row.status == "ok" and (out / row.output).is_file():
+                report.skipped.append(row.input)
+            elif same and row.status == "failed" and not retry_failed:
+                report.skipped_failed.append(_result(row))
+            else:
+                todo.append(Job(str(path), str(out / names[path])))
+
+        def snapshot(last: FileResult | None) -> BatchProgress:
+            return BatchProgress(len(todo), len(report.results), len(report.ok), len(report.failed),
+                                 len(report.skipped), len(report.skipped_failed), last)
+
+        def record(outcome: Outcome) -> None:
+            st = stats[outcome.job.input]
+            s = outcome.summary or {}
+            res = FileResult(outcome.job.input, Path(outcome.job.output).name, outcome.status,
+                             s.get("edges"), s.get("segments"), s.get("worst_ald"), outcome.seconds,
+                             outcome.error)
+            index.record(input=res.input, output=res.output, status=res.status, size=st.st_size,
+                         mtime_ns=st.st_mtime_ns, options=opts, edges=res.edges, segments=res.segments,
+                         worst_ald=res.worst_ald, seconds=res.seconds, error=res.error)
+            report.results.append(res)
+            if progress is not None:
+                progress(snapshot(res))
+
+        if progress is not None:
+            progress(snapshot(None))
+        if todo:
+            with connect(workers=workers, scheduler=scheduler) as client:
+                run_jobs(client, todo, task or refine_task, options, timeout=timeout, on_outcome=record)
+    report.seconds = time.perf_counter() - t0
+    return report

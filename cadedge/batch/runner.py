@@ -1,0 +1,159 @@
+"""Running batch tasks on dask.distributed: cluster or client set-up, submission, timeouts, crashes.
+
+Tasks are submitted no faster than the cluster has threads, so a submitted task starts at once and
+the scheduler never holds thousands of keys. A task's clock starts when the scheduler first reports
+it processing on a worker. Failures are isolated per input:
+
+- the task raises: failed with the exception's type and message;
+- the worker process dies (OCCT crash, kill, out of memory): dask's ``KilledWorker``; our own
+  LocalCluster allows no retries (``allowed-failures`` 0), so a crashing file costs one worker restart;
+- the task outlives ``timeout``: a hung OCCT call cannot be interrupted in its thread, so the worker
+  running it is restarted through its nanny and the input is failed as timed out.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import uuid
+from collections import deque
+from dataclasses import dataclass
+from time import monotonic
+from typing import Any, Callable, Iterator
+
+from ..errors import InputError
+
+POLL_SECONDS = 0.2
+CONNECT_SECONDS = 10.0
+RESTART_SECONDS = 30.0
+WORKER_DIED = "worker process died (killed or crashed)"
+
+Task = Callable[[str, str, dict], dict]
+
+
+@dataclass(frozen=True)
+class Job:
+    """One input to process: its resolved path and the full path of its output file."""
+
+    input: str
+    output: str
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What became of a job: ``status`` "ok" with the task's summary, or "failed" with a reason."""
+
+    job: Job
+    status: str
+    summary: dict[str, Any] | None
+    error: str | None
+    seconds: float
+
+
+def default_workers() -> int:
+    """Worker processes of the embedded LocalCluster: one per usable core."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iterator[Any]:
+    """A dask ``Client``: on the scheduler at ``scheduler``, else on a new LocalCluster of processes.
+
+    The LocalCluster has ``workers`` single-threaded worker processes with nannies (so crashed or
+    hung workers are restarted), no dashboard, no task retries after a worker death, and its logs
+    silenced: every failure is reported per input instead.
+    """
+    import dask
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=CONNECT_SECONDS)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(f"cannot connect to dask scheduler {scheduler}: {exc}") from None
+        with client:
+            yield client
+        return
+    config = {"distributed.scheduler.allowed-failures": 0,
+              "distributed.scheduler.worker-saturation": 1.0}
+    with dask.config.set(config):
+        cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                               processes=True, dashboard_address=None, silence_logs=logging.CRITICAL)
+    with cluster, Client(cluster) as client:
+        yield client
+
+
+def _failure_reason(future: Any) -> str:
+    from distributed import KilledWorker
+
+    if future.status == "cancelled":
+        return "cancelled (scheduler lost or shutting down)"
+    exc = future.exception()
+    if isinstance(exc, KilledWorker):
+        return WORKER_DIED
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
+def _restart_worker_of(client: Any, key: str) -> str:
+    """Restart the worker processing ``key``; returns what happened, for the failure reason."""
+    workers = [addr for addr, keys in client.processing().items() if key in keys]
+    if not workers:
+        return "task no longer on a worker"
+    status = client.restart_workers(workers, timeout=RESTART_SECONDS, raise_for_error=False)
+    state = status.get(workers[0], "unknown")
+    return "worker restarted" if state == "OK" else f"worker restart: {state}"
+
+
+@dataclass
+class _Running:
+    job: Job
+    submitted: float
+    started: float | None = None
+
+
+def run_jobs(client: Any, jobs: list[Job], task: Task, options: dict[str, Any], *, timeout: float,
+             on_outcome: Callable[[Outcome], None]) -> None:
+    """Run ``task(job.input, job.output, options)`` for every job; call ``on_outcome`` as each ends.
+
+    ``on_outcome`` runs in this (the client) process, in completion order; it is where the index is
+    written, so the index has a single writer.
+    """
+    from distributed import wait
+
+    todo = deque(jobs)
+    running: dict[Any, _Running] = {}
+    while todo or running:
+        if todo:
+            capacity = max(1, sum(client.nthreads().values()))
+            while todo and len(running) < capacity:
+                job = todo.popleft()
+                future = client.submit(task, job.input, job.output, options, pure=False,
+                                       key=f"cadedge-batch-{uuid.uuid4().hex}")
+                running[future] = _Running(job, monotonic())
+        try:
+            wait(list(running), timeout=POLL_SECONDS, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            pass
+        now = monotonic()
+        for future in [f for f in running if f.done()]:
+            run = running.pop(future)
+            elapsed = now - (run.started if run.started is not None else run.submitted)
+            if future.status == "finished":
+                summary = future.result()
+                on_outcome(Outcome(run.job, "ok", summary, None, float(summary.get("seconds", elapsed))))
+            else:
+                on_outcome(Outcome(run.job, "failed", None, _failure_reason(future), elapsed))
+        if any(run.started is None for run in running.values()):
+            processing = set().union(*client.processing().values())
+            for future, run in running.items():
+                if run.started is None and future.key in processing:
+                    run.started = now
+        for future, run in list(running.items()):
+            if run.started is not None and now - run.started > timeout and not future.done():
+                del running[future]
+                what = _restart_worker_of(client, future.key)
+                future.cancel()
+                on_outcome(Outcome(run.job, "failed", None, f"timed out after {timeout:g} s ({what})",
+                                   monotonic() - run.started))
