@@ -74,7 +74,7 @@ class Topology:
     def curve_type(self, i: int) -> str:
         """OCCT's curve type name of edge ``i`` (0-based), e.g. "Line", "BSplineCurve".
 
-        Edges with only curves on surfaces (no 3-D curve) are typed by the adaptor's view of them.
+        Edges with only curves on surfaces (no 3-D curve) are typed by the adaptor: "OtherCurve".
         """
         try:
             kind = BRepAdaptor_Curve(self.edges[i]).GetType()
@@ -96,7 +96,7 @@ class Topology:
 
     def has_3d_curve(self, i: int) -> bool:
         """True when the edge carries a 3-D curve (not only curves on surfaces)."""
-        return bool(BRep_Tool.IsGeometric_s(self.edges[i]))
+        return bool(BRepAdaptor_Curve(self.edges[i]).Is3DCurve())
 
     def __repr__(self) -> str:
         return f"Topology(edges={len(self.edges)}, vertices={len(self.vertices)}, faces={len(self.faces)})"

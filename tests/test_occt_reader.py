@@ -1,0 +1,163 @@
+"""cadedge.occt.reader: STEP files and in-memory shapes in, one-line InputErrors for bad input."""
+
+from __future__ import annotations
+
+import math
+import shutil
+
+import pytest
+
+pytest.importorskip("OCP")
+
+from OCP.Bnd import Bnd_Box  # noqa: E402
+from OCP.BRepBndLib import BRepBndLib  # noqa: E402
+from OCP.TopAbs import TopAbs_COMPOUND, TopAbs_SOLID  # noqa: E402
+from OCP.TopoDS import TopoDS_Shape  # noqa: E402
+
+from cadedge.errors import InputError  # noqa: E402
+from cadedge.occt.reader import LoadedShape, load_shape  # noqa: E402
+from conftest import CORPUS, CORPUS_FILES, FIXTURE_FILES, FIXTURES  # noqa: E402
+
+EMPTY_STEP = """ISO-10303-21;
+HEADER;
+FILE_DESCRIPTION(('empty'),'2;1');
+FILE_NAME('empty.step','2026-01-01T00:00:00',(''),(''),'','','');
+FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));
+ENDSEC;
+DATA;
+ENDSEC;
+END-ISO-10303-21;
+"""
+
+
+def _diag(shape: TopoDS_Shape) -> float:
+    box = Bnd_Box()
+    BRepBndLib.Add_s(shape, box, False)
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    return math.dist((x0, y0, z0), (x1, y1, z1))
+
+
+@pytest.mark.parametrize("path", FIXTURE_FILES + CORPUS_FILES, ids=lambda p: p.name)
+def test_every_file_loads_in_millimetres(path):
+    loaded = load_shape(path)
+    assert isinstance(loaded, LoadedShape)
+    assert not loaded.shape.IsNull()
+    assert loaded.source == path.name
+    assert loaded.units == "mm"
+    assert all(isinstance(w, str) and "\n" not in w for w in loaded.warnings)
+
+
+def test_str_path_and_upper_case_suffixes(tmp_path):
+    src = FIXTURES / "cylinder.step"
+    for name in ("CYL.STEP", "cyl.Stp"):
+        shutil.copy(src, tmp_path / name)
+        assert load_shape(str(tmp_path / name)).source == name
+
+
+def test_metre_file_is_converted_to_millimetres():
+    # wing_fuselage declares METRE; SOURCES.tsv gives its diagonal as 918.8 after OCCT's transfer to mm
+    loaded = load_shape(CORPUS / "live-clones__gmsh__wing_fuselage.step")
+    assert loaded.units == "mm"
+    assert _diag(loaded.shape) == pytest.approx(918.8, rel=1e-3)
+
+
+def test_reader_check_messages_become_warnings():
+    loaded = load_shape(CORPUS / "live-clones__gmsh__wing_fuselage.step")
+    assert any("Poor result from projection vertex / curve 3d" in w for w in loaded.warnings)
+    clean = load_shape(CORPUS / "live-clones__gmsh__Kurbelwelle.stp")
+    assert clean.warnings == []
+
+
+@pytest.mark.parametrize("name", ["live-clones__gmsh__mesh_T106_V3.step", "LLNL__axom_data__boxed_sphere.step"])
+def test_loose_tolerance_is_a_warning_naming_edge_and_model_size(name):
+    loaded = load_shape(CORPUS / name)
+    loose = [w for w in loaded.warnings if w.startswith("loose tolerance")]
+    assert len(loose) == 1
+    assert "edge " in loose[0] and "model size" in loose[0] and "mm" in loose[0]
+
+
+@pytest.mark.parametrize("name", ["live-clones__gmsh__Kurbelwelle.stp", "live-clones__gmsh__917_fusee.stp",
+                                  "live-clones__gmsh__wing_fuselage.step"])
+def test_tolerances_within_declared_precision_do_not_warn(name):
+    assert not any(w.startswith("loose tolerance") for w in load_shape(CORPUS / name).warnings)
+
+
+def _one_line_error(source, *needles):
+    with pytest.raises(InputError) as info:
+        load_shape(source)
+    msg = str(info.value)
+    assert "\n" not in msg
+    for needle in needles:
+        assert needle in msg, msg
+    return msg
+
+
+def test_missing_file(tmp_path):
+    _one_line_error(tmp_path / "nothere.step", "nothere.step", "no such file")
+
+
+def test_text_file_named_step(tmp_path):
+    path = tmp_path / "notes.step"
+    path.write_text("these are not the shapes you are looking for\n")
+    _one_line_error(path, "notes.step", "not a STEP file")
+
+
+def test_truncated_copy_of_a_fixture(tmp_path):
+    data = (FIXTURES / "bracket.step").read_bytes()
+    cut = tmp_path / "cut.step"
+    cut.write_bytes(data[: len(data) // 2])
+    _one_line_error(cut, "cut.step", "truncated")
+    # a cut that still ends with a trailer: OCCT's parser rejects it, still one clean line
+    patched = tmp_path / "patched.step"
+    patched.write_bytes(data[: len(data) // 2] + b"\nEND-ISO-10303-21;\n")
+    _one_line_error(patched, "patched.step", "corrupt")
+
+
+def test_empty_step_and_empty_file(tmp_path):
+    empty = tmp_path / "empty.step"
+    empty.write_text(EMPTY_STEP)
+    _one_line_error(empty, "empty.step", "empty")
+    zero = tmp_path / "zero.stp"
+    zero.write_bytes(b"")
+    _one_line_error(zero, "zero.stp", "empty")
+
+
+def test_wrong_suffix_and_wrong_object(tmp_path):
+    other = tmp_path / "part.iges"
+    shutil.copy(FIXTURES / "cylinder.step", other)
+    _one_line_error(other, "part.iges", "unsupported file type")
+    _one_line_error(tmp_path, tmp_path.name, "not a file")
+    _one_line_error(42, "int")
+
+
+def test_bad_file_prints_nothing(tmp_path, capfd):
+    data = (FIXTURES / "bracket.step").read_bytes()
+    patched = tmp_path / "patched.step"
+    patched.write_bytes(data[: len(data) // 3] + b"\nEND-ISO-10303-21;\n")
+    with pytest.raises(InputError):
+        load_shape(patched)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+
+
+def test_cadquery_workplane_shape_and_multi_value_workplane():
+    cq = pytest.importorskip("cadquery")
+    wp = cq.Workplane("XY").box(10, 20, 30)
+    loaded = load_shape(wp)
+    assert loaded.source == "<cadquery Workplane>" and loaded.units == "mm"
+    assert loaded.shape.ShapeType() == TopAbs_SOLID
+    assert load_shape(wp.val()).source == "<cadquery Solid>"
+    two = cq.Workplane("XY").pushPoints([(0, 0), (30, 0)]).box(5, 5, 5)
+    assert load_shape(two).shape.ShapeType() == TopAbs_COMPOUND
+    _one_line_error(cq.Workplane("XY"), "Workplane", "empty")
+
+
+def test_build123d_part_and_raw_topods():
+    bd = pytest.importorskip("build123d")
+    part = bd.Box(10, 20, 30) - bd.Cylinder(3, 30)
+    loaded = load_shape(part)
+    assert loaded.source.startswith("<build123d")
+    assert _diag(loaded.shape) == pytest.approx(math.sqrt(10**2 + 20**2 + 30**2), rel=1e-3)
+    raw = load_shape(part.wrapped)
+    assert raw.source == "<TopoDS_Shape>" and raw.shape.IsSame(part.wrapped)
+    _one_line_error(TopoDS_Shape(), "empty")
