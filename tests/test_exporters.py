@@ -298,3 +298,55 @@ def test_unwritable_target_is_input_error(grid, tmp_path):
     with pytest.raises(InputError, match="missing-folder"):
         write(grid, path)
     assert not path.parent.exists()
+
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+
+
+@pytest.fixture(scope="module", params=["bracket.step", "sphere.step", "two_solids.step", "helix_wire.step"])
+def real_grid(request) -> ShapeGrid:
+    pytest.importorskip("OCP")
+    import cadedge
+
+    return cadedge.refine_shape(FIXTURES / request.param, ald=1e-3)
+
+
+def test_real_json_validates_and_keeps_shared_vertices_bit_identical(real_grid, tmp_path):
+    path = tmp_path / "real.json"
+    real_grid.write(path)
+    doc = json.loads(path.read_text())
+    json_exporter.validate(doc)
+    assert doc["source"] == real_grid.source and len(doc["edges"]) == len(real_grid.edges)
+    vpoint = {v["id"]: v["point"] for v in doc["vertices"]}
+    for e, de in zip(real_grid.edges, doc["edges"]):
+        assert np.array_equal(np.array(de["points"]), e.points) and np.array_equal(np.array(de["params"]), e.params)
+        assert de["points"][0] == vpoint[de["vertices"][0]] and de["points"][-1] == vpoint[de["vertices"][1]]
+    assert doc["summary"]["segments"] == sum(len(e["params"]) - 1 for e in doc["edges"] if not e["degenerate"])
+
+
+def test_real_msh_is_conforming_in_gmsh(real_grid, tmp_path, gmsh_session):
+    gmsh = gmsh_session
+    path = tmp_path / "real.msh"
+    real_grid.write(path)
+    gmsh.open(str(path))
+    live = [e for e in real_grid.edges if not e.degenerate]
+    for e in live:
+        tags, _, _ = gmsh.model.mesh.getNodes(1, e.id, includeBoundary=True)
+        assert len(set(tags.tolist())) == len(np.unique(e.points, axis=0))  # closed: boundary node listed twice
+    all_tags, _, _ = gmsh.model.mesh.getNodes()
+    interior = sum(len(e.params) - 2 for e in live)
+    assert len(all_tags) == len(real_grid.vertices) + interior  # shared vertex nodes appear once
+
+
+def test_real_vtp_and_ply_point_counts(real_grid, tmp_path):
+    vtk = pytest.importorskip("vtk")
+    trimesh = pytest.importorskip("trimesh")
+    live = [e for e in real_grid.edges if not e.degenerate]
+    real_grid.write(tmp_path / "real.vtp")
+    reader = vtk.vtkXMLPolyDataReader()
+    reader.SetFileName(str(tmp_path / "real.vtp"))
+    reader.Update()
+    assert reader.GetOutput().GetNumberOfLines() == len(live)
+    real_grid.write(tmp_path / "real.ply")
+    path = trimesh.load(tmp_path / "real.ply")
+    assert math.isclose(path.length, sum(e.length for e in live), rel_tol=1e-12)

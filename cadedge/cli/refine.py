@@ -21,6 +21,7 @@ from ..shapegrid import ShapeGrid
 from ._table import format_table
 
 PROGRESS_MIN_EDGES = 50
+MAX_WARNINGS = 20
 
 
 def add_refine_options(parser: argparse.ArgumentParser) -> None:
@@ -147,8 +148,11 @@ def run(args: argparse.Namespace) -> int:
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     ours = [str(w.message) for w in caught if issubclass(w.category, CadedgeWarning)]
     messages = list(dict.fromkeys([*grid.warnings, *ours]))
-    for message in messages:
+    for message in messages[:MAX_WARNINGS]:
         print(f"cadedge refine: warning: {message}", file=sys.stderr)
+    if len(messages) > MAX_WARNINGS:
+        print(f"cadedge refine: warning: ... and {len(messages) - MAX_WARNINGS} more warnings (all in the "
+              "ShapeGrid.warnings of the Python API)", file=sys.stderr)
     write(grid, args.output)
     if args.plot:
         from ..plot import plot_grid
