@@ -1,7 +1,9 @@
 """Write a :class:`~cadedge.shapegrid.ShapeGrid` to a file; the format comes from the suffix.
 
 ``FORMATS`` maps each suffix to a function ``ShapeGrid -> bytes`` (one module per format). Every
-write is atomic (:mod:`cadedge.atomic`): a failing export leaves no file behind.
+write is atomic (:mod:`cadedge.atomic`): a failing export leaves no file behind. JSON and CSV list
+every edge; the geometric formats (.vtp .msh .geo .obj .ply) leave degenerate edges' zero-length
+polylines out (.msh keeps their curve entities, without elements).
 """
 
 from __future__ import annotations

@@ -12,6 +12,7 @@ HEADER = "edge_id,index,param,x,y,z\n"
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
+    """CSV text: header, then ``edge_id,index,param,x,y,z`` per grid point, edges in id order."""
     p = polylines(grid, skip_degenerate=False)
     body = table([p.point_edge, p.point_index, p.params, p.points[:, 0], p.points[:, 1], p.points[:, 2]],
                  delimiter=",")

@@ -20,6 +20,7 @@ def _size(value: float | None) -> float:
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
+    """A ``.geo`` script: sized points, transfinite 2-node lines, one physical curve per edge."""
     out = [f"// {comment(grid)}\n", "// Point(k) = cadedge vertex k; Physical Curve k = cadedge edge k\n"]
     out += [f"Point({v.id}) = {{{x!r}, {y!r}, {z!r}, {_size(v.spacing)!r}}};\n"
             for v in grid.vertices for x, y, z in [np.reshape(v.point, 3).astype(float).tolist()]]

@@ -22,6 +22,7 @@ def _bbox(points: np.ndarray) -> str:
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
+    """MSH 4.1 ASCII: point and curve entities tagged with cadedge ids, nodes, point and line elements."""
     nv = len(grid.vertices)
     vpoints = np.array([np.reshape(v.point, 3) for v in grid.vertices], dtype=float).reshape(-1, 3)
     vids = np.array([v.id for v in grid.vertices], dtype=np.int64)

@@ -13,6 +13,7 @@ from ._common import comment, polylines, table
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
+    """OBJ text: ``v`` records, then one ``g edge_<id>`` group with one ``l`` polyline per edge."""
     p = polylines(grid, skip_degenerate=True)
     lines = [f"# {comment(grid)}\n", "o cadedge_edges\n"]
     lines.append(table([np.full(len(p.params), "v"), p.points[:, 0], p.points[:, 1], p.points[:, 2]]))

@@ -17,6 +17,7 @@ EDGE = np.dtype([("vertex1", "<i4"), ("vertex2", "<i4")])
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
+    """Binary PLY: float64 vertices with ``param`` and ``edge_id``, and 2-vertex ``edge`` records."""
     p = polylines(grid, skip_degenerate=True)
     vertices = np.empty(len(p.params), dtype=VERTEX)
     vertices["x"], vertices["y"], vertices["z"] = p.points.T

@@ -19,6 +19,7 @@ def _array(name: str, vtk_type: str, values: np.ndarray, components: int = 1) ->
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
+    """VTK XML PolyData: all grid points, one polyline cell per non-degenerate edge."""
     p = polylines(grid, skip_degenerate=True)
     n, m = len(p.params), len(p.edge_ids)
     connectivity = np.arange(n, dtype=np.int64)
