@@ -25,7 +25,6 @@ from typing import Any, Callable, Iterator
 from ..errors import InputError
 
 POLL_SECONDS = 0.2
-CONNECT_SECONDS = 10.0
 RESTART_SECONDS = 30.0
 WORKER_DIED = "worker process died (killed or crashed)"
 
@@ -60,6 +59,7 @@ def default_workers() -> int:
 def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iterator[Any]:
     """A dask ``Client``: on the scheduler at ``scheduler``, else on a new LocalCluster of processes.
 
+    Connecting gives up after dask's ``distributed.comm.timeouts.connect`` (30 s by default).
     The LocalCluster has ``workers`` single-threaded worker processes with nannies (so crashed or
     hung workers are restarted), no dashboard, no task retries after a worker death, and its logs
     silenced: every failure is reported per input instead.
@@ -69,7 +69,7 @@ def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iter
 
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout=CONNECT_SECONDS)
+            client = Client(scheduler, timeout=dask.config.get("distributed.comm.timeouts.connect"))
         except (OSError, TimeoutError, ValueError) as exc:
             raise InputError(f"cannot connect to dask scheduler {scheduler}: {exc}") from None
         with client:
