@@ -82,12 +82,16 @@ def test_refine_plot(tmp_path, capsys):
     assert str(png) in capsys.readouterr().out
 
 
-def test_refine_prints_model_warnings(tmp_path, capsys):
-    path = CORPUS / "LLNL__axom_data__sliced_cylinder.step"  # Rhino file with unquoted names
+@pytest.mark.parametrize("name, expected", [
+    ("LLNL__axom_data__sliced_cylinder.step", "STEP load fail"),  # Rhino file with unquoted names
+    ("live-clones__gmsh__mesh_T106_V3.step", "loose tolerance"),  # healed edge tolerance 0.73 mm
+])
+def test_refine_prints_model_warnings(tmp_path, capsys, name, expected):
     out = tmp_path / "s.json"
-    assert main(["refine", str(path), "-o", str(out)]) == 0
+    assert main(["refine", str(CORPUS / name), "-o", str(out)]) == 0
     err = capsys.readouterr().err.splitlines()
     assert err and all(line.startswith("cadedge refine: warning: ") for line in err)
+    assert any(expected in line for line in err)
     validate(json.loads(out.read_text()))
 
 
