@@ -350,3 +350,38 @@ def test_real_vtp_and_ply_point_counts(real_grid, tmp_path):
     real_grid.write(tmp_path / "real.ply")
     path = trimesh.load(tmp_path / "real.ply")
     assert math.isclose(path.length, sum(e.length for e in live), rel_tol=1e-12)
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+@pytest.mark.parametrize("suffix", [".json", ".csv"])
+def test_text_formats_round_trip_any_float(tmp_path, suffix):
+    """Any finite float64, subnormals and extremes included, survives the text formats bit for bit."""
+    pytest.importorskip("hypothesis")
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
+
+    @settings(max_examples=60, deadline=None, database=None)
+    @given(st.lists(st.tuples(finite, finite, finite), min_size=2, max_size=6))
+    def check(coords):
+        grid = make_grid()
+        edge = grid.edges[0]
+        edge.points = np.array(coords, dtype=float)
+        edge.params = np.arange(len(coords), dtype=float) / 7.0
+        grid.vertices[0].point, grid.vertices[1].point = edge.points[0], edge.points[-1]
+        path = tmp_path / f"h{suffix}"
+        try:
+            write(grid, path)
+        except CadedgeError:  # the polyline length overflowed to inf: refused, never written wrong
+            assert not np.isfinite(edge.length)
+            return
+        if suffix == ".json":
+            doc = json.loads(path.read_text())
+            assert np.array_equal(np.array(doc["edges"][0]["points"]), edge.points)
+            assert doc["vertices"][0]["point"] == doc["edges"][0]["points"][0]
+        else:
+            rows = np.array([r.split(",") for r in path.read_text().splitlines()[1:]], dtype=float)
+            assert np.array_equal(rows[rows[:, 0] == 1][:, 3:], edge.points)
+
+    check()
