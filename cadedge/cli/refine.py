@@ -139,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     progress = Progress(stream=sys.stderr, enabled=False if args.quiet else None)
     try:
         with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+            warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
             grid = cadedge.refine_shape(args.input, **opts, progress=progress)
     finally:
         progress.close()
