@@ -58,7 +58,7 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
     Each outcome is recorded in ``outdir/index.sqlite`` as it arrives. An input already ok there
     (same size, mtime and options, output present) is skipped; one that failed is skipped unless
     ``retry_failed``. A task that raises, kills its worker or runs over ``timeout`` seconds fails
-    alone. ``task(input, output, options) -> summary`` replaces the per-file work (default: refine
+    alone. Largest inputs go first. ``task(input, output, options) -> summary`` replaces the per-file work (default: refine
     and write JSON). Raises :class:`InputError` for bad options, missing inputs or no inputs.
     """
     _check_options(ald, min_length, max_length, max_growth, workers, scheduler, timeout)
@@ -87,6 +87,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
                 report.skipped_failed.append(_result(row))
             else:
                 todo.append(Job(str(path), str(out / names[path])))
+        # largest files first: the long tasks start early, so workers finish together
+        todo.sort(key=lambda job: -stats[job.input].st_size)
 
         def snapshot(last: FileResult | None) -> BatchProgress:
             return BatchProgress(len(todo), len(report.results), len(report.ok), len(report.failed),
