@@ -6,8 +6,9 @@ For every curve of ``cadedge.analytic.paper_curves() + cadedge.analytic.family()
 ``cadedge.refine_curve(c, c.domain, ald=eps)``; the achieved ALD ``1 - length / L_ref`` (``L_ref`` the
 known length, else ``cadedge.reference.reference_length``); the sampled DP optimum at the achieved length
 (``cadedge.optimum.sampled_optimum``: fewest segments through dense samples, the grid's own vertices
-included, reaching the grid's own length, so the optimum is never worse than the grid) and at ``(1 - eps) L_ref``; the ratio segments / optimum at the achieved length; evaluations;
-seconds of refinement. A row passes when ALD <= eps and the ratio <= 1.15.
+included, reaching the grid's own length, so the optimum is never worse than the grid) and at
+``(1 - eps) L_ref``; the ratio segments / optimum at the achieved length; evaluations; seconds of
+refinement. A row passes when ALD <= eps and the ratio <= 1.15.
 Prints a markdown table; ``--write`` also puts it into docs/target.md. Exit status 1 if any row fails.
 """
 
@@ -60,9 +61,9 @@ def markdown(rows: list[dict]) -> str:
              "| ratio | DP optimum at eps | evaluations | seconds | ALD <= eps | ratio <= 1.15 |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['eps']:g} | {r['curve']} | {r['segments']} | {r['ald']:.3e} | {r['estimate']:.3e} "
-                     f"| {r['opt']} | {r['ratio']:.3f} | {r['opt_eps']} | {r['evaluations']} "
-                     f"| {r['seconds']:.3f} | {'PASS' if r['ald_ok'] else 'FAIL'} "
+        lines.append(f"| {r['eps']:g} | {r['curve']} | {r['segments']} | {r['ald']:.3e} "
+                     f"| {r['estimate']:.3e} | {r['opt']} | {r['ratio']:.3f} | {r['opt_eps']} "
+                     f"| {r['evaluations']} | {r['seconds']:.3f} | {'PASS' if r['ald_ok'] else 'FAIL'} "
                      f"| {'PASS' if r['ratio_ok'] else 'FAIL'} |")
     failed = sum(not (r["ald_ok"] and r["ratio_ok"]) for r in rows)
     worst = max(rows, key=lambda r: r["ratio"])
