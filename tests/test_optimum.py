@@ -151,3 +151,11 @@ def test_include_makes_the_optimum_no_worse_than_a_grid():
     params = np.linspace(0.0, 1.0, 15)  # 14 equal chords: the continuous optimum
     grid_length = polyline_length(c.evaluate(params))
     assert sampled_optimum(c, c.domain, grid_length, n=1000, include=params) == 14
+
+
+def test_optimum_ignores_the_parametrisation():
+    """The same half ellipse traced at speeds varying by e**10 (2e4) or barely: the same optimum."""
+    true = reference_length(analytic.uneven(1.0), (0.0, 1.0))
+    for eps in (1e-3, 1e-4):
+        counts = {sampled_optimum(analytic.uneven(p), None, (1 - eps) * true) for p in (1.0, 10.0)}
+        assert len(counts) == 1
