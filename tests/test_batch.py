@@ -23,7 +23,8 @@ ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = ROOT / "fixtures"
 CORPUS = ROOT.parent / "shared" / "corpus"
 SMALL = ["cylinder", "sphere", "open_face", "helix_wire"]
-CORPUS_SMALL = ["LLNL__axom_data__sliced_cylinder.step", "CadQuery__cadquery__red_cube_blue_cylinder.step"]
+CORPUS_SMALL = ["LLNL__axom_data__sliced_cylinder.step", "CadQuery__cadquery__red_cube_blue_cylinder.step",
+                "live-clones__gmsh__mesh_T106_V3.step"]  # the last has loose tolerances: a warning
 ALD = 1e-2
 
 
@@ -110,9 +111,9 @@ def test_real_refine_on_cluster_with_duplicate_stems(tmp_path, scheduler):
     seen = []
     report = run_batch([tmp_path / "one", inputs[-1], *(CORPUS / n for n in CORPUS_SMALL)], out, ald=ALD,
                        scheduler=scheduler, progress=seen.append)
-    assert report.all_ok and len(report.ok) == 7, report.failed
+    assert report.all_ok and len(report.ok) == 8, report.failed
     names = [r.output for r in report.results]
-    assert len(set(names)) == 7
+    assert len(set(names)) == 8
     assert sum(n.startswith("cylinder-") for n in names) == 2
     rows = index_rows(out)
     assert set(rows) == {str(p.resolve()) for p in [*inputs, *(CORPUS / n for n in CORPUS_SMALL)]}
@@ -122,7 +123,12 @@ def test_real_refine_on_cluster_with_duplicate_stems(tmp_path, scheduler):
         assert doc["summary"]["edges"] == r.edges and doc["summary"]["segments"] == r.segments
         assert doc["summary"]["max_ald_estimate"] <= ALD
         assert rows[r.input][:5] == (r.output, "ok", r.edges, r.segments, r.worst_ald)
-    assert [p.done for p in seen] == list(range(8)) and seen[-1].ok == 7 and seen[0].last is None
+    assert [p.done for p in seen] == list(range(9)) and seen[-1].ok == 8 and seen[0].last is None
+    warned = {Path(r.input).name: r.warnings for r in report.results if r.warnings}
+    assert set(warned) == set(CORPUS_SMALL)  # these third-party files all carry reader warnings
+    assert any("tolerance" in w for w in warned[CORPUS_SMALL[-1]])
+    with BatchIndex(out / INDEX_NAME) as index:
+        assert json.loads(index.get(str(CORPUS / CORPUS_SMALL[-1])).warnings) == list(warned[CORPUS_SMALL[-1]])
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary files left
 
 

@@ -28,6 +28,7 @@ CREATE TABLE IF NOT EXISTS results (
     worst_ald REAL,
     seconds REAL,
     error TEXT,
+    warnings TEXT NOT NULL DEFAULT '[]',
     size INTEGER NOT NULL,
     mtime_ns INTEGER NOT NULL,
     options TEXT NOT NULL,
@@ -48,6 +49,7 @@ class IndexRow:
     worst_ald: float | None
     seconds: float | None
     error: str | None
+    warnings: str
     size: int
     mtime_ns: int
     options: str
@@ -95,11 +97,12 @@ class BatchIndex:
 
     def record(self, *, input: str, output: str, status: str, size: int, mtime_ns: int, options: str,
                edges: int | None = None, segments: int | None = None, worst_ald: float | None = None,
-               seconds: float | None = None, error: str | None = None) -> None:
+               seconds: float | None = None, error: str | None = None,
+               warnings: list[str] | tuple[str, ...] = ()) -> None:
         """Insert or replace one input's outcome and commit at once (a crash loses nothing recorded)."""
         finished = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
         self._db.execute(
-            "INSERT OR REPLACE INTO results VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-            (input, output, status, edges, segments, worst_ald, seconds, error, size, mtime_ns, options,
-             finished))
+            "INSERT OR REPLACE INTO results VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+            (input, output, status, edges, segments, worst_ald, seconds, error, json.dumps(list(warnings)),
+             size, mtime_ns, options, finished))
         self._db.commit()

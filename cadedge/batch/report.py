@@ -18,6 +18,7 @@ class FileResult:
     worst_ald: float | None = None
     seconds: float | None = None
     error: str | None = None
+    warnings: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

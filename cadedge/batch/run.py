@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import time
@@ -41,7 +42,7 @@ def _check_options(ald: float, min_length: float | None, max_length: float | Non
 
 def _result(row: IndexRow) -> FileResult:
     return FileResult(row.input, row.output, row.status, row.edges, row.segments, row.worst_ald,
-                      row.seconds, row.error)
+                      row.seconds, row.error, tuple(json.loads(row.warnings)))
 
 
 def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *, ald: float = 1e-3,
@@ -99,10 +100,11 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
             s = outcome.summary or {}
             res = FileResult(outcome.job.input, Path(outcome.job.output).name, outcome.status,
                              s.get("edges"), s.get("segments"), s.get("worst_ald"), outcome.seconds,
-                             outcome.error)
+                             outcome.error, tuple(s.get("warnings", ())))
             index.record(input=res.input, output=res.output, status=res.status, size=st.st_size,
                          mtime_ns=st.st_mtime_ns, options=opts, edges=res.edges, segments=res.segments,
-                         worst_ald=res.worst_ald, seconds=res.seconds, error=res.error)
+                         worst_ald=res.worst_ald, seconds=res.seconds, error=res.error,
+                         warnings=res.warnings)
             report.results.append(res)
             if progress is not None:
                 progress(snapshot(res))

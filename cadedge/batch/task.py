@@ -1,7 +1,8 @@
 """The per-file work of a batch, run inside a dask worker: refine one STEP file, write its JSON.
 
 A task is any picklable callable ``task(input, output, options) -> dict`` returning the summary the
-index records (``edges``, ``segments``, ``worst_ald``); it raises on failure. Its output is written
+index records (``edges``, ``segments``, ``worst_ald``, optionally ``seconds`` and ``warnings``, a
+list of strings); it raises on failure. Its output is written
 atomically by the worker straight into the output folder (a shared file system for remote workers).
 """
 
@@ -19,4 +20,4 @@ def refine_task(input: str, output: str, options: dict[str, Any]) -> dict[str, A
     grid = refine_shape(input, **options)
     grid.write(output)
     return {"edges": len(grid.edges), "segments": grid.segments, "worst_ald": grid.max_ald_estimate,
-            "seconds": time.perf_counter() - t0}
+            "seconds": time.perf_counter() - t0, "warnings": [str(w) for w in grid.warnings]}

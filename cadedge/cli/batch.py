@@ -13,7 +13,9 @@ import logging
 import sys
 from typing import IO, Any
 
-from .refine import _number, add_refine_options, refine_options
+from ..batch.run import DEFAULT_TIMEOUT
+
+from .refine import add_refine_options, refine_options
 
 
 class BatchBar:
@@ -64,7 +66,8 @@ def register(subparsers: Any) -> None:
                                                                 "(default: one per core)")
     where.add_argument("--scheduler", metavar="ADDRESS", help="use the dask scheduler at ADDRESS "
                                                               "(e.g. tcp://host:8786) instead of a local cluster")
-    p.add_argument("--timeout", default="600", metavar="SECONDS", help="per-file time limit (default 600)")
+    p.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT, metavar="SECONDS",
+                   help=f"per-file time limit (default {DEFAULT_TIMEOUT:g})")
     p.add_argument("--retry-failed", action="store_true", help="run again the inputs that failed before")
     p.set_defaults(func=run)
 
@@ -73,12 +76,11 @@ def run(args: argparse.Namespace) -> int:
     from ..batch import run_batch
 
     opts = refine_options(args, "options")
-    timeout = _number("--timeout", args.timeout, "options", low=0.0)
     logging.getLogger("distributed").setLevel(logging.CRITICAL)
     bar = BatchBar(out=sys.stdout, err=sys.stderr)
     try:
         report = run_batch(args.inputs, args.output, **opts, workers=args.workers, scheduler=args.scheduler,
-                           timeout=timeout, retry_failed=args.retry_failed, progress=bar)
+                           timeout=args.timeout, retry_failed=args.retry_failed, progress=bar)
     finally:
         bar.close()
     total = len(report.results) + len(report.skipped) + len(report.skipped_failed)
@@ -87,5 +89,8 @@ def run(args: argparse.Namespace) -> int:
           f"(finished before), {len(report.skipped_failed)} failed before; {report.seconds:.1f} s")
     for r in failed:
         print(f"failed: {r.input}: {r.error}")
+    warned = sum(bool(r.warnings) for r in report.ok)
+    if warned:
+        print(f"{warned} inputs refined with warnings (column 'warnings' of the index)")
     print(f"results in {report.outdir}, index {report.index}")
     return 0 if report.all_ok else 1
