@@ -189,6 +189,11 @@ def test_rerun_skips_finished_retries_failed_redoes_changed(tmp_path, scheduler)
     assert len(finer.ok) == 4 and not finer.skipped
     assert all(json.loads((out / r.output).read_text())["options"]["ald"] == ALD / 2 for r in finer.results)
 
+    inputs[2].write_text("no longer a STEP file\n")            # an input breaks: its old output goes
+    broken = run_batch([tmp_path / "in"], out, ald=ALD / 2, scheduler=scheduler)
+    assert [Path(r.input).name for r in broken.failed] == ["open_face.step"]
+    assert not (out / "open_face.json").exists() and (out / "cylinder.json").exists()
+
 
 def test_unreachable_scheduler_is_an_input_error(tmp_path):
     import dask

@@ -59,7 +59,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
     Each outcome is recorded in ``outdir/index.sqlite`` as it arrives. An input already ok there
     (same size, mtime and options, output present) is skipped; one that failed is skipped unless
     ``retry_failed``. A task that raises, kills its worker or runs over ``timeout`` seconds fails
-    alone. Largest inputs go first. ``task(input, output, options) -> summary`` replaces the per-file work (default: refine
+    alone, and its earlier output, if any, is removed: an output file exists only for inputs ok in
+    the index. Largest inputs go first. ``task(input, output, options) -> summary`` replaces the per-file work (default: refine
     and write JSON). Raises :class:`InputError` for bad options, missing inputs or no inputs.
     """
     _check_options(ald, min_length, max_length, max_growth, workers, scheduler, timeout)
@@ -78,7 +79,10 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
         todo: list[Job] = []
         stats = {}
         for path in paths:
-            st = path.stat()
+            try:
+                st = path.stat()
+            except OSError as exc:
+                raise InputError(f"{path}: cannot read: {exc.strerror}") from None
             stats[str(path)] = st
             row = index.get(str(path))
             same = row is not None and (row.size, row.mtime_ns, row.options) == (st.st_size, st.st_mtime_ns, opts)
@@ -105,6 +109,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
                          mtime_ns=st.st_mtime_ns, options=opts, edges=res.edges, segments=res.segments,
                          worst_ald=res.worst_ald, seconds=res.seconds, error=res.error,
                          warnings=res.warnings)
+            if res.status == "failed":  # an output from an earlier version of this input is stale now
+                Path(outcome.job.output).unlink(missing_ok=True)
             report.results.append(res)
             if progress is not None:
                 progress(snapshot(res))
