@@ -89,7 +89,8 @@ def refine_curve(curve: Any, domain: tuple[float, float] | None = None, *, ald: 
             ev, a, b, ald=ald, min_length=min_length, max_length=max_length, search_tol=search_tol)
     if max_growth is not None:
         from .growth import limit_growth
-        params, points = limit_growth(ev, params, points, float(max_growth), min_length=min_length)
+        params, points, growth_notes = limit_growth(ev, params, points, float(max_growth), min_length=min_length)
+        notes = list(notes) + growth_notes
     for note in notes:
         warnings.warn(note, CadedgeWarning, stacklevel=2)
     return EdgeGrid(params=np.asarray(params, dtype=float), points=np.asarray(points, dtype=float),
