@@ -198,5 +198,6 @@ def test_rerun_skips_finished_retries_failed_redoes_changed(tmp_path, scheduler)
 def test_unreachable_scheduler_is_an_input_error(tmp_path):
     import dask
 
-    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}), pytest.raises(InputError, match="cannot connect to dask scheduler tcp://127.0.0.1:9"):
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}), \
+            pytest.raises(InputError, match="cannot connect to dask scheduler tcp://127.0.0.1:9"):
         run_batch([FIXTURES / "sphere.step"], tmp_path / "out", scheduler="tcp://127.0.0.1:9")

@@ -60,8 +60,10 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
     (same size, mtime and options, output present) is skipped; one that failed is skipped unless
     ``retry_failed``. A task that raises, kills its worker or runs over ``timeout`` seconds fails
     alone, and its earlier output, if any, is removed: an output file exists only for inputs ok in
-    the index. Largest inputs go first. ``task(input, output, options) -> summary`` replaces the per-file work (default: refine
-    and write JSON). Raises :class:`InputError` for bad options, missing inputs or no inputs.
+    the index. Largest inputs go first. ``task(input, output, options) -> summary`` replaces the
+    per-file work (default: refine and write JSON). ``progress`` receives a :class:`BatchProgress`
+    before the first task and after each. Raises :class:`InputError` for bad options, missing
+    inputs or no inputs.
     """
     _check_options(ald, min_length, max_length, max_growth, workers, scheduler, timeout)
     t0 = time.perf_counter()
@@ -85,7 +87,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
                 raise InputError(f"{path}: cannot read: {exc.strerror}") from None
             stats[str(path)] = st
             row = index.get(str(path))
-            same = row is not None and (row.size, row.mtime_ns, row.options) == (st.st_size, st.st_mtime_ns, opts)
+            same = row is not None and (row.size, row.mtime_ns, row.options) == (st.st_size, st.st_mtime_ns,
+                                                                                  opts)
             if same and row.status == "ok" and (out / row.output).is_file():
                 report.skipped.append(row.input)
             elif same and row.status == "failed" and not retry_failed:
@@ -95,8 +98,10 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
         # largest files first: the long tasks start early, so workers finish together
         todo.sort(key=lambda job: -stats[job.input].st_size)
 
+        counts = {"ok": 0, "failed": 0}
+
         def snapshot(last: FileResult | None) -> BatchProgress:
-            return BatchProgress(len(todo), len(report.results), len(report.ok), len(report.failed),
+            return BatchProgress(len(todo), len(report.results), counts["ok"], counts["failed"],
                                  len(report.skipped), len(report.skipped_failed), last)
 
         def record(outcome: Outcome) -> None:
@@ -112,6 +117,7 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
             if res.status == "failed":  # an output from an earlier version of this input is stale now
                 Path(outcome.job.output).unlink(missing_ok=True)
             report.results.append(res)
+            counts[res.status] += 1
             if progress is not None:
                 progress(snapshot(res))
 
