@@ -145,7 +145,7 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
                 progress(i + 1, total)
     if max_growth is not None:
         try:
-            grade_vertices(edges, topo, float(max_growth))
+            notes += grade_vertices(edges, topo, float(max_growth))
         except Standard_Failure as exc:
             raise GeometryError(f"{loaded.source}: grading edge ends at vertices: OCCT failed: {exc}") from exc
     spacing = _vertex_spacing(edges, len(vpoints))
