@@ -1,0 +1,229 @@
+"""Surface meshes on cadedge's edge grids, by gmsh, with a watertight/conforming check.
+
+``mesh_shape(source, ald=...)`` refines the edges (or takes a ready :class:`~cadedge.ShapeGrid`), loads the
+same B-rep into gmsh, and then either
+
+- ``mode="nodes"`` (default): imposes every edge grid as the mesh of its gmsh curve (shared vertex nodes,
+  so faces sharing an edge share its nodes) and lets gmsh mesh only the faces, sized by a field graded
+  from our spacings; or
+- ``mode="sizes"``: gives gmsh only sizes (at the grid's parametric points on each curve and at each
+  vertex) and lets it mesh the curves itself, for meshers that take sizes rather than nodes.
+
+The result carries the triangles, the faces gmsh failed on (with gmsh's reason; the rest is still
+meshed) and :class:`~cadedge.mesh.check.MeshCheck`. ``output`` may be ``.msh``, ``.stl`` or ``.vtk``
+(the mesh) or ``.geo`` (the spacing export, see :func:`~cadedge.mesh.sizes.write_geo`; no meshing).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..atomic import atomic_path
+from ..errors import InputError, MeshError
+from ..shapegrid import ShapeGrid
+from .check import MeshCheck, check_triangles
+from .generate import FaceFailure, mesh_surfaces, read_mesh
+from .sizes import DEFAULT_GROWTH, SizeField, apply_spacing_sizes, configure_gmsh_sizes, write_geo
+
+MODES = ("nodes", "sizes")
+MESH_SUFFIXES = (".msh", ".stl", ".vtk")
+# Edge grids for meshing are graded (neighbouring segments within this ratio, also across vertices): a
+# one-segment straight edge next to a finely split arc would otherwise force sliver triangles.
+MESH_MAX_GROWTH = 1.3
+
+
+@dataclass
+class MeshResult:
+    """A surface mesh: ``nodes`` (n, 3), ``triangles`` (m, 3) 0-based, ``triangle_faces`` (m,) B-rep face ids."""
+
+    source: str
+    mode: str
+    grid: ShapeGrid
+    nodes: np.ndarray
+    triangles: np.ndarray
+    triangle_faces: np.ndarray
+    failures: list[FaceFailure]
+    check: MeshCheck | None
+    output: Path | None = None
+    seconds: float = 0.0
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        """No failed face and a passed check."""
+        return not self.failures and (self.check is None or self.check.ok)
+
+    def problems(self) -> list[str]:
+        """One line per problem: failed faces first, then check failures."""
+        return [f.line() for f in self.failures] + (self.check.problems if self.check else [])
+
+    def lines(self) -> list[str]:
+        """The printed report: the check summary and the problems."""
+        head = f"{self.source}: {len(self.grid.edges)} edges, {self.grid.segments} segments, mode {self.mode}, " \
+               f"{self.seconds:.2f} s"
+        return [head] + (self.check.lines() if self.check else []) + self.problems()
+
+
+def _grid_of(source: Any, ald: float, min_length: float | None, max_length: float | None,
+             max_growth: float | None) -> ShapeGrid:
+    if isinstance(source, ShapeGrid):
+        if source.shape is None:
+            raise InputError(f"{source.source}: the shape grid carries no OCCT shape to mesh")
+        return source
+    from .. import refine_shape
+    return refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth)
+
+
+def _edge_multiplicity(raw, imposed, grid: ShapeGrid, emap) -> dict[tuple[int, int], int]:
+    """Expected triangle count of every imposed segment: how often its curve bounds a face."""
+    import gmsh
+
+    from .gmsh_model import surface_curve_uses
+
+    uses: dict[int, int] = {}
+    for _, s in gmsh.model.getEntities(2):
+        for c, n in surface_curve_uses(s).items():
+            uses[c] = uses.get(c, 0) + n
+    out: dict[tuple[int, int], int] = {}
+    for eid, chain in imposed.edge_nodes.items():
+        idx = raw.index_of(chain)
+        n = uses.get(emap.edges[eid].tag, 0)
+        for a, b in np.sort(np.column_stack([idx[:-1], idx[1:]]), axis=1):
+            out[(int(a), int(b))] = n
+    return out
+
+
+def _write(path: Path) -> None:
+    import gmsh
+
+    with atomic_path(path) as tmp:
+        gmsh.write(str(tmp))
+
+
+def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | None = None,
+               mode: str = "nodes", min_length: float | None = None, max_length: float | None = None,
+               max_growth: float | None = MESH_MAX_GROWTH, growth: float = DEFAULT_GROWTH,
+               max_size: float | None = None) -> MeshResult:
+    """Mesh every face of ``source`` (STEP path, cadquery/build123d/OCP shape, or a ``ShapeGrid``).
+
+    ``ald``, ``min_length``, ``max_length``, ``max_growth`` go to :func:`cadedge.refine_shape` (ignored for
+    a ready ShapeGrid); ``max_growth`` defaults to :data:`MESH_MAX_GROWTH` here (``None`` for pure ALD grids). Interior sizes grow from the edge spacings by ``growth`` per unit distance, capped
+    at ``max_size`` (default: ``max_length``, else the largest edge spacing). ``mode`` is ``"nodes"`` or
+    ``"sizes"`` (see the module doc). Raises :class:`InputError` on bad arguments or input; faces gmsh
+    fails on are returned in ``failures``, not raised.
+    """
+    if mode not in MODES:
+        raise InputError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
+    out = Path(output) if output is not None else None
+    if out is not None and out.suffix.lower() not in MESH_SUFFIXES + (".geo",):
+        raise InputError(f"{out}: unsupported mesh output suffix {out.suffix!r} "
+                         f"(use {', '.join(MESH_SUFFIXES)} or .geo)")
+    if out is not None and not (out.parent if str(out.parent) else Path(".")).is_dir():
+        raise InputError(f"{out}: output folder does not exist")
+    t0 = time.perf_counter()
+    grid = _grid_of(source, ald, min_length, max_length, max_growth)
+    field_ = SizeField(grid, growth=growth, min_size=min_length, max_size=max_size or max_length)
+    if out is not None and out.suffix.lower() == ".geo":
+        write_geo(grid, out, growth=growth, max_size=max_size or max_length)
+        return MeshResult(source=grid.source, mode="sizes", grid=grid, nodes=np.zeros((0, 3)),
+                          triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
+                          failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
+                          notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
+    return _run_gmsh(grid, field_, mode, out, t0)
+
+
+def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float) -> MeshResult:
+    import gmsh
+
+    from .gmsh_model import gmsh_session, import_shape, map_entities
+    from .impose import impose_edge_grids
+
+    with gmsh_session():
+        import_shape(grid.shape)
+        emap = map_entities(grid)
+        imposed = None
+        if mode == "nodes":
+            imposed = impose_edge_grids(grid, emap)
+            configure_gmsh_sizes(field_)
+            gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
+            gmsh.model.mesh.generate(1)  # only the degenerate and unmatched curves are still empty
+        else:
+            apply_spacing_sizes(grid, emap, field_)
+            configure_gmsh_sizes(field_)
+            gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 0)
+            gmsh.model.mesh.generate(1)
+        surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        failed = mesh_surfaces(surfaces)
+        raw = read_mesh(surfaces)
+        face_of = emap.face_of_surface
+        failures = [FaceFailure(face=face_of.get(s, s), surface=s, reason=r) for s, r in sorted(failed.items())]
+        grid_points = None
+        multiplicity = None
+        if imposed is not None:
+            grid_points = np.vstack([np.asarray(v.point, dtype=float)[None] for v in grid.vertices]
+                                    + [e.points for e in grid.edges if not e.degenerate])
+            multiplicity = _edge_multiplicity(raw, imposed, grid, emap)
+        tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
+        check = check_triangles(raw.nodes, raw.triangles, triangle_faces=tri_faces, grid_points=grid_points,
+                                edge_multiplicity=multiplicity)
+        if out is not None:
+            _write(out)
+    notes = list(emap.notes)
+    if emap.unmatched_curves:
+        notes.append(f"gmsh curves {emap.unmatched_curves} match no cadedge edge; gmsh meshed them itself")
+    return MeshResult(source=grid.source, mode=mode, grid=grid, nodes=raw.nodes, triangles=raw.triangles,
+                      triangle_faces=tri_faces, failures=failures, check=check, output=out,
+                      seconds=time.perf_counter() - t0, notes=notes)
+
+
+def check_mesh(result_or_nodes: MeshResult | np.ndarray, triangles: np.ndarray | None = None, *,
+               grid: ShapeGrid | None = None) -> MeshCheck:
+    """Watertight/conforming check of a :class:`MeshResult` or of raw ``nodes`` and ``triangles``.
+
+    For raw arrays, ``grid`` (optional) adds the every-edge-grid-node-is-a-mesh-node test; boundary edges
+    are then only expected where a grid edge bounds a single face.
+    """
+    if isinstance(result_or_nodes, MeshResult):
+        if result_or_nodes.check is None:
+            raise MeshError(f"{result_or_nodes.source}: no mesh to check (spacing export only)")
+        return result_or_nodes.check
+    if triangles is None:
+        raise InputError("check_mesh needs triangles with raw nodes")
+    nodes = np.asarray(result_or_nodes, dtype=float)
+    grid_points = None
+    multiplicity = None
+    if grid is not None:
+        grid_points = np.vstack([np.asarray(v.point, dtype=float)[None] for v in grid.vertices]
+                                + [e.points for e in grid.edges if not e.degenerate])
+        multiplicity = _multiplicity_from_grid(nodes, grid)
+    return check_triangles(nodes, triangles, grid_points=grid_points, edge_multiplicity=multiplicity)
+
+
+def _multiplicity_from_grid(nodes: np.ndarray, grid: ShapeGrid) -> dict[tuple[int, int], int]:
+    """Expected triangle counts of grid segments found in a raw mesh (by exact coordinates)."""
+    from .check import _row_keys
+
+    keys = _row_keys(nodes)
+    order = np.argsort(keys)
+    out: dict[tuple[int, int], int] = {}
+    for e in grid.edges:
+        if e.degenerate:
+            continue
+        k = _row_keys(e.points)
+        pos = np.clip(np.searchsorted(keys[order], k), 0, len(order) - 1)
+        idx = np.where(keys[order][pos] == k, order[pos], -1)
+        n = len(e.faces) if len(e.faces) > 1 else 0  # one face: free boundary or seam, both fine
+        for a, b in np.sort(np.column_stack([idx[:-1], idx[1:]]), axis=1):
+            if a >= 0:
+                out[(int(a), int(b))] = n
+    return out
+
+
+__all__ = ["mesh_shape", "check_mesh", "MeshResult", "MeshCheck", "FaceFailure", "SizeField", "write_geo",
+           "MODES"]

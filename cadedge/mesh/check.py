@@ -1,0 +1,130 @@
+"""Watertight / conforming check of a triangle surface mesh against its edge grids.
+
+Per connected shell of triangles (trimesh's face-adjacency components): every triangle edge must be
+shared by exactly two triangles, except edges on B-rep edges that bound fewer or more faces (free
+boundaries of open shells are expected once; non-manifold edges as often as they have faces). Nodes at
+identical coordinates under different tags are a hidden crack and fail the check. Every edge-grid point
+must be a node of some triangle, at exactly its coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+
+@dataclass
+class ShellCheck:
+    """One connected set of triangles."""
+
+    triangles: int
+    faces: list[int]
+    watertight: bool
+    boundary_edges: int
+    bad_edges: int
+
+
+@dataclass
+class MeshCheck:
+    """Result of :func:`check_triangles`; ``ok`` is the overall verdict, ``problems`` one line each."""
+
+    nodes: int
+    triangles: int
+    shells: list[ShellCheck]
+    grid_nodes: int
+    missing_grid_nodes: int
+    duplicate_nodes: int
+    min_angle_deg: float
+    problems: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+    def lines(self) -> list[str]:
+        """Human-readable summary, one line per shell, then the verdict."""
+        out = [f"mesh: {self.nodes} nodes, {self.triangles} triangles, {len(self.shells)} shells, "
+               f"min angle {self.min_angle_deg:.1f} deg"]
+        for i, s in enumerate(self.shells, 1):
+            kind = "closed, watertight" if s.watertight else (
+                f"open, {s.boundary_edges} boundary edges" if not s.bad_edges else "NOT conforming")
+            out.append(f"  shell {i}: {s.triangles} triangles on {len(s.faces)} faces: {kind}"
+                       + (f", {s.bad_edges} bad edges" if s.bad_edges else ""))
+        if self.grid_nodes:
+            out.append(f"  edge-grid nodes in mesh: {self.grid_nodes - self.missing_grid_nodes}/{self.grid_nodes}")
+        out.append("check: ok" if self.ok else f"check: FAILED ({len(self.problems)} problems)")
+        return out
+
+
+def _row_keys(a: np.ndarray) -> np.ndarray:
+    """Rows of a float array as hashable byte strings (exact coordinate identity)."""
+    a = np.ascontiguousarray(np.asarray(a, dtype=np.float64) + 0.0)  # +0.0 folds -0.0 into 0.0
+    return a.view(np.dtype((np.void, a.dtype.itemsize * a.shape[1]))).ravel()
+
+
+def min_angle_deg(nodes: np.ndarray, triangles: np.ndarray) -> float:
+    """Smallest interior angle over all triangles, in degrees (trimesh's per-face angles)."""
+    if len(triangles) == 0:
+        return float("nan")
+    return float(np.degrees(trimesh.triangles.angles(nodes[triangles]).min()))
+
+
+def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces: np.ndarray | None = None,
+                    grid_points: np.ndarray | None = None,
+                    edge_multiplicity: dict[tuple[int, int], int] | None = None) -> MeshCheck:
+    """Check a triangle mesh: ``nodes`` (n, 3), ``triangles`` (m, 3) 0-based indices into ``nodes``.
+
+    ``triangle_faces`` gives each triangle's B-rep face id (for the report); ``grid_points`` the edge-grid
+    points that must be mesh nodes; ``edge_multiplicity`` maps a sorted node-index pair on a B-rep edge to
+    the number of triangles it should have (1 on a free boundary, 2 normally, more on non-manifold edges,
+    0 for "1 or 2": a single-face edge not known to be a seam); any other mesh edge must have exactly two.
+    """
+    nodes = np.asarray(nodes, dtype=float)
+    tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    tri_faces = np.zeros(len(tris), dtype=np.int64) if triangle_faces is None else np.asarray(triangle_faces)
+    problems: list[str] = []
+    mesh = trimesh.Trimesh(nodes, tris, process=False, validate=False)
+    edges = mesh.edges_sorted  # (3m, 2), edge k belongs to triangle k // 3
+    uniq, inverse, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    expected = np.full(len(uniq), 2)
+    if edge_multiplicity:
+        key = {k: v for k, v in edge_multiplicity.items()}
+        for j, (a, b) in enumerate(uniq):
+            expected[j] = key.get((int(a), int(b)), 2)
+    either = expected == 0  # a single-face edge that may be a seam: once (free boundary) or twice
+    bad = np.where(either, (counts < 1) | (counts > 2), counts != expected)
+    boundary = (counts == 1) & ((expected == 1) | either)
+    labels = trimesh.graph.connected_components(mesh.face_adjacency, nodes=np.arange(len(tris)),
+                                                min_len=1, engine=None)
+    shells: list[ShellCheck] = []
+    edge_tri = np.arange(len(edges)) // 3
+    for comp in sorted(labels, key=lambda c: int(np.min(c))):
+        comp = np.asarray(comp)
+        in_comp = np.zeros(len(tris), dtype=bool)
+        in_comp[comp] = True
+        used = np.unique(inverse.ravel()[in_comp[edge_tri]])
+        n_bad, n_bnd = int(bad[used].sum()), int(boundary[used].sum())
+        faces = sorted({int(f) for f in tri_faces[comp]})
+        shells.append(ShellCheck(triangles=len(comp), faces=faces, watertight=n_bad == 0 and n_bnd == 0,
+                                 boundary_edges=n_bnd, bad_edges=n_bad))
+        if n_bad:
+            problems.append(f"shell on faces {faces[:8]}{'...' if len(faces) > 8 else ''}: {n_bad} triangle "
+                            "edges not shared by the expected number of triangles (not watertight/conforming)")
+    used_nodes = np.unique(tris)
+    keys = _row_keys(nodes[used_nodes])
+    _, dup_counts = np.unique(keys, return_counts=True)
+    n_dup = int((dup_counts > 1).sum())
+    if n_dup:
+        problems.append(f"{n_dup} coordinates carry more than one mesh node (a crack between faces)")
+    n_grid = n_missing = 0
+    if grid_points is not None and len(grid_points):
+        gkeys = np.unique(_row_keys(grid_points))
+        n_grid = len(gkeys)
+        n_missing = int((~np.isin(gkeys, keys)).sum())
+        if n_missing:
+            problems.append(f"{n_missing} of {n_grid} edge-grid nodes are not mesh nodes")
+    return MeshCheck(nodes=len(used_nodes), triangles=len(tris), shells=shells, grid_nodes=n_grid,
+                     missing_grid_nodes=n_missing, duplicate_nodes=n_dup,
+                     min_angle_deg=min_angle_deg(nodes, tris), problems=problems)

@@ -1,0 +1,214 @@
+"""Load a B-rep into gmsh and map gmsh's entity tags to cadedge's vertex, edge and face ids.
+
+The shape travels as an OCCT ``.brep`` file rather than a native pointer: gmsh links its own copy of
+OpenCASCADE, and handing a ``TopoDS_Shape`` from OCP's build to gmsh's is not ABI-safe. The BREP text
+keeps the topology (shared vertices and edges, seams, degenerate edges, locations) exactly, and gmsh
+binds its entities in ``TopExp::MapShapes`` order, which is the order of cadedge's ids. That identity is
+verified edge by edge (gmsh's curve evaluated at our parameters must land on our points); edges that
+fail it are matched by geometry instead (end points, then every grid point projected onto the curve),
+which also handles reversed parametrisations.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from dataclasses import dataclass, field
+from typing import Iterator
+
+import gmsh
+import numpy as np
+
+from ..errors import GeometryError, MeshError
+from ..shapegrid import ShapeGrid
+
+
+@contextlib.contextmanager
+def gmsh_session() -> Iterator[None]:
+    """Initialise gmsh quietly with its logger on; always finalise. gmsh is a process-wide singleton."""
+    if gmsh.isInitialized():
+        raise MeshError("gmsh is already initialised in this process; cadedge meshes one model at a time")
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.logger.start()
+        yield
+    finally:
+        gmsh.finalize()
+
+
+def import_shape(shape: object) -> None:
+    """Put the OCCT shape into the current gmsh model without healing, sewing or fragmenting."""
+    from OCP.BRepTools import BRepTools
+
+    for opt in ("Geometry.OCCFixDegenerated", "Geometry.OCCFixSmallEdges", "Geometry.OCCFixSmallFaces",
+                "Geometry.OCCSewFaces", "Geometry.OCCMakeSolids"):
+        gmsh.option.setNumber(opt, 0)
+    gmsh.option.setNumber("Geometry.OCCScaling", 1)
+    gmsh.option.setNumber("Geometry.OCCImportLabels", 0)
+    with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
+        path = os.path.join(tmp, "shape.brep")
+        if not BRepTools.Write_s(shape, path):
+            raise GeometryError("OCCT could not write the shape as BREP for gmsh")
+        try:
+            gmsh.model.occ.importShapes(path, highestDimOnly=False)
+            gmsh.model.occ.synchronize()
+        except Exception as exc:  # gmsh raises a bare Exception carrying its last error
+            raise GeometryError(f"gmsh could not import the shape: {exc}") from exc
+
+
+@dataclass
+class CurveMatch:
+    """gmsh curve ``tag`` for one cadedge edge; ``params`` are gmsh parameters of the edge's grid points."""
+
+    tag: int
+    params: np.ndarray
+    by_order: bool
+
+
+@dataclass
+class EntityMap:
+    """cadedge id -> gmsh tag for vertices, non-degenerate edges and faces (plus the reverse for faces)."""
+
+    vertices: dict[int, int]
+    edges: dict[int, CurveMatch]
+    faces: dict[int, int]
+    degenerate_curves: list[int] = field(default_factory=list)
+    unmatched_curves: list[int] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def face_of_surface(self) -> dict[int, int]:
+        return {s: f for f, s in self.faces.items()}
+
+
+def model_tolerance(grid: ShapeGrid) -> float:
+    """Distance under which two points count as the same: relative to the model size and edge tolerances."""
+    pts = [e.points for e in grid.edges if len(e.points)] + [np.atleast_2d(v.point) for v in grid.vertices]
+    allp = np.vstack(pts) if pts else np.zeros((1, 3))
+    diag = float(np.linalg.norm(allp.max(axis=0) - allp.min(axis=0))) or 1.0
+    tol = max([e.tolerance for e in grid.edges] + [v.tolerance for v in grid.vertices] + [0.0])
+    return max(1e-7 * diag, 2.0 * tol)
+
+
+def _curve_values(tag: int, params: np.ndarray) -> np.ndarray:
+    return np.asarray(gmsh.model.getValue(1, tag, params.tolist()), dtype=float).reshape(-1, 3)
+
+
+def _match_vertices(grid: ShapeGrid, tol: float, notes: list[str]) -> dict[int, int]:
+    from scipy.spatial import cKDTree
+
+    tags = [t for _, t in gmsh.model.getEntities(0)]
+    coords = np.array([gmsh.model.getValue(0, t, []) for t in tags], dtype=float).reshape(-1, 3)
+    out: dict[int, int] = {}
+    tree = cKDTree(coords) if len(coords) else None
+    for v in grid.vertices:
+        p = np.asarray(v.point, dtype=float)
+        if v.id <= len(tags) and np.linalg.norm(coords[v.id - 1] - p) <= tol:
+            out[v.id] = tags[v.id - 1]
+            continue
+        if tree is None:
+            raise MeshError(f"gmsh has no point entities; cannot place vertex {v.id}")
+        d, i = tree.query(p)
+        if d > tol:
+            raise MeshError(f"vertex {v.id} at {p.tolist()} has no gmsh point within {tol:.3g}")
+        out[v.id] = tags[int(i)]
+        notes.append(f"vertex {v.id} matched to gmsh point {tags[int(i)]} by position")
+    return out
+
+
+def _match_by_geometry(edge, candidates: list[int], tol: float) -> CurveMatch | None:
+    """Find the gmsh curve carrying every grid point of ``edge``; parameters come from projection."""
+    p0, p1 = edge.points[0], edge.points[-1]
+    for tag in candidates:
+        lo, hi = (float(x[0]) for x in gmsh.model.getParametrizationBounds(1, tag))
+        ends = _curve_values(tag, np.array([lo, hi]))
+        same = np.linalg.norm(ends[0] - p0) <= tol and np.linalg.norm(ends[1] - p1) <= tol
+        flip = np.linalg.norm(ends[0] - p1) <= tol and np.linalg.norm(ends[1] - p0) <= tol
+        if not (same or flip):
+            continue
+        params = np.asarray(gmsh.model.getParametrization(1, tag, edge.points.ravel().tolist()), dtype=float)
+        params[0], params[-1] = (lo, hi) if same else (hi, lo)
+        if edge.closed and np.isclose(params[0], params[-1]):
+            params[-1] = hi if params[0] == lo else lo
+        if not (np.all(np.diff(params) > 0) or np.all(np.diff(params) < 0)):
+            continue
+        if np.max(np.linalg.norm(_curve_values(tag, params) - edge.points, axis=1)) <= tol:
+            return CurveMatch(tag=tag, params=params, by_order=False)
+    return None
+
+
+def map_entities(grid: ShapeGrid) -> EntityMap:
+    """Map every cadedge vertex, edge and face of ``grid`` onto the gmsh model loaded from ``grid.shape``."""
+    tol = model_tolerance(grid)
+    notes: list[str] = []
+    vertices = _match_vertices(grid, tol, notes)
+    curve_tags = [t for _, t in gmsh.model.getEntities(1)]
+    by_tag = set(curve_tags)
+    edges: dict[int, CurveMatch] = {}
+    pending = []
+    degenerate_curves = []
+    for e in grid.edges:
+        if e.degenerate:
+            if e.id in by_tag:
+                degenerate_curves.append(e.id)
+            continue
+        if e.id in by_tag:
+            try:
+                ok = np.max(np.linalg.norm(_curve_values(e.id, e.params) - e.points, axis=1)) <= tol
+            except Exception:  # gmsh raises if the parameters are outside the curve's range
+                ok = False
+            if ok:
+                edges[e.id] = CurveMatch(tag=e.id, params=np.asarray(e.params, dtype=float), by_order=True)
+                continue
+        pending.append(e)
+    taken = {m.tag for m in edges.values()} | set(degenerate_curves)
+    for e in pending:
+        m = _match_by_geometry(e, [t for t in curve_tags if t not in taken], tol)
+        if m is None:
+            raise MeshError(f"edge {e.id} ({e.curve}) matches no gmsh curve within {tol:.3g}")
+        edges[e.id] = m
+        taken.add(m.tag)
+        notes.append(f"edge {e.id} matched to gmsh curve {m.tag} by geometry")
+    unmatched = [t for t in curve_tags if t not in taken]
+    faces = _match_faces(grid, edges)
+    return EntityMap(vertices=vertices, edges=edges, faces=faces, degenerate_curves=degenerate_curves,
+                     unmatched_curves=unmatched, notes=notes)
+
+
+def _match_faces(grid: ShapeGrid, edges: dict[int, CurveMatch]) -> dict[int, int]:
+    """Face ids are MapShapes order like gmsh's surface tags; confirm through edge adjacency, else match on it."""
+    surf_tags = [t for _, t in gmsh.model.getEntities(2)]
+    ours: dict[int, set[int]] = {}
+    for e in grid.edges:
+        if e.id in edges:
+            for f in e.faces:
+                ours.setdefault(f, set()).add(e.id)
+    curve_to_edge = {m.tag: eid for eid, m in edges.items()}
+    theirs: dict[int, set[int]] = {}
+    for s in surf_tags:
+        bnd = gmsh.model.getBoundary([(2, s)], combined=False, oriented=False)
+        theirs[s] = {curve_to_edge[abs(t)] for _, t in bnd if abs(t) in curve_to_edge}
+    n_faces = grid.faces or len(surf_tags)
+    if n_faces == len(surf_tags) and all(theirs[s] == ours.get(s, set()) for s in surf_tags):
+        return {s: s for s in surf_tags}
+    out: dict[int, int] = {}
+    free = dict(theirs)
+    for f in sorted(ours):
+        hits = [s for s, es in free.items() if es == ours[f]]
+        if hits:
+            out[f] = hits[0]
+            del free[hits[0]]
+    for s in sorted(free):  # bounded only by degenerate edges, or ambiguous: keep gmsh's order
+        if s not in out:
+            out[s] = s
+    return out
+
+
+def surface_curve_uses(surface: int) -> dict[int, int]:
+    """How many times each curve bounds ``surface`` (a seam bounds its face twice)."""
+    uses: dict[int, int] = {}
+    for _, t in gmsh.model.getBoundary([(2, surface)], combined=False, oriented=False):
+        uses[abs(t)] = uses.get(abs(t), 0) + 1
+    return uses

@@ -1,0 +1,62 @@
+"""Impose cadedge's edge grids on gmsh's curves as their 1-D mesh.
+
+Every B-rep vertex gets one node on its gmsh point entity; every edge's interior grid points become
+nodes on its gmsh curve (with gmsh parameters), and its line elements start and end on the vertex
+nodes. Faces sharing an edge therefore share its nodes. With ``Mesh.MeshOnlyEmpty`` gmsh leaves these
+curves alone and meshes only the faces (and the degenerate curves, which carry no grid).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import gmsh
+import numpy as np
+
+from ..shapegrid import ShapeGrid
+from .gmsh_model import EntityMap
+
+
+@dataclass
+class ImposedNodes:
+    """gmsh node tags of every grid point: ``vertex_nodes[vid]`` and ``edge_nodes[eid]`` (first to last)."""
+
+    vertex_nodes: dict[int, int]
+    edge_nodes: dict[int, np.ndarray]
+
+    def all_tags(self) -> np.ndarray:
+        parts = [np.fromiter(self.vertex_nodes.values(), dtype=np.int64)]
+        parts += list(self.edge_nodes.values())
+        return np.unique(np.concatenate(parts)) if parts else np.zeros(0, dtype=np.int64)
+
+
+def impose_edge_grids(grid: ShapeGrid, emap: EntityMap) -> ImposedNodes:
+    """Add the grid nodes and line elements to the gmsh model; returns the node tags used."""
+    vertex_nodes: dict[int, int] = {}
+    for v in grid.vertices:
+        tag = v.id
+        gmsh.model.mesh.addNodes(0, emap.vertices[v.id], [tag], np.asarray(v.point, dtype=float).tolist())
+        vertex_nodes[v.id] = tag
+    next_node = max(vertex_nodes.values(), default=0) + 1
+    next_elem = 1
+    edge_nodes: dict[int, np.ndarray] = {}
+    for e in grid.edges:
+        if e.degenerate or e.id not in emap.edges:
+            continue
+        match = emap.edges[e.id]
+        inner = len(e.params) - 2
+        tags = np.arange(next_node, next_node + inner, dtype=np.int64)
+        next_node += inner
+        chain = np.concatenate([[vertex_nodes[e.vertices[0]]], tags, [vertex_nodes[e.vertices[1]]]])
+        edge_nodes[e.id] = chain
+        params, points = match.params, np.asarray(e.points, dtype=float)
+        if params[-1] < params[0]:  # gmsh's curve runs the other way: give gmsh its own order
+            chain, params, points = chain[::-1], params[::-1], points[::-1]
+        if inner:
+            gmsh.model.mesh.addNodes(1, match.tag, chain[1:-1].tolist(), points[1:-1].ravel().tolist(),
+                                     params[1:-1].tolist())
+        n_seg = len(chain) - 1
+        conn = np.column_stack([chain[:-1], chain[1:]]).ravel()
+        gmsh.model.mesh.addElementsByType(match.tag, 1, list(range(next_elem, next_elem + n_seg)), conn.tolist())
+        next_elem += n_seg
+    return ImposedNodes(vertex_nodes=vertex_nodes, edge_nodes=edge_nodes)
