@@ -161,3 +161,30 @@ def test_build123d_part_and_raw_topods():
     raw = load_shape(part.wrapped)
     assert raw.source == "<TopoDS_Shape>" and raw.shape.IsSame(part.wrapped)
     _one_line_error(TopoDS_Shape(), "empty")
+
+
+def test_units_follow_occts_cascade_unit_setting():
+    from OCP.Interface import Interface_Static
+
+    before = Interface_Static.CVal_s("xstep.cascade.unit")
+    try:
+        assert Interface_Static.SetCVal_s("xstep.cascade.unit", "M")
+        loaded = load_shape(CORPUS / "live-clones__gmsh__wing_fuselage.step")
+        assert loaded.units == "m"
+        assert _diag(loaded.shape) == pytest.approx(0.9188, rel=1e-3)
+    finally:
+        Interface_Static.SetCVal_s("xstep.cascade.unit", before)
+    assert load_shape(FIXTURES / "cylinder.step").units == "mm"
+
+
+def test_quiet_occt_restores_the_printers():
+    from OCP.Message import Message
+
+    from cadedge.occt.reader import quiet_occt
+
+    before = Message.DefaultMessenger_s().Printers().Size()
+    with quiet_occt():
+        with quiet_occt():
+            assert Message.DefaultMessenger_s().Printers().Size() == 0
+        assert Message.DefaultMessenger_s().Printers().Size() == 0
+    assert Message.DefaultMessenger_s().Printers().Size() == before

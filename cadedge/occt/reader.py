@@ -48,6 +48,8 @@ _READ_STATUS = {"RetVoid": "nothing to read", "RetError": "cannot open or unknow
 _HEAD_BYTES = 4096
 _TAIL_BYTES = 4096
 _occt_output = threading.Lock()
+_quiet_depth = 0
+_saved_printers: list[Any] = []
 
 
 @dataclass
@@ -62,18 +64,29 @@ class LoadedShape:
 
 @contextmanager
 def quiet_occt() -> Iterator[None]:
-    """Detach OCCT's default message printers (its console output) for the duration of the block."""
+    """Detach OCCT's default message printers (its console output) for the duration of the block.
+
+    Reference-counted, so concurrent readers in threads do not serialise or restore too early.
+    """
+    global _quiet_depth, _saved_printers
     with _occt_output:
-        messenger = Message.DefaultMessenger_s()
-        printers = messenger.Printers()
-        saved = [printers.Value(i) for i in range(1, printers.Size() + 1)]
-        for p in saved:
-            messenger.RemovePrinter(p)
-        try:
-            yield
-        finally:
-            for p in saved:
-                messenger.AddPrinter(p)
+        if _quiet_depth == 0:
+            messenger = Message.DefaultMessenger_s()
+            printers = messenger.Printers()
+            _saved_printers = [printers.Value(i) for i in range(1, printers.Size() + 1)]
+            for p in _saved_printers:
+                messenger.RemovePrinter(p)
+        _quiet_depth += 1
+    try:
+        yield
+    finally:
+        with _occt_output:
+            _quiet_depth -= 1
+            if _quiet_depth == 0:
+                messenger = Message.DefaultMessenger_s()
+                for p in _saved_printers:
+                    messenger.AddPrinter(p)
+                _saved_printers = []
 
 
 def _check_messages(checks: Interface_CheckIterator, stage: str) -> list[str]:
