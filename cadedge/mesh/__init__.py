@@ -128,6 +128,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         raise InputError(f"{out}: output folder does not exist")
     t0 = time.perf_counter()
     grid = _grid_of(source, ald, min_length, max_length, max_growth)
+    if not grid.faces:
+        raise InputError(f"{grid.source}: the shape has no faces to mesh (only loose edges)")
     field_ = SizeField(grid, growth=growth, min_size=min_length, max_size=max_size or max_length)
     if out is not None and out.suffix.lower() == ".geo":
         write_geo(grid, out, growth=growth, max_size=max_size or max_length)

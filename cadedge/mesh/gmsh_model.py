@@ -129,9 +129,9 @@ def _match_by_geometry(edge, candidates: list[int], tol: float) -> CurveMatch | 
         if not (same or flip):
             continue
         params = np.asarray(gmsh.model.getParametrization(1, tag, edge.points.ravel().tolist()), dtype=float)
+        if same and flip:  # a closed curve: the interior points tell the direction
+            same = len(params) < 3 or params[1] <= params[-2]
         params[0], params[-1] = (lo, hi) if same else (hi, lo)
-        if edge.closed and np.isclose(params[0], params[-1]):
-            params[-1] = hi if params[0] == lo else lo
         if not (np.all(np.diff(params) > 0) or np.all(np.diff(params) < 0)):
             continue
         if np.max(np.linalg.norm(_curve_values(tag, params) - edge.points, axis=1)) <= tol:

@@ -1,0 +1,203 @@
+"""cadedge.mesh: real gmsh on real OCCT shapes (fixtures, cadquery shapes, corpus solids)."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+gmsh = pytest.importorskip("gmsh")
+trimesh = pytest.importorskip("trimesh")
+
+import cadedge  # noqa: E402
+from cadedge.errors import InputError  # noqa: E402
+from cadedge.mesh import check_mesh, mesh_shape  # noqa: E402
+from cadedge.mesh.check import check_triangles  # noqa: E402
+
+from conftest import CORPUS, FIXTURES  # noqa: E402
+
+ALD = 1e-2
+CLOSED_FIXTURES = ["bracket", "cylinder", "sphere", "spline_prism", "two_solids"]
+
+
+@pytest.fixture(scope="module")
+def grids() -> dict[str, cadedge.ShapeGrid]:
+    return {name: cadedge.refine_shape(FIXTURES / f"{name}.step", ald=ALD, max_growth=1.3)
+            for name in CLOSED_FIXTURES + ["open_face"]}
+
+
+def _assert_watertight(result) -> None:
+    assert not result.failures, [f.line() for f in result.failures]
+    assert result.check.ok, result.check.problems
+    assert result.check.shells and all(s.watertight for s in result.check.shells)
+    assert result.check.missing_grid_nodes == 0
+    # independent of our check: trimesh on each connected piece, and exact grid points among the nodes
+    mesh = trimesh.Trimesh(result.nodes, result.triangles, process=False)
+    for part in mesh.split(only_watertight=False):
+        assert part.is_watertight
+    nodes = {tuple(p) for p in result.nodes[np.unique(result.triangles)]}
+    for e in result.grid.edges:
+        assert all(tuple(p) in nodes for p in e.points), f"edge {e.id}"
+    faces = set(range(1, result.grid.faces + 1))
+    assert set(np.unique(result.triangle_faces)) == faces
+
+
+@pytest.mark.parametrize("name", CLOSED_FIXTURES)
+def test_closed_fixtures_are_watertight_and_carry_every_grid_node(grids, name):
+    result = mesh_shape(grids[name])
+    _assert_watertight(result)
+    assert result.check.min_angle_deg > 5.0
+
+
+def test_shells_match_solids(grids):
+    result = mesh_shape(grids["two_solids"])
+    assert len(result.check.shells) == 2
+    assert sum(len(s.faces) for s in result.check.shells) == grids["two_solids"].faces
+
+
+def test_open_shell_boundary_is_reported_not_failed(grids):
+    result = mesh_shape(grids["open_face"])
+    assert not result.failures and result.check.ok
+    (shell,) = result.check.shells
+    assert not shell.watertight and shell.bad_edges == 0
+    boundary_segments = sum(e.segments for e in grids["open_face"].edges if len(e.faces) == 1)
+    assert shell.boundary_edges == boundary_segments
+
+
+def test_sizes_mode_is_watertight_without_imposed_nodes(grids):
+    result = mesh_shape(grids["bracket"], mode="sizes")
+    assert not result.failures and result.check.ok
+    assert all(s.watertight for s in result.check.shells)
+    assert result.check.grid_nodes == 0  # nodes are gmsh's own in this mode
+
+
+def test_interior_is_graded_not_overrefined(grids):
+    """Triangle sizes follow the edge spacings: far fewer triangles than a uniform mesh at the finest spacing."""
+    grid = grids["bracket"]
+    result = mesh_shape(grid)
+    area = trimesh.Trimesh(result.nodes, result.triangles, process=False).area
+    finest = min(min(e.spacing) for e in grid.edges if not e.degenerate)
+    uniform = area / (np.sqrt(3) / 4 * finest ** 2)
+    assert len(result.triangles) < uniform / 5
+
+
+def _shuffled_order(grid: cadedge.ShapeGrid) -> cadedge.ShapeGrid:
+    """Same edges, but listed backwards, each with its points reversed and made-up parameters.
+
+    gmsh's tags then no longer follow our ids and gmsh's curves run against our edges, so the mapping must
+    fall back on geometry (end points, projection of every grid point) and handle the reversal.
+    """
+    g = copy.copy(grid)
+    n = len(grid.edges)
+    g.edges = []
+    for k, e in enumerate(reversed(grid.edges)):
+        e2 = copy.copy(e)
+        e2.id = k + 1
+        if not e.degenerate:
+            e2.points = e.points[::-1].copy()
+            e2.vertices = (e.vertices[1], e.vertices[0])
+            e2.params = np.linspace(0.0, 1.0, len(e.params))
+        g.edges.append(e2)
+    assert len(g.edges) == n
+    return g
+
+
+def test_mapping_falls_back_on_geometry_for_reordered_reversed_edges(grids):
+    result = mesh_shape(_shuffled_order(grids["cylinder"]))
+    _assert_watertight(result)
+    assert any("by geometry" in n for n in result.notes)
+
+
+def test_gmsh_failure_is_reported_by_face_and_the_rest_is_meshed(grids):
+    """A folded grid on one box edge: its two faces fail with gmsh's reason, the others still mesh."""
+    g = copy.copy(grids["two_solids"])
+    g.edges = [copy.copy(e) for e in g.edges]
+    edge = next(e for e in g.edges if e.curve == "Line" and len(e.faces) == 2)
+    k = 9
+    t = np.linspace(0.0, 1.0, k)
+    order = np.r_[0, np.arange(k - 2, 0, -1), k - 1]  # interior points run backwards: the boundary folds
+    edge.params = edge.params[0] + (edge.params[-1] - edge.params[0]) * t[order]
+    edge.params[[0, -1]] = grids["two_solids"].edges[edge.id - 1].params[[0, -1]]
+    a, b = edge.points[0], edge.points[-1]
+    edge.points = a + (b - a) * t[order][:, None]
+    edge.points[[0, -1]] = a, b
+    result = mesh_shape(g)
+    failed = {f.face for f in result.failures}
+    assert failed and failed <= set(edge.faces)
+    assert all(f.reason for f in result.failures)
+    assert not result.ok
+    assert set(np.unique(result.triangle_faces)) == set(range(1, g.faces + 1)) - failed
+
+
+def test_check_finds_cracks_and_holes(grids):
+    result = mesh_shape(grids["cylinder"])
+    nodes, tris = result.nodes, result.triangles
+    holed = check_triangles(nodes, tris[1:])
+    assert not holed.ok and any(not s.watertight for s in holed.shells)
+    cracked_nodes = np.vstack([nodes, nodes[tris[0, 0]]])  # same coordinates, second node
+    cracked = tris.copy()
+    cracked[0, 0] = len(nodes)
+    crack = check_triangles(cracked_nodes, cracked)
+    assert not crack.ok and crack.duplicate_nodes == 1
+    raw = check_mesh(nodes, tris, grid=grids["cylinder"])
+    assert raw.ok and raw.missing_grid_nodes == 0
+    moved = nodes.copy()
+    vertex = np.asarray(grids["cylinder"].vertices[0].point)
+    moved[np.flatnonzero((nodes == vertex).all(axis=1))[0]] += 1e-9  # off by a nanometre is not there
+    assert check_mesh(moved, tris, grid=grids["cylinder"]).missing_grid_nodes == 1
+    assert check_mesh(result) is result.check
+
+
+def test_geo_export_meshes_in_gmsh(grids, tmp_path):
+    out = tmp_path / "cyl.geo"
+    result = mesh_shape(grids["cylinder"], output=out)
+    assert result.check is None and out.exists() and out.with_suffix(".brep").exists()
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(out))
+        gmsh.model.mesh.generate(2)
+        _, _, tri = gmsh.model.mesh.getElements(2)
+        assert sum(len(t) for t in tri) > 0
+    finally:
+        gmsh.finalize()
+
+
+@pytest.mark.parametrize("suffix", [".msh", ".stl", ".vtk"])
+def test_outputs_are_written(grids, tmp_path, suffix):
+    out = tmp_path / f"cyl{suffix}"
+    result = mesh_shape(grids["cylinder"], output=out)
+    assert result.output == out and out.stat().st_size > 0
+    assert [p.name for p in tmp_path.iterdir()] == [out.name]  # no temporary left behind
+    if suffix == ".stl":
+        read = trimesh.load(out, force="mesh")
+        assert len(read.faces) == len(result.triangles)
+
+
+def test_bad_arguments(grids, tmp_path):
+    with pytest.raises(InputError):
+        mesh_shape(grids["cylinder"], mode="quads")
+    with pytest.raises(InputError):
+        mesh_shape(grids["cylinder"], output=tmp_path / "x.obj")
+    with pytest.raises(InputError):
+        mesh_shape(FIXTURES / "helix_wire.step", ald=ALD)
+
+
+def test_cadquery_shapes_with_poles_seams_and_apex():
+    cq = pytest.importorskip("cadquery")
+    cone = cq.Solid.makeCone(1.0, 0.0, 2.0, pnt=cq.Vector(0, -5, 0))
+    shape = cq.Compound.makeCompound([cq.Workplane().box(2, 3, 4).faces(">Z").hole(1).edges("|Z").fillet(0.3).val(),
+                                      cq.Workplane().sphere(1).translate((5, 0, 0)).val(), cone])
+    result = mesh_shape(shape, ald=ALD)
+    _assert_watertight(result)
+    assert len(result.check.shells) == 3
+
+
+@pytest.mark.parametrize("name", ["live-clones__gmsh__Kurbelwelle.stp", "LLNL__axom_data__sliced_cylinder.step"])
+def test_corpus_solids(name):
+    path = CORPUS / name
+    if not path.exists():
+        pytest.fail(f"corpus file missing: {path}")
+    result = mesh_shape(path, ald=ALD)
+    _assert_watertight(result)
