@@ -20,7 +20,8 @@ def _norms(v: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("ij,ij->i", v, v))
 
 
-def _worst_ratio(p: np.ndarray) -> float:
+def worst_growth(p: np.ndarray) -> float:
+    """Largest length ratio of adjacent segments of the polyline through ``p`` (1 for fewer than two)."""
     seg = _norms(np.diff(p, axis=0))
     if len(seg) < 2:
         return 1.0
@@ -91,12 +92,17 @@ def limit_growth(ev, params: np.ndarray, points: np.ndarray, max_growth: float, 
     """Split segments until neighbours have a length ratio of at most ``max_growth``.
 
     Returns (params, points, notes). A piece is never cut shorter than 1/max_growth of the segment
-    beside it, and the passes are capped, so the work is bounded; a note says when some ratio could not be brought within the bound that way
+    beside it nor than half the shortest input segment, so the work is bounded; a note says when some ratio could not be brought within the bound that way
     (min_length, or a bound below about 1.33 right next to an abrupt change of size).
     """
     u, p = np.asarray(params, dtype=float), np.asarray(points, dtype=float)
     g = max_growth
-    if len(u) > 2 and _worst_ratio(p) > g:
+    start = _norms(np.diff(p, axis=0))
+    start = start[start > 0]
+    # No piece is ever accepted below half the shortest input segment: the work stays bounded
+    # (at most length / floor segments) whatever the curve does between its points.
+    floor = 0.5 * float(start.min()) if len(start) else 0.0
+    if len(u) > 2 and worst_growth(p) > g:
         u, p = _graded_split(ev, u, p, g, min_length)
     for _ in range(MAX_PASSES):
         seg = _norms(np.diff(p, axis=0))
@@ -128,9 +134,12 @@ def limit_growth(ev, params: np.ndarray, points: np.ndarray, max_growth: float, 
         # the piece sits at the short neighbour's side of the long segment
         ref = np.where(long_is_left[:, None], p[k + 1], p[k])
         um, pm = _points_at_distances(ev, u[k], u[k + 1], ref, x, from_start=~long_is_left)
-        u = np.insert(u, k + 1, um)
-        p = np.insert(p, k + 1, pm, axis=0)
-    worst = _worst_ratio(p)
+        fits = np.minimum(_norms(pm - p[k]), _norms(p[k + 1] - pm)) >= floor
+        if not fits.any():
+            break
+        u = np.insert(u, k[fits] + 1, um[fits])
+        p = np.insert(p, k[fits] + 1, pm[fits], axis=0)
+    worst = worst_growth(p)
     notes = [] if worst <= g * (1 + 1e-9) else [
         f"max_growth {g:g} not met everywhere: worst ratio of adjacent segments is {worst:.3g}"]
     return u, p, notes

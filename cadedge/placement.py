@@ -52,9 +52,9 @@ def greedy(points: np.ndarray, cum: np.ndarray, cap: float, *, min_length: float
             window *= 2
         reach = i + 1 + (int(bad[0]) - 1 if len(bad) else len(ok) - 1)
         reach = max(reach, i + 1)
-        if min_length is not None and chord[reach - i - 1] < min_length and reach < stop:
-            longer = np.flatnonzero(chord[reach - i - 1:] >= min_length)
-            reach = reach + int(longer[0]) if len(longer) else j_hi
+        if min_length is not None and reach < stop and np.linalg.norm(points[reach] - points[i]) < min_length:
+            far = _norms(points[reach + 1:stop + 1] - points[i]) >= min_length
+            reach = reach + 1 + int(np.argmax(far)) if far.any() else stop
         nodes.append(reach)
         i = reach
     out = np.array(nodes)

@@ -86,8 +86,9 @@ def refine_curve(curve: Any, domain: tuple[float, float] | None = None, *, ald: 
         ald = _positive("ald", 1e-3 if ald is None else ald, upper=1.0)
         from .target import refine_target
         params, points, estimate, notes = refine_target(
-            ev, a, b, ald=ald, min_length=min_length, max_length=max_length, search_tol=search_tol)
-    if max_growth is not None:
+            ev, a, b, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth,
+            search_tol=search_tol)
+    if max_growth is not None and paper:  # target mode grades its own grid
         from .growth import limit_growth
         params, points, growth_notes = limit_growth(ev, params, points, float(max_growth), min_length=min_length)
         notes = list(notes) + growth_notes
