@@ -24,6 +24,7 @@ from OCP.IFSelect import IFSelect_RetDone
 from OCP.Interface import Interface_CheckIterator
 from OCP.Message import Message
 from OCP.StepBasic import StepBasic_UncertaintyMeasureWithUnit
+from OCP.Standard import Standard_Failure
 from OCP.STEPControl import STEPControl_Reader
 from OCP.TColStd import TColStd_SequenceOfAsciiString
 from OCP.TopAbs import TopAbs_EDGE
@@ -31,7 +32,7 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape
 from OCP.TopTools import TopTools_IndexedMapOfShape
 
-from ..errors import InputError
+from ..errors import GeometryError, InputError
 
 STEP_SUFFIXES = (".step", ".stp")
 #: Millimetres per unit for the length unit names STEP files declare (lower-cased).
@@ -128,14 +129,13 @@ def _sniff_step(path: Path) -> None:
         raise InputError(f"{name}: truncated or corrupt STEP file (no END-ISO-10303-21 trailer)")
 
 
-def _file_unit_mm(reader: STEPControl_Reader) -> tuple[str | None, float | None]:
-    """The length unit the STEP file declares and its size in millimetres (None if unknown)."""
+def _file_unit_mm(reader: STEPControl_Reader) -> float | None:
+    """Millimetres per length unit the STEP file declares (None if unknown)."""
     lengths, angles, solids = (TColStd_SequenceOfAsciiString() for _ in range(3))
     reader.FileUnits(lengths, angles, solids)
     if lengths.Length() == 0:
-        return None, None
-    unit = lengths.Value(1).ToCString()
-    return unit, MM_PER_UNIT.get(unit.strip().lower())
+        return None
+    return MM_PER_UNIT.get(lengths.Value(1).ToCString().strip().lower())
 
 
 def _declared_uncertainty(reader: STEPControl_Reader) -> float | None:
@@ -162,12 +162,15 @@ def _read_step(path: Path) -> LoadedShape:
         warnings = _check_messages(reader.WS().ModelCheckList(), "load")
         if reader.NbRootsForTransfer() == 0:
             raise InputError(f"{name}: empty STEP file (no shape to transfer)")
-        reader.TransferRoots()
+        try:
+            reader.TransferRoots()
+            shape = reader.OneShape()
+        except Standard_Failure as exc:
+            raise GeometryError(f"{name}: OCCT failed to transfer the STEP file: {exc}") from exc
         warnings += _check_messages(reader.WS().TransferReader().LastCheckList(), "transfer")
-        shape = reader.OneShape()
     if shape.IsNull() or _count(shape, TopAbs_EDGE) == 0:
         raise InputError(f"{name}: empty shape (the STEP file has no edges)")
-    unit, mm_per_unit = _file_unit_mm(reader)
+    mm_per_unit = _file_unit_mm(reader)
     declared = _declared_uncertainty(reader)
     declared_mm = declared * mm_per_unit if declared is not None and mm_per_unit is not None else None
     units = UNIT_NAMES.get(reader.SystemLengthUnit(), f"{reader.SystemLengthUnit():g} mm")

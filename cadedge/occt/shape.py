@@ -15,7 +15,6 @@ from typing import Any, Callable
 
 import numpy as np
 from OCP.BRep import BRep_Tool
-from OCP.Standard import Standard_Failure
 
 from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError, InputError
 from ..refine import refine_curve
@@ -88,13 +87,13 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
         first, last = BRep_Tool.Range_s(edge)
         return ShapeEdgeGrid(params=np.array([first, last], dtype=float), points=np.array([p1, p1]),
                              ald_estimate=0.0, evaluations=0, **common)
-    curve = EdgeCurve(edge, eid)
     try:
+        curve = EdgeCurve(edge, eid)
         grid = refine_curve(curve, curve.domain, **opts)
     except CurveEvaluationError as exc:
         raise GeometryError(f"{src}: edge {eid}: {exc}") from exc
-    except Standard_Failure as exc:
-        raise GeometryError(f"{src}: edge {eid}: OCCT failed: {exc}") from exc
+    except GeometryError as exc:  # EdgeCurve's messages already name the edge
+        raise GeometryError(f"{src}: {exc}") from exc
     points, estimate = _anchor(grid.points, p1, p2, grid.ald_estimate)
     notes.extend(f"edge {eid}: {w}" for w in grid.warnings)
     if estimate > opts["ald"] and grid.ald_estimate <= opts["ald"]:
@@ -146,8 +145,8 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     if max_growth is not None:
         try:
             notes += grade_vertices(edges, topo, float(max_growth))
-        except Standard_Failure as exc:
-            raise GeometryError(f"{loaded.source}: grading edge ends at vertices: OCCT failed: {exc}") from exc
+        except GeometryError as exc:
+            raise GeometryError(f"{loaded.source}: grading edge ends at vertices: {exc}") from exc
     spacing = _vertex_spacing(edges, len(vpoints))
     vertices = [VertexGrid(id=k + 1, point=p, spacing=spacing[k],
                            tolerance=float(BRep_Tool.Tolerance_s(topo.vertices[k])))
