@@ -146,3 +146,16 @@ def test_bad_options_fail_before_reading(tmp_path):
         refine_shape(missing, min_length=2.0, max_length=1.0)
     with pytest.raises(InputError, match="missing.step: no such file"):
         refine_shape(missing)
+
+
+def test_edge_with_only_a_curve_on_surface():
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+    from OCP.Geom import Geom_CylindricalSurface
+    from OCP.Geom2d import Geom2d_Line
+    from OCP.gp import gp, gp_Ax3, gp_Dir2d, gp_Pnt2d
+
+    surf = Geom_CylindricalSurface(gp_Ax3(gp.XOY_s()), 5.0)
+    edge = BRepBuilderAPI_MakeEdge(Geom2d_Line(gp_Pnt2d(0, 0), gp_Dir2d(1, 1)), surf, 0.0, 6.0).Edge()
+    sg = refine_shape(edge, ald=1e-3)
+    assert len(sg.edges) == 1 and sg.edges[0].curve == "OtherCurve" and sg.edges[0].segments > 1
+    check_grid(sg, Topology(sg.shape), 1e-3)
