@@ -217,3 +217,12 @@ def test_info_bad_input(tmp_path, capsys, name):
     err = capsys.readouterr().err
     lines = err.strip().splitlines()
     assert rc == 2 and len(lines) == 1 and name in lines[0] and lines[0].startswith("cadedge info: error: ")
+
+
+def test_info_flags_seams_and_closed_edges(capsys):
+    assert main(["info", str(CORPUS / "live-clones__gmsh__periodic_u_cst.step")]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines() if re.match(r"\s*\d+\s+[A-Z]", line)]
+    seams = [int(r[0]) for r in rows if r[4] == "yes"]
+    degenerate = [int(r[0]) for r in rows if r[2] == "yes"]
+    assert len(rows) == 6 and len(seams) == 2 and len(degenerate) == 2  # as SOURCES.tsv describes it
+    assert all(r[3] == "yes" for r in rows if int(r[0]) in degenerate)
