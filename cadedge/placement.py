@@ -23,6 +23,73 @@ def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
     return float(np.sum(_norms(np.diff(points[nodes], axis=0))))
 
 
+#: Largest number of samples for which fewest_nodes tabulates every chord deficit (n**2 floats).
+TABLE_SAMPLES = 1000
+
+
+def _follow(reach: list[int], last: int) -> np.ndarray:
+    nodes = [0]
+    i = 0
+    while i < last:
+        i = reach[i]
+        nodes.append(i)
+    return np.array(nodes)
+
+
+def _stops(n: int, forced: np.ndarray | None) -> np.ndarray:
+    """For each sample but the last, the first forced node (or the last sample) after it."""
+    last = n - 1
+    stops = np.array([last]) if forced is None else np.unique(np.concatenate([forced, [last]]))
+    return stops[np.searchsorted(stops, np.arange(last), side="right")]
+
+
+def _greedy_reach(points: np.ndarray, cum: np.ndarray, cap: float, forced: np.ndarray | None) -> np.ndarray:
+    """:func:`greedy` without length bounds: the farthest reach of every sample in one vectorised bisection.
+
+    The deficit of a chord from sample i grows with its far end (triangle inequality), so the reach of
+    every i is found together in about log2(n) numpy passes; the nodes then follow the reach pointers.
+    """
+    last = len(points) - 1
+    idx = np.arange(last)
+    lo, hi = idx + 1, _stops(len(points), forced)  # lo always admissible (reach is at least one sample on)
+    while True:
+        open_ = lo < hi
+        if not open_.any():
+            break
+        i, a, b = idx[open_], lo[open_], hi[open_]
+        mid = (a + b + 1) // 2
+        ok = (cum[mid] - cum[i]) - _norms(points[mid] - points[i]) <= cap
+        lo[open_] = np.where(ok, mid, a)
+        hi[open_] = np.where(ok, b, mid - 1)
+    return _follow(lo.tolist(), last)
+
+
+class _DeficitTable:
+    """Every chord deficit between samples, tabulated once so each :func:`greedy` cap costs one pass.
+
+    Row i, column k holds the deficit of the chord from sample i to sample i + 1 + k (inf past a stop),
+    so the farthest reach under a cap is the first column over it: exactly :func:`greedy`'s choice.
+    """
+
+    def __init__(self, points: np.ndarray, cum: np.ndarray, forced: np.ndarray | None):
+        n = len(points)
+        self.last = n - 1
+        idx = np.arange(self.last)
+        j = idx[:, None] + 1 + np.arange(self.last)[None, :]
+        stop = _stops(n, forced)
+        valid = j <= stop[:, None]
+        jc = np.minimum(j, self.last)
+        d = (cum[jc] - cum[idx, None]) - np.linalg.norm(points[jc] - points[idx, None], axis=2)
+        self.table = np.where(valid, d, np.inf)
+        self.idx, self.stop = idx, stop
+
+    def greedy(self, cap: float) -> np.ndarray:
+        over = self.table > cap
+        first = np.where(over.any(axis=1), over.argmax(axis=1), self.stop - self.idx)  # columns admissible
+        reach = self.idx + np.maximum(first, 1)
+        return _follow(reach.tolist(), self.last)
+
+
 def greedy(points: np.ndarray, cum: np.ndarray, cap: float, *, min_length: float | None = None,
            max_length: float | None = None, forced: np.ndarray | None = None) -> np.ndarray:
     """Node indices by farthest reach: each chord misses at most ``cap`` of the samples' length.
@@ -30,6 +97,8 @@ def greedy(points: np.ndarray, cum: np.ndarray, cap: float, *, min_length: float
     Chords stay at most ``max_length`` long and, where the curve allows, at least ``min_length``.
     ``forced`` sample indices (sharp corners) are always nodes.
     """
+    if min_length is None and max_length is None and cap > 0.0:  # cap 0 keeps every sample off a rounding-noise chord
+        return _greedy_reach(points, cum, cap, forced)
     n = len(points)
     last = n - 1
     stops = np.array([last]) if forced is None else np.unique(np.concatenate([forced, [last]]))
@@ -114,9 +183,16 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
     not enough (min_length), the densest admissible grid is returned.
     """
     total = cum[-1]
+    table = (_DeficitTable(points, cum, forced)
+             if min_length is None and max_length is None and len(points) <= TABLE_SAMPLES else None)
+
+    def cover(cap: float) -> np.ndarray:
+        if table is not None and cap > 0.0:
+            return table.greedy(cap)
+        return greedy(points, cum, cap, min_length=min_length, max_length=max_length, forced=forced)
 
     def plan(cap: float) -> tuple[np.ndarray, float]:
-        nodes = greedy(points, cum, cap, min_length=min_length, max_length=max_length, forced=forced)
+        nodes = cover(cap)
         if len(nodes) > 2:
             nodes = polish(points, nodes, fixed=forced)
         return nodes, total - chord_length(points, nodes)
@@ -143,7 +219,7 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
         fewer = None
         for _ in range(40):
             mid = 0.5 * (cap_lo + cap_hi)
-            nodes = greedy(points, cum, mid, min_length=min_length, max_length=max_length, forced=forced)
+            nodes = cover(mid)
             if len(nodes) < len(best):
                 cap_hi, fewer = mid, nodes
             else:
