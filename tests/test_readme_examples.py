@@ -38,3 +38,18 @@ def test_readme_example_runs(name, output, tmp_path, monkeypatch, capsys):
     assert doc["summary"]["edges"] == 27 and doc["source"].startswith(f"<{name}")
     assert str(doc["summary"]["edges"]) in printed
     assert doc["summary"]["max_ald_estimate"] <= doc["options"]["ald"]
+
+
+def test_readme_api_example_runs(tmp_path, monkeypatch, capsys):
+    """The "Python API" block: curves in both modes and a bundled fixture written as VTK."""
+    section = README.read_text(encoding="utf-8").split("## Python API\n", 1)[1].split("\n## ", 1)[0]
+    (code, name), = BLOCK.findall(section)
+    assert name == "api"
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fixtures").mkdir()
+    (tmp_path / "fixtures" / "bracket.step").write_bytes((README.parent / "fixtures" / "bracket.step").read_bytes())
+    namespace = {"__name__": "__main__"}
+    exec(compile(code, "README.md:api", "exec"), namespace)
+    assert namespace["grid"].ald_estimate <= 1e-4 and namespace["paper"].mode == "paper"
+    assert (tmp_path / "bracket.vtp").stat().st_size > 0
+    assert capsys.readouterr().out.strip()
