@@ -26,6 +26,8 @@ EXPLORE_SHARE = 1.0 / 16.0
 MARGIN = 0.03
 #: Most placements measured while searching for the fewest equidistributed segments.
 MAX_TRIALS = 10
+#: Samples per max_length that a max_length placement can choose among.
+MAX_LENGTH_SAMPLES = 8
 #: Most re-placements along a graded size field for max_growth.
 GRADING_PASSES = 4
 
@@ -108,6 +110,27 @@ def _graded(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarr
     return None
 
 
+def _densify(ev, ex, spacing: float):
+    """The exploration with extra samples wherever two neighbours are more than ``spacing`` apart.
+
+    A straight run is explored with its two ends only; a ``max_length`` placement needs samples
+    along it to put nodes on.
+    """
+    from .explore import Exploration
+
+    gap = np.linalg.norm(np.diff(ex.points, axis=0), axis=1)
+    pieces = np.ceil(gap / spacing).astype(int)
+    long_ = np.flatnonzero(pieces > 1)
+    if not len(long_):
+        return ex
+    new = np.concatenate([np.linspace(ex.params[i], ex.params[i + 1], pieces[i] + 1)[1:-1] for i in long_])
+    u = np.concatenate([ex.params, new])
+    p = np.concatenate([ex.points, ev(new)])
+    order = np.argsort(u, kind="stable")
+    return Exploration(params=u[order], points=p[order], length_estimate=ex.length_estimate,
+                       remainder=ex.remainder, corners=ex.corners, notes=ex.notes)
+
+
 def _sharp_nodes(points: np.ndarray, ald: float) -> np.ndarray:
     """Interior node indices whose polyline turns much more sharply than a smooth grid at ``ald`` would.
 
@@ -166,6 +189,9 @@ def refine_target(ev, a: float, b: float, *, ald: float, min_length: float | Non
         notes.append(f"curve has zero length on [{a!r}, {b!r}] (all {len(u)} samples are one point); "
                      "returning its two ends")
         return np.array([a, b]), p[[0, -1]], 0.0, notes
+    if max_length is not None:
+        ex = _densify(ev, ex, max_length / MAX_LENGTH_SAMPLES)
+        u, p = ex.params, ex.points
     limit = ald * (1.0 - MARGIN) * total
     budget = max(limit - ex.remainder, 0.0)
     corner_idx = np.searchsorted(u, ex.corners) if len(ex.corners) else np.zeros(0, dtype=int)

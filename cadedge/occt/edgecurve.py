@@ -1,19 +1,30 @@
 """An OCCT edge as a cadedge black-box curve: parameter in, 3-D point out, nothing else.
 
 Evaluation goes through ``BRepAdaptor_Curve``, which also handles edges that carry only curves on
-surfaces (no 3-D curve) and applies the edge's location. The per-point loop lives in one method,
-:meth:`EdgeCurve.evaluate`, so a batched evaluator can replace it without touching the refiners.
+surfaces (no 3-D curve) and applies the edge's location. Lines, conics, B-splines and Bezier curves
+are evaluated in one numpy call by :mod:`cadedge.occt.fasteval` (checked against OCCT on
+construction); other edges, and any that fail that check, use OCCT's per-point loop.
+:meth:`EdgeCurve.initial_params` tells the exploration where the curve's pieces start and end.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
+from OCP.GeomAbs import GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse, GeomAbs_Line
 from OCP.Standard import Standard_Failure
 from OCP.TopoDS import TopoDS_Edge
 
 from ..errors import GeometryError
+from .fasteval import fast_evaluator
 from .topology import forward
+
+#: Root intervals per full turn of a circle or ellipse, and per knot span of a spline.
+CONIC_ROOTS, SPAN_ROOTS = 8, 2
+#: Root intervals for any other curve (as the exploration's own default).
+DEFAULT_ROOTS = 64
 
 
 class EdgeCurve:
@@ -28,8 +39,10 @@ class EdgeCurve:
         try:
             self.adaptor = BRepAdaptor_Curve(self.edge)
             self.domain = (float(self.adaptor.FirstParameter()), float(self.adaptor.LastParameter()))
+            self.kind = self.adaptor.GetType()
         except Standard_Failure as exc:
             raise GeometryError(f"{self._name()}: OCCT cannot adapt its curve: {exc}") from exc
+        self.fast = fast_evaluator(self.adaptor, self.domain)
 
     def _name(self) -> str:
         return f"edge {self.edge_id}" if self.edge_id is not None else "edge"
@@ -37,6 +50,8 @@ class EdgeCurve:
     def evaluate(self, u: np.ndarray) -> np.ndarray:
         """Points at parameters ``u`` (1-D), shape (len(u), 3)."""
         u = np.asarray(u, dtype=float).ravel()
+        if self.fast is not None:
+            return self.fast(u)
         out = np.empty((len(u), 3))
         value = self.adaptor.Value
         try:
@@ -45,6 +60,33 @@ class EdgeCurve:
         except Standard_Failure as exc:
             raise GeometryError(f"{self._name()}: OCCT failed to evaluate u={uk!r}: {exc}") from exc
         return out
+
+    def initial_params(self, a: float, b: float) -> np.ndarray:
+        """Where the exploration starts: the ends of a line; a few uniform steps on a conic; each knot
+        span of a spline in ``SPAN_ROOTS`` pieces; ``DEFAULT_ROOTS`` uniform steps otherwise."""
+        if self.kind == GeomAbs_Line and self.adaptor.Is3DCurve():
+            return np.array([a, b])
+        if self.kind in (GeomAbs_Circle, GeomAbs_Ellipse):
+            return np.linspace(a, b, max(2, math.ceil(CONIC_ROOTS * (b - a) / (2 * math.pi))) + 1)
+        if self.kind in (GeomAbs_BSplineCurve, GeomAbs_BezierCurve) and self.adaptor.Is3DCurve():
+            knots = self._knots(a, b)
+            steps = np.linspace(0.0, 1.0, SPAN_ROOTS + 1)[:-1]
+            u = (knots[:-1, None] + np.diff(knots)[:, None] * steps[None, :]).ravel()
+            return np.unique(np.concatenate([u, [b]]))
+        return np.linspace(a, b, DEFAULT_ROOTS + 1)
+
+    def _knots(self, a: float, b: float) -> np.ndarray:
+        """The distinct knots in [a, b] (all periods of a periodic spline), with a and b."""
+        if self.kind == GeomAbs_BezierCurve:
+            return np.array([a, b])
+        bs = self.adaptor.BSpline()
+        k = np.array([bs.Knot(i) for i in range(1, bs.NbKnots() + 1)], dtype=float)
+        if bs.IsPeriodic():
+            per = float(bs.Period())
+            shifts = np.arange(math.floor((a - k[-1]) / per), math.ceil((b - k[0]) / per) + 1) * per
+            k = (k[None, :] + shifts[:, None]).ravel()
+        tol = 1e-9 * (b - a)  # a knot a hair inside an end would only make a sliver of a span
+        return np.unique(np.concatenate([[a], k[(k > a + tol) & (k < b - tol)], [b]]))
 
     def __repr__(self) -> str:
         return f"EdgeCurve({self._name()}, domain={self.domain})"

@@ -1,0 +1,134 @@
+"""The numpy evaluation of OCCT edges agrees with BRepAdaptor_Curve, and the exploration hints are sound."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("OCP")
+cq = pytest.importorskip("cadquery")
+
+from OCP.BRepAdaptor import BRepAdaptor_Curve  # noqa: E402
+from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_Transform  # noqa: E402
+from OCP.Geom import Geom_BSplineCurve  # noqa: E402
+from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec  # noqa: E402
+from OCP.TColgp import TColgp_Array1OfPnt  # noqa: E402
+from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal  # noqa: E402
+from OCP.TopoDS import TopoDS  # noqa: E402
+
+from cadedge import refine_curve  # noqa: E402
+from cadedge.occt.edgecurve import EdgeCurve  # noqa: E402
+from cadedge.occt.fasteval import fast_evaluator  # noqa: E402
+from cadedge.occt.reader import load_shape  # noqa: E402
+from cadedge.occt.topology import Topology  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+CORPUS = ROOT.parent / "shared" / "corpus"
+
+
+def _occt(curve: EdgeCurve, u: np.ndarray) -> np.ndarray:
+    return np.array([curve.adaptor.Value(x).Coord() for x in u.tolist()])
+
+
+def _agree(curve: EdgeCurve, n: int = 57) -> float:
+    a, b = curve.domain
+    u = np.linspace(a, b, n)
+    ref = _occt(curve, u)
+    size = max(np.abs(ref).max(), np.ptp(ref, axis=0).max())
+    return float(np.abs(curve.evaluate(u) - ref).max() / size)
+
+
+def _moved(edge, angle: float = 0.7):
+    """The edge rotated and translated: its location must be applied."""
+    t = gp_Trsf()
+    t.SetRotation(gp_Ax1(gp_Pnt(1, 2, 3), gp_Dir(1, 1, 0.3)), angle)
+    s = gp_Trsf()
+    s.SetTranslation(gp_Vec(5.0, -3.0, 11.0))
+    return TopoDS.Edge_s(BRepBuilderAPI_Transform(edge, s.Multiplied(t), False).Shape())
+
+
+def _edges() -> dict:
+    out = {
+        "line": cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(3, 1, 2)).wrapped,
+        "circle": cq.Edge.makeCircle(2.5, cq.Vector(1, 1, 1), cq.Vector(0, 1, 1), 30, 250).wrapped,
+        "ellipse": cq.Edge.makeEllipse(4.0, 1.5, cq.Vector(0, 0, 1), cq.Vector(1, 0, 1), angle1=10, angle2=300).wrapped,
+        "spline": cq.Edge.makeSpline([cq.Vector(x, math.sin(x), 0.1 * x * x) for x in np.linspace(0, 6, 9)]).wrapped,
+        "periodic": cq.Edge.makeSpline([cq.Vector(math.cos(t), math.sin(t), 0.2 * math.sin(3 * t))
+                                        for t in np.linspace(0, 2 * math.pi, 9)[:-1]], periodic=True).wrapped,
+        "bezier": cq.Edge.makeBezier([cq.Vector(0, 0, 0), cq.Vector(1, 2, 0), cq.Vector(3, -1, 1), cq.Vector(4, 0, 0)]).wrapped,
+    }
+    out.update({f"moved {k}": _moved(v) for k, v in list(out.items())})
+    return out
+
+
+@pytest.mark.parametrize("name", list(_edges()))
+def test_fast_evaluation_matches_occt(name):
+    curve = EdgeCurve(_edges()[name])
+    assert curve.fast is not None, f"{name}: no numpy evaluator"
+    assert _agree(curve) <= 1e-12
+
+
+def _rational_periodic():
+    """A periodic rational B-spline (a full circle as NURBS) trimmed across its seam."""
+    n = 8
+    poles, weights = TColgp_Array1OfPnt(1, n), TColStd_Array1OfReal(1, n)
+    for i in range(n):
+        t = 2 * math.pi * i / n
+        r = 1.0 if i % 2 == 0 else 1.0 / math.cos(math.pi / n)
+        poles.SetValue(i + 1, gp_Pnt(r * math.cos(t), r * math.sin(t), 0.3 * (i % 3)))
+        weights.SetValue(i + 1, 1.0 if i % 2 == 0 else 0.8)
+    knots, mults = TColStd_Array1OfReal(1, n + 1), TColStd_Array1OfInteger(1, n + 1)
+    for i in range(n + 1):
+        knots.SetValue(i + 1, float(i))
+        mults.SetValue(i + 1, 1)
+    curve = Geom_BSplineCurve(poles, weights, knots, mults, 2, True)
+    return BRepBuilderAPI_MakeEdge(curve, 6.5, 10.25).Edge()  # crosses the period end at 8
+
+
+def test_rational_periodic_spline_across_the_seam():
+    curve = EdgeCurve(_rational_periodic())
+    assert curve.adaptor.IsRational() and curve.fast is not None
+    assert _agree(curve, 101) <= 1e-12
+    u = curve.initial_params(*curve.domain)
+    assert 8.0 in u and 7.0 in u and 9.0 in u and 10.0 in u  # knots of the next period are roots too
+
+
+def test_unsupported_type_keeps_occt():
+    edge = cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(1, 0, 0)).wrapped
+    ad = BRepAdaptor_Curve(edge)
+    assert fast_evaluator(ad, (0.0, 1.0)) is not None
+    if not CORPUS.is_dir():
+        pytest.skip("shared corpus not present")
+    hyper = [e for e in Topology(load_shape(CORPUS / "gumyr__build123d__M6-1x12-countersunk-screw.step").shape).edges
+             if BRepAdaptor_Curve(e).GetType().name == "GeomAbs_Hyperbola"]
+    assert hyper, "the screw has hyperbola edges"
+    curve = EdgeCurve(hyper[0])
+    assert curve.fast is None
+    assert len(curve.initial_params(*curve.domain)) == 65
+
+
+def test_initial_params_per_type():
+    e = _edges()
+    a, b = EdgeCurve(e["line"]).domain
+    assert list(EdgeCurve(e["line"]).initial_params(a, b)) == [a, b]
+    c = EdgeCurve(e["circle"])
+    u = c.initial_params(*c.domain)
+    assert u[0] == c.domain[0] and u[-1] == c.domain[1] and 4 <= len(u) <= 8
+    s = EdgeCurve(e["spline"])
+    u = s.initial_params(*s.domain)
+    assert np.all(np.diff(u) > 0) and u[0] == s.domain[0] and u[-1] == s.domain[1]
+    assert len(u) == 2 * (s.adaptor.NbKnots() - 1) + 1
+
+
+def test_refined_edge_meets_target_against_occt_length():
+    from OCP.GCPnts import GCPnts_AbscissaPoint
+
+    for name, edge in _edges().items():
+        curve = EdgeCurve(edge)
+        g = refine_curve(curve, curve.domain, ald=1e-4)
+        true = GCPnts_AbscissaPoint.Length_s(BRepAdaptor_Curve(curve.edge))
+        assert 1 - g.length / true <= 1e-4, name
+        np.testing.assert_allclose(g.points, _occt(curve, g.params), rtol=0, atol=1e-12 * max(1.0, true))
