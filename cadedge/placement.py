@@ -191,11 +191,16 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
             return table.greedy(cap)
         return greedy(points, cum, cap, min_length=min_length, max_length=max_length, forced=forced)
 
+    planned: dict[bytes, tuple[np.ndarray, float]] = {}  # caps of the bisection often give the same nodes
+
     def plan(cap: float) -> tuple[np.ndarray, float]:
         nodes = cover(cap)
-        if len(nodes) > 2:
-            nodes = polish(points, nodes, fixed=forced)
-        return nodes, total - chord_length(points, nodes)
+        key = nodes.tobytes()
+        if key not in planned:
+            if len(nodes) > 2:
+                nodes = polish(points, nodes, fixed=forced)
+            planned[key] = nodes, total - chord_length(points, nodes)
+        return planned[key]
 
     lo, hi = 0.0, max(budget, 0.0)
     best, miss = plan(hi)
