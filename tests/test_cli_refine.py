@@ -19,8 +19,7 @@ from cadedge.cli.refine import Progress  # noqa: E402
 from cadedge.exporters import FORMATS  # noqa: E402
 from cadedge.exporters.json import validate  # noqa: E402
 
-FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+from conftest import CORPUS, FIXTURES
 BRACKET = FIXTURES / "bracket.step"
 SPHERE = FIXTURES / "sphere.step"
 CUBE_FILET = CORPUS / "live-clones__gmsh__cube_filet.stp"  # 74 edges: Line 34, Circle 32, 8 degenerate
