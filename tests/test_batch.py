@@ -19,9 +19,7 @@ from cadedge.exporters.json import validate
 
 pytest.importorskip("distributed")
 
-ROOT = Path(__file__).resolve().parents[1]
-FIXTURES = ROOT / "fixtures"
-CORPUS = ROOT.parent / "shared" / "corpus"
+from conftest import CORPUS, FIXTURES
 SMALL = ["cylinder", "sphere", "open_face", "helix_wire"]
 CORPUS_SMALL = ["LLNL__axom_data__sliced_cylinder.step", "CadQuery__cadquery__red_cube_blue_cylinder.step",
                 "live-clones__gmsh__mesh_T106_V3.step"]  # the last has loose tolerances: a warning

@@ -9,7 +9,6 @@ import shutil
 import signal
 import threading
 import time
-from pathlib import Path
 
 import pytest
 
@@ -20,9 +19,7 @@ from cadedge.cli.batch import BatchBar
 
 pytest.importorskip("distributed")
 
-ROOT = Path(__file__).resolve().parents[1]
-FIXTURES = ROOT / "fixtures"
-CORPUS = ROOT.parent / "shared" / "corpus"
+from conftest import CORPUS, FIXTURES
 SLOW = [CORPUS / "gumyr__build123d__M6-1x12-countersunk-screw.step", CORPUS / "live-clones__gmsh__Kurbelwelle.stp"]
 
 

@@ -1,7 +1,6 @@
 """Property tests (hypothesis) for both refinement modes on random smooth and rough curves."""
 
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
