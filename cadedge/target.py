@@ -24,6 +24,9 @@ from .placement import chord_length, deficit_measure, equidistribute, fewest_nod
 EXPLORE_SHARE = 1.0 / 16.0
 #: Share of the target kept in reserve against error in the length estimate itself.
 MARGIN = 0.03
+#: Share of the target kept in reserve when the curve knows its exact length (``exact_length(a, b)``):
+#: only against rounding and the snapping of the ends to B-rep vertices.
+EXACT_MARGIN = 1e-3
 #: Most placements measured while searching for the fewest equidistributed segments.
 MAX_TRIALS = 10
 #: Samples per max_length that a max_length placement can choose among.
@@ -192,8 +195,16 @@ def refine_target(ev, a: float, b: float, *, ald: float, min_length: float | Non
     if max_length is not None:
         ex = _densify(ev, ex, max_length / MAX_LENGTH_SAMPLES)
         u, p = ex.params, ex.points
-    limit = ald * (1.0 - MARGIN) * total
-    budget = max(limit - ex.remainder, 0.0)
+    known = getattr(ev.curve, "exact_length", None)
+    exact = known(a, b) if known is not None else None
+    if exact is not None and exact > 0.0:  # a line or circle: the true length, not an estimate to guard
+        total = float(exact)
+        remainder = max(total - float(ex.cumulative[-1]), 0.0)
+        limit = ald * (1.0 - EXACT_MARGIN) * total
+    else:
+        remainder = ex.remainder
+        limit = ald * (1.0 - MARGIN) * total
+    budget = max(limit - remainder, 0.0)
     corner_idx = np.searchsorted(u, ex.corners) if len(ex.corners) else np.zeros(0, dtype=int)
     nodes = fewest_nodes(p, ex.cumulative, budget, min_length=min_length, max_length=max_length,
                          forced=corner_idx)

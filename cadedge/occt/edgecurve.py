@@ -75,6 +75,16 @@ class EdgeCurve:
             return np.unique(np.concatenate([u, [b]]))
         return np.linspace(a, b, DEFAULT_ROOTS + 1)
 
+    def exact_length(self, a: float, b: float) -> float | None:
+        """The closed-form length of a line or circle piece (checked numpy geometry), else ``None``."""
+        if self.fast is None:
+            return None
+        if self.kind == GeomAbs_Line:
+            return float(np.linalg.norm(np.diff(self.fast(np.array([a, b])), axis=0)))
+        if self.kind == GeomAbs_Circle:
+            return float(self.adaptor.Circle().Radius() * (b - a))
+        return None
+
     def _knots(self, a: float, b: float) -> np.ndarray:
         """The distinct knots in [a, b] (all periods of a periodic spline), with a and b."""
         if self.kind == GeomAbs_BezierCurve:
