@@ -7,22 +7,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-@dataclass
-class EdgeGrid:
-    """A polyline on a curve: parameters, points and how it was obtained.
+class Polyline:
+    """Lengths derived from ``points`` (n, 3), shared by the grids of a curve and of a B-rep edge."""
 
-    ``params`` increase strictly from the first domain end to the last; ``points[i]`` is the curve at
-    ``params[i]`` (always 3-D: 2-D curves are padded with z = 0). ``evaluations`` counts every point
-    the black box was asked for (a vectorised call of k parameters counts k). ``ald_estimate`` is the
-    refiner's estimate of ``1 - length / true_length``; ``length`` is the polyline's length.
-    """
-
-    params: np.ndarray
     points: np.ndarray
-    evaluations: int
-    ald_estimate: float
-    mode: str = "target"
-    warnings: list[str] = field(default_factory=list)
 
     @property
     def segment_lengths(self) -> np.ndarray:
@@ -37,13 +25,31 @@ class EdgeGrid:
     @property
     def segments(self) -> int:
         """Number of segments (points - 1)."""
-        return len(self.params) - 1
+        return len(self.points) - 1
 
     @property
     def spacing(self) -> tuple[float, float]:
         """Lengths of the first and last segments: the point spacing a mesher should use at the ends."""
         seg = self.segment_lengths
         return (float(seg[0]), float(seg[-1])) if len(seg) else (0.0, 0.0)
+
+
+@dataclass
+class EdgeGrid(Polyline):
+    """A polyline on a curve: parameters, points and how it was obtained.
+
+    ``params`` increase strictly from the first domain end to the last; ``points[i]`` is the curve at
+    ``params[i]`` (always 3-D: 2-D curves are padded with z = 0). ``evaluations`` counts every point
+    the black box was asked for (a vectorised call of k parameters counts k). ``ald_estimate`` is the
+    refiner's estimate of ``1 - length / true_length``; ``length`` is the polyline's length.
+    """
+
+    params: np.ndarray
+    points: np.ndarray
+    evaluations: int
+    ald_estimate: float
+    mode: str = "target"
+    warnings: list[str] = field(default_factory=list)
 
     def __repr__(self) -> str:
         return (f"EdgeGrid(mode={self.mode!r}, segments={self.segments}, length={self.length:.6g}, "

@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from .grid import Polyline
+
 SCHEMA = "cadedge.edgegrid/1"
 
 
@@ -26,7 +28,7 @@ class VertexGrid:
 
 
 @dataclass
-class ShapeEdgeGrid:
+class ShapeEdgeGrid(Polyline):
     """The grid on one B-rep edge. Degenerate edges carry their single point twice and no length."""
 
     id: int
@@ -42,23 +44,14 @@ class ShapeEdgeGrid:
     tolerance: float = 0.0
 
     @property
-    def segment_lengths(self) -> np.ndarray:
-        return np.linalg.norm(np.diff(self.points, axis=0), axis=1)
-
-    @property
-    def length(self) -> float:
-        """Polyline length."""
-        return float(self.segment_lengths.sum())
-
-    @property
     def segments(self) -> int:
-        return 0 if self.degenerate else len(self.params) - 1
+        """Number of segments; none on a degenerate edge."""
+        return 0 if self.degenerate else super().segments
 
     @property
     def spacing(self) -> tuple[float, float]:
-        """Lengths of the first and last segments."""
-        seg = self.segment_lengths
-        return (float(seg[0]), float(seg[-1])) if len(seg) and not self.degenerate else (0.0, 0.0)
+        """Lengths of the first and last segments; zero on a degenerate edge."""
+        return (0.0, 0.0) if self.degenerate else super().spacing
 
 
 @dataclass
