@@ -35,7 +35,7 @@ MODES = ("nodes", "sizes")
 MESH_SUFFIXES = (".msh", ".stl", ".vtk")
 # Edge grids for meshing are graded (neighbouring segments within this ratio, also across vertices): a
 # one-segment straight edge next to a finely split arc would otherwise force sliver triangles.
-MESH_MAX_GROWTH = 1.3
+MESH_MAX_GROWTH = 2.0
 
 
 @dataclass
@@ -168,8 +168,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         grid_points = None
         multiplicity = None
         if imposed is not None:
-            grid_points = np.vstack([np.asarray(v.point, dtype=float)[None] for v in grid.vertices]
-                                    + [e.points for e in grid.edges if not e.degenerate])
+            grid_points = _face_grid_points(grid)
             multiplicity = _edge_multiplicity(raw, imposed, grid, emap)
         tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
         check = check_triangles(raw.nodes, raw.triangles, triangle_faces=tri_faces, grid_points=grid_points,
@@ -201,10 +200,15 @@ def check_mesh(result_or_nodes: MeshResult | np.ndarray, triangles: np.ndarray |
     grid_points = None
     multiplicity = None
     if grid is not None:
-        grid_points = np.vstack([np.asarray(v.point, dtype=float)[None] for v in grid.vertices]
-                                + [e.points for e in grid.edges if not e.degenerate])
+        grid_points = _face_grid_points(grid)
         multiplicity = _multiplicity_from_grid(nodes, grid)
     return check_triangles(nodes, triangles, grid_points=grid_points, edge_multiplicity=multiplicity)
+
+
+def _face_grid_points(grid: ShapeGrid) -> np.ndarray:
+    """Grid points of every edge that bounds a face (loose edges carry no triangles)."""
+    pts = [e.points for e in grid.edges if e.faces and len(e.points)]
+    return np.vstack(pts) if pts else np.zeros((0, 3))
 
 
 def _multiplicity_from_grid(nodes: np.ndarray, grid: ShapeGrid) -> dict[tuple[int, int], int]:

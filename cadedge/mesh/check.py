@@ -3,8 +3,9 @@
 Per connected shell of triangles (trimesh's face-adjacency components): every triangle edge must be
 shared by exactly two triangles, except edges on B-rep edges that bound fewer or more faces (free
 boundaries of open shells are expected once; non-manifold edges as often as they have faces). Nodes at
-identical coordinates under different tags are a hidden crack and fail the check. Every edge-grid point
-must be a node of some triangle, at exactly its coordinates.
+identical coordinates under different tags within one shell are a hidden crack and fail the check
+(separate shells may touch). Every edge-grid point must be a node of some triangle, at exactly its
+coordinates.
 """
 
 from __future__ import annotations
@@ -114,10 +115,13 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
                             "edges not shared by the expected number of triangles (not watertight/conforming)")
     used_nodes = np.unique(tris)
     keys = _row_keys(nodes[used_nodes])
-    _, dup_counts = np.unique(keys, return_counts=True)
-    n_dup = int((dup_counts > 1).sum())
+    n_dup = 0
+    for comp in labels:  # separate shells may touch (an assembly); within one shell it is a crack
+        comp_keys = _row_keys(nodes[np.unique(tris[np.asarray(comp)])])
+        _, dup_counts = np.unique(comp_keys, return_counts=True)
+        n_dup += int((dup_counts > 1).sum())
     if n_dup:
-        problems.append(f"{n_dup} coordinates carry more than one mesh node (a crack between faces)")
+        problems.append(f"{n_dup} coordinates carry more than one mesh node within a shell (a crack between faces)")
     n_grid = n_missing = 0
     if grid_points is not None and len(grid_points):
         gkeys = np.unique(_row_keys(grid_points))

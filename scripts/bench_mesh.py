@@ -1,0 +1,102 @@
+"""Compare ``cadedge.mesh.mesh_shape`` with gmsh meshing the same STEP file with its own edge meshing.
+
+Per model: triangles, minimum angle, seconds, watertight (cadedge's check on both meshes), for
+
+- cadedge: ``mesh_shape(path, ald=ALD)`` (refinement included in the time; edge grids imposed);
+- gmsh: ``gmsh.open(path)`` then ``generate(2)`` with curvature-based sizes at the same deficit
+  (``Mesh.MeshSizeFromCurvature`` = segments per full circle giving that ALD, ``2 pi / sqrt(24 ALD)``)
+  and ``Mesh.MeshSizeMax`` = the largest cadedge edge spacing, so both aim at comparable sizes.
+
+Prints a markdown table (the one in docs/mesh.md):
+
+    cd /work/main && /work/venv/bin/python scripts/bench_mesh.py --ald 1e-2
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import gmsh
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from cadedge.errors import CadedgeError  # noqa: E402
+from cadedge.mesh import mesh_shape  # noqa: E402
+from cadedge.mesh.check import check_triangles  # noqa: E402
+
+CORPUS = ROOT.parent / "shared" / "corpus"
+DEFAULT_MODELS = [ROOT / "fixtures" / f"{n}.step" for n in ("bracket", "cylinder", "sphere", "two_solids")] + \
+    sorted(p for p in CORPUS.glob("*") if p.suffix.lower() in (".step", ".stp"))
+
+
+def gmsh_own(path: Path, ald: float, max_size: float) -> dict:
+    """gmsh alone: its STEP import, its edge meshing, curvature sizes for the same ALD."""
+    t0 = time.perf_counter()
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", math.ceil(2 * math.pi / math.sqrt(24 * ald)))
+        gmsh.option.setNumber("Mesh.MeshSizeMax", max_size)
+        gmsh.open(str(path))
+        error = ""
+        try:
+            gmsh.model.mesh.generate(2)
+        except Exception as exc:  # gmsh's bare Exception: record it, measure what was meshed
+            error = str(exc).splitlines()[0][:60]
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        tris = []
+        for _, s in gmsh.model.getEntities(2):
+            tris.append(np.asarray(gmsh.model.mesh.getElementsByType(2, s)[1], dtype=np.int64).reshape(-1, 3))
+    finally:
+        gmsh.finalize()
+    seconds = time.perf_counter() - t0
+    tags = np.asarray(tags, dtype=np.int64)
+    lookup = np.zeros(tags.max() + 1, dtype=np.int64)
+    lookup[tags] = np.arange(len(tags))
+    tri = lookup[np.vstack(tris)] if tris else np.zeros((0, 3), dtype=np.int64)
+    check = check_triangles(np.asarray(coords).reshape(-1, 3), tri)
+    return {"triangles": len(tri), "min_angle": check.min_angle_deg, "seconds": seconds,
+            "watertight": _closed(check), "error": error}
+
+
+def _closed(check) -> str:
+    closed = sum(s.watertight for s in check.shells)
+    return f"{closed}/{len(check.shells)}"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("models", nargs="*", type=Path, default=DEFAULT_MODELS)
+    parser.add_argument("--ald", type=float, default=1e-2)
+    args = parser.parse_args()
+    print(f"ALD {args.ald:g}; gmsh Mesh.MeshSizeFromCurvature = "
+          f"{math.ceil(2 * math.pi / math.sqrt(24 * args.ald))}; times include STEP reading\n")
+    print("| model | cadedge triangles | min angle | s | closed shells | check | gmsh triangles | min angle | s "
+          "| closed shells |")
+    print("|---|---:|---:|---:|---:|---|---:|---:|---:|---:|")
+    for path in args.models:
+        t0 = time.perf_counter()
+        try:
+            r = mesh_shape(path, ald=args.ald)
+        except CadedgeError as exc:
+            print(f"| {path.name} | error: {exc} | | | | | | | | |")
+            continue
+        ours_s = time.perf_counter() - t0
+        spacing = max(max(e.segment_lengths) for e in r.grid.edges if not e.degenerate)
+        theirs = gmsh_own(path, args.ald, spacing)
+        verdict = "ok" if r.ok else f"{len(r.failures)} faces failed" if r.failures else "FAILED"
+        print(f"| {path.name} | {len(r.triangles)} | {r.check.min_angle_deg:.1f} | {ours_s:.1f} | "
+              f"{_closed(r.check)} | {verdict} | {theirs['triangles']} | {theirs['min_angle']:.1f} | "
+              f"{theirs['seconds']:.1f} | {theirs['watertight']}{' (' + theirs['error'] + ')' if theirs['error'] else ''} |",
+              flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
