@@ -201,3 +201,12 @@ def test_corpus_solids(name):
         pytest.fail(f"corpus file missing: {path}")
     result = mesh_shape(path, ald=ALD)
     _assert_watertight(result)
+
+
+def test_loose_edge_beside_a_solid_is_not_required_in_the_mesh():
+    cq = pytest.importorskip("cadquery")
+    box = cq.Workplane().box(1, 1, 1).val()
+    wire = cq.Edge.makeCircle(0.5, pnt=cq.Vector(3, 0, 0))
+    result = mesh_shape(cq.Compound.makeCompound([box, wire]), ald=ALD)
+    assert result.ok, result.problems()
+    assert len(result.check.shells) == 1 and result.check.shells[0].watertight
