@@ -24,9 +24,12 @@ from .placement import chord_length, deficit_measure, equidistribute, fewest_nod
 EXPLORE_SHARE = 1.0 / 16.0
 #: Share of the target kept in reserve against error in the length estimate itself.
 MARGIN = 0.03
-#: Share of the target kept in reserve when the curve knows its exact length (``exact_length(a, b)``):
-#: only against rounding and the snapping of the ends to B-rep vertices.
+#: Share of the target kept in reserve when the curve knows its length (``exact_length(a, b)``, to about
+#: 1e-9): only against that error, rounding and the snapping of the ends to B-rep vertices.
 EXACT_MARGIN = 1e-3
+#: How far (as a share of the target) the exploration's estimate may differ from a curve's own length
+#: for that length to be used; past that the estimate and its margins are kept.
+AGREEMENT = 0.25
 #: Most placements measured while searching for the fewest equidistributed segments.
 MAX_TRIALS = 10
 #: Samples per max_length that a max_length placement can choose among.
@@ -197,7 +200,8 @@ def refine_target(ev, a: float, b: float, *, ald: float, min_length: float | Non
         u, p = ex.params, ex.points
     known = getattr(ev.curve, "exact_length", None)
     exact = known(a, b) if known is not None else None
-    if exact is not None and exact > 0.0:  # a line or circle: the true length, not an estimate to guard
+    if exact is not None and exact > 0.0 and abs(exact - total) <= AGREEMENT * ald * exact:
+        # the curve's own length (closed form or integrated), confirmed by the exploration's estimate
         total = float(exact)
         remainder = max(total - float(ex.cumulative[-1]), 0.0)
         limit = ald * (1.0 - EXACT_MARGIN) * total
