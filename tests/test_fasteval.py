@@ -132,3 +132,18 @@ def test_refined_edge_meets_target_against_occt_length():
         true = GCPnts_AbscissaPoint.Length_s(BRepAdaptor_Curve(curve.edge))
         assert 1 - g.length / true <= 1e-4, name
         np.testing.assert_allclose(g.points, _occt(curve, g.params), rtol=0, atol=1e-12 * max(1.0, true))
+
+
+@pytest.mark.parametrize("name", ["line", "circle", "moved ellipse", "spline", "periodic", "bezier"])
+def test_exact_length_agrees_with_dense_polylines(name):
+    curve = EdgeCurve(_edges()[name])
+    a, b = curve.domain
+    mid = a + 0.37 * (b - a)
+
+    def dense(lo: float, hi: float, n: int) -> float:
+        return float(np.linalg.norm(np.diff(curve.evaluate(np.linspace(lo, hi, n)), axis=0), axis=1).sum())
+
+    for lo, hi in ((a, b), (a, mid)):
+        coarse, fine = dense(lo, hi, 20001), dense(lo, hi, 40001)
+        richardson = fine + (fine - coarse) / 3.0
+        assert curve.exact_length(lo, hi) == pytest.approx(richardson, rel=1e-9)
