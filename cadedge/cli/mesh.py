@@ -18,8 +18,7 @@ from .refine import _number, add_refine_options, refine_options
 
 
 def register(subparsers: Any) -> None:
-    from ..mesh import MESH_MAX_GROWTH, MODES
-    from ..mesh.sizes import DEFAULT_GROWTH
+    from ..mesh import DEFAULT_GROWTH, MESH_MAX_GROWTH, MODES
 
     p = subparsers.add_parser(
         "mesh", help="surface mesh (gmsh) on the edge grids, with a watertight check",

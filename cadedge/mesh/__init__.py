@@ -22,16 +22,22 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..atomic import atomic_path
 from ..errors import InputError, MeshError
 from ..shapegrid import ShapeGrid
-from .check import MeshCheck, check_triangles
-from .generate import FaceFailure, mesh_surfaces, read_mesh
-from .sizes import DEFAULT_GROWTH, SizeField, apply_spacing_sizes, configure_gmsh_sizes, write_geo
+
+if TYPE_CHECKING:  # gmsh, trimesh and scipy load only when a mesh is made (``cadedge --help`` stays fast)
+    from .check import MeshCheck
+    from .generate import FaceFailure
+    from .sizes import SizeField
 
 MODES = ("nodes", "sizes")
+# Interior sizes grow by this much per unit distance from the edges (see sizes.configure_gmsh_sizes).
+DEFAULT_GROWTH = 0.25
 MESH_SUFFIXES = (".msh", ".stl", ".vtk")
 # Edge grids for meshing are graded (neighbouring segments within this ratio, also across vertices): a
 # one-segment straight edge next to a finely split arc would otherwise force sliver triangles.
@@ -80,7 +86,7 @@ def _grid_of(source: Any, ald: float, min_length: float | None, max_length: floa
     return refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth)
 
 
-def _edge_multiplicity(raw, imposed, grid: ShapeGrid, emap) -> dict[tuple[int, int], int]:
+def _edge_multiplicity(raw, imposed, emap) -> dict[tuple[int, int], int]:
     """Expected triangle count of every imposed segment: how often its curve bounds a face."""
     import gmsh
 
@@ -126,6 +132,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                          f"(use {', '.join(MESH_SUFFIXES)} or .geo)")
     if out is not None and not (out.parent if str(out.parent) else Path(".")).is_dir():
         raise InputError(f"{out}: output folder does not exist")
+    from .sizes import SizeField, write_geo
+
     t0 = time.perf_counter()
     grid = _grid_of(source, ald, min_length, max_length, max_growth)
     if not grid.faces:
@@ -143,8 +151,11 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
 def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float) -> MeshResult:
     import gmsh
 
+    from .check import check_triangles
+    from .generate import FaceFailure, mesh_surfaces, read_mesh
     from .gmsh_model import gmsh_session, import_shape, map_entities
     from .impose import impose_edge_grids
+    from .sizes import apply_spacing_sizes, configure_gmsh_sizes
 
     with gmsh_session():
         import_shape(grid.shape)
@@ -169,7 +180,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         multiplicity = None
         if imposed is not None:
             grid_points = _face_grid_points(grid)
-            multiplicity = _edge_multiplicity(raw, imposed, grid, emap)
+            multiplicity = _edge_multiplicity(raw, imposed, emap)
         tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
         check = check_triangles(raw.nodes, raw.triangles, triangle_faces=tri_faces, grid_points=grid_points,
                                 edge_multiplicity=multiplicity)
@@ -190,6 +201,8 @@ def check_mesh(result_or_nodes: MeshResult | np.ndarray, triangles: np.ndarray |
     For raw arrays, ``grid`` (optional) adds the every-edge-grid-node-is-a-mesh-node test; boundary edges
     are then only expected where a grid edge bounds a single face.
     """
+    from .check import check_triangles
+
     if isinstance(result_or_nodes, MeshResult):
         if result_or_nodes.check is None:
             raise MeshError(f"{result_or_nodes.source}: no mesh to check (spacing export only)")
@@ -231,5 +244,5 @@ def _multiplicity_from_grid(nodes: np.ndarray, grid: ShapeGrid) -> dict[tuple[in
     return out
 
 
-__all__ = ["mesh_shape", "check_mesh", "MeshResult", "MeshCheck", "FaceFailure", "SizeField", "write_geo",
-           "MODES"]
+__all__ = ["mesh_shape", "check_mesh", "MeshResult", "MODES", "MESH_SUFFIXES", "MESH_MAX_GROWTH",
+           "DEFAULT_GROWTH"]

@@ -1,4 +1,4 @@
-"""Run gmsh's surface meshers face by face robustness-wise, and read the mesh back.
+"""Run gmsh's surface meshers, retrying and reporting failed faces one by one; read the mesh back.
 
 gmsh meshes all empty surfaces in one call. Afterwards each surface is checked on its own (it has
 triangles, and its triangle edges on its boundary curves are exactly the curve segments, each used as

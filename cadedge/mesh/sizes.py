@@ -19,9 +19,8 @@ from scipy.spatial import cKDTree
 from ..atomic import atomic_path
 from ..errors import InputError
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid
+from . import DEFAULT_GROWTH
 from .gmsh_model import EntityMap
-
-DEFAULT_GROWTH = 0.25
 _NEIGHBOURS = 8
 
 
@@ -139,51 +138,57 @@ def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField) -> N
         gmsh.model.mesh.setSizeAtParametricPoints(1, m.tag, gparams.tolist(), sizes.tolist())
 
 
+def _threshold(lines: list[str], n: int, target: str, size: float, max_size: float, growth: float) -> int:
+    """Append a Distance field to ``target`` and a Threshold growing from ``size``; returns the Threshold's id."""
+    lines += [f"Field[{n}] = Distance; Field[{n}].{target};",
+              f"Field[{n + 1}] = Threshold; Field[{n + 1}].InField = {n}; Field[{n + 1}].SizeMin = {size!r}; "
+              f"Field[{n + 1}].SizeMax = {max_size!r}; Field[{n + 1}].DistMin = 0; "
+              f"Field[{n + 1}].DistMax = {max(max_size - size, 0.0) / growth!r};"]
+    return n + 1
+
+
 def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAULT_GROWTH,
               max_size: float | None = None) -> Path:
     """Write a gmsh ``.geo`` carrying our spacings, plus the shape as ``<stem>.brep`` beside it.
 
-    The ``.geo`` merges the BREP (so gmsh's tags are cadedge's ids: MapShapes order), sets each vertex's
-    spacing as its point size, and adds per curve a Distance/Threshold field that is the curve's finest
-    spacing on the curve and grows by ``growth`` away from it. The ``.geo`` language has no sizes at
-    parametric points, so along a curve this is conservative (its finest spacing); the exact per-point
-    sizes are applied by :func:`apply_spacing_sizes` through the API.
+    The ``.geo`` merges the BREP (gmsh's tags are then cadedge's ids: MapShapes order) and sizes the mesh
+    with Distance/Threshold fields growing by ``growth`` away from each vertex (from its spacing) and from
+    each curve (from its median spacing). The ``.geo`` language has no sizes at parametric points, so along
+    a curve this approximates the grid; :func:`apply_spacing_sizes` gives gmsh the exact per-point sizes
+    through the API. Point sizes are not used: gmsh would interpolate them along curves, making a straight
+    edge between two fine vertices fine all along.
     """
     from OCP.BRepTools import BRepTools
 
     target = Path(path)
     if grid.shape is None:
         raise InputError(f"{grid.source}: the shape grid carries no OCCT shape to export")
+    field = SizeField(grid, growth=growth, max_size=max_size)
     brep = target.with_suffix(".brep")
     with atomic_path(brep) as tmp:
-        BRepTools.Write_s(grid.shape, str(tmp))
-    field = SizeField(grid, growth=growth, max_size=max_size)
+        if not BRepTools.Write_s(grid.shape, str(tmp)):
+            raise InputError(f"{brep}: OCCT could not write the BREP")
     lines = [f"// cadedge spacing export of {grid.source} (options {grid.options})",
              'SetFactory("OpenCASCADE");',
              "Geometry.OCCFixDegenerated = 0; Geometry.OCCFixSmallEdges = 0; Geometry.OCCFixSmallFaces = 0;",
              "Geometry.OCCSewFaces = 0; Geometry.OCCMakeSolids = 0; Geometry.OCCImportLabels = 0;",
              f'Merge "{brep.name}";',
-             "Mesh.MeshSizeFromCurvature = 0; Mesh.MeshSizeFromPoints = 1; Mesh.MeshSizeExtendFromBoundary = 1;",
+             "Mesh.MeshSizeFromCurvature = 0; Mesh.MeshSizeFromPoints = 0; Mesh.MeshSizeExtendFromBoundary = 0;",
              f"Mesh.MeshSizeMax = {field.max_size!r};"]
+    fields, n = [], 1
     for vid, h in sorted(_vertex_spacing(grid).items()):
         if h > 0:
-            lines.append(f"MeshSize{{{vid}}} = {h!r};")
-    fields = []
+            fields.append(_threshold(lines, n, f"PointsList = {{{vid}}}", h, field.max_size, growth))
+            n += 2
     for e in grid.edges:
-        if e.degenerate or len(e.points) < 2:
-            continue
-        hmin = float(node_spacings(e).min())
-        d, t = 2 * e.id - 1, 2 * e.id
-        lines += [f"Field[{d}] = Distance; Field[{d}].CurvesList = {{{e.id}}}; "
-                  f"Field[{d}].Sampling = {max(len(e.points), 2)};",
-                  f"Field[{t}] = Threshold; Field[{t}].InField = {d}; Field[{t}].SizeMin = {hmin!r}; "
-                  f"Field[{t}].SizeMax = {field.max_size!r}; Field[{t}].DistMin = 0; "
-                  f"Field[{t}].DistMax = {max(field.max_size - hmin, 0.0) / growth!r};"]
-        fields.append(t)
+        if not e.degenerate and len(e.points) >= 2:
+            h = float(np.median(node_spacings(e)))
+            fields.append(_threshold(lines, n, f"CurvesList = {{{e.id}}}; Field[{n}].Sampling = "
+                                               f"{max(len(e.points), 2)}", h, field.max_size, growth))
+            n += 2
     if fields:
-        top = 2 * len(grid.edges) + 1
-        lines += [f"Field[{top}] = Min; Field[{top}].FieldsList = {{{', '.join(map(str, fields))}}};",
-                  f"Background Field = {top};"]
+        lines += [f"Field[{n}] = Min; Field[{n}].FieldsList = {{{', '.join(map(str, fields))}}};",
+                  f"Background Field = {n};"]
     with atomic_path(target) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     return target
