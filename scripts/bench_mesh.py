@@ -9,13 +9,17 @@ Per model: triangles, minimum angle, seconds, watertight (cadedge's check on bot
 
 Prints a markdown table (the one in docs/mesh.md):
 
-    cd /work/main && /work/venv/bin/python scripts/bench_mesh.py --ald 1e-2
+    cd /work/main && /work/venv/bin/python scripts/bench_mesh.py --ald 1e-2 --timeout 300
+
+gmsh alone runs in a child process with a time limit (a hang or crash costs one row).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -65,6 +69,20 @@ def gmsh_own(path: Path, ald: float, max_size: float) -> dict:
             "watertight": _closed(check), "error": error}
 
 
+def gmsh_own_isolated(path: Path, ald: float, max_size: float, timeout: float) -> dict:
+    """:func:`gmsh_own` in a child process, so a gmsh hang or crash costs one row, not the run."""
+    cmd = [sys.executable, __file__, "--gmsh-only", str(path), "--ald", repr(float(ald)), "--max-size", repr(float(max_size))]
+    try:
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return {"triangles": "-", "min_angle": float("nan"), "seconds": timeout, "watertight": "-",
+                "error": f"no result within {timeout:g} s"}
+    if done.returncode != 0:
+        return {"triangles": "-", "min_angle": float("nan"), "seconds": float("nan"), "watertight": "-",
+                "error": f"gmsh exited with {done.returncode}"}
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def _closed(check) -> str:
     closed = sum(s.watertight for s in check.shells)
     return f"{closed}/{len(check.shells)}"
@@ -74,7 +92,13 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("models", nargs="*", type=Path, default=DEFAULT_MODELS)
     parser.add_argument("--ald", type=float, default=1e-2)
+    parser.add_argument("--timeout", type=float, default=300.0, help="seconds allowed to gmsh alone per model")
+    parser.add_argument("--gmsh-only", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--max-size", type=float, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.gmsh_only:
+        print(json.dumps(gmsh_own(args.models[0], args.ald, args.max_size)))
+        return 0
     print(f"ALD {args.ald:g}; gmsh Mesh.MeshSizeFromCurvature = "
           f"{math.ceil(2 * math.pi / math.sqrt(24 * args.ald))}; times include STEP reading\n")
     print("| model | cadedge triangles | min angle | s | closed shells | check | gmsh triangles | min angle | s "
@@ -89,7 +113,7 @@ def main() -> int:
             continue
         ours_s = time.perf_counter() - t0
         spacing = max(max(e.segment_lengths) for e in r.grid.edges if not e.degenerate)
-        theirs = gmsh_own(path, args.ald, spacing)
+        theirs = gmsh_own_isolated(path, args.ald, spacing, args.timeout)
         verdict = "ok" if r.ok else f"{len(r.failures)} faces failed" if r.failures else "FAILED"
         print(f"| {path.name} | {len(r.triangles)} | {r.check.min_angle_deg:.1f} | {ours_s:.1f} | "
               f"{_closed(r.check)} | {verdict} | {theirs['triangles']} | {theirs['min_angle']:.1f} | "
