@@ -71,7 +71,8 @@ def gmsh_own(path: Path, ald: float, max_size: float) -> dict:
 
 def gmsh_own_isolated(path: Path, ald: float, max_size: float, timeout: float) -> dict:
     """:func:`gmsh_own` in a child process, so a gmsh hang or crash costs one row, not the run."""
-    cmd = [sys.executable, __file__, "--gmsh-only", str(path), "--ald", repr(float(ald)), "--max-size", repr(float(max_size))]
+    cmd = [sys.executable, __file__, "--gmsh-only", str(path), "--ald", repr(float(ald)),
+           "--max-size", repr(float(max_size))]
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -115,10 +116,10 @@ def main() -> int:
         spacing = max(max(e.segment_lengths) for e in r.grid.edges if not e.degenerate)
         theirs = gmsh_own_isolated(path, args.ald, spacing, args.timeout)
         verdict = "ok" if r.ok else f"{len(r.failures)} faces failed" if r.failures else "FAILED"
+        note = f" ({theirs['error']})" if theirs["error"] else ""
         print(f"| {path.name} | {len(r.triangles)} | {r.check.min_angle_deg:.1f} | {ours_s:.1f} | "
               f"{_closed(r.check)} | {verdict} | {theirs['triangles']} | {theirs['min_angle']:.1f} | "
-              f"{theirs['seconds']:.1f} | {theirs['watertight']}{' (' + theirs['error'] + ')' if theirs['error'] else ''} |",
-              flush=True)
+              f"{theirs['seconds']:.1f} | {theirs['watertight']}{note} |", flush=True)
     return 0
 
 

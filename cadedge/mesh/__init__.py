@@ -119,7 +119,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     """Mesh every face of ``source`` (STEP path, cadquery/build123d/OCP shape, or a ``ShapeGrid``).
 
     ``ald``, ``min_length``, ``max_length``, ``max_growth`` go to :func:`cadedge.refine_shape` (ignored for
-    a ready ShapeGrid); ``max_growth`` defaults to :data:`MESH_MAX_GROWTH` here (``None`` for pure ALD grids). Interior sizes grow from the edge spacings by ``growth`` per unit distance, capped
+    a ready ShapeGrid); ``max_growth`` defaults to :data:`MESH_MAX_GROWTH` here (``None`` for pure ALD
+    grids). Interior sizes grow from the edge spacings by ``growth`` per unit distance, capped
     at ``max_size`` (default: ``max_length``, else the largest edge spacing). ``mode`` is ``"nodes"`` or
     ``"sizes"`` (see the module doc). Raises :class:`InputError` on bad arguments or input; faces gmsh
     fails on are returned in ``failures``, not raised.
