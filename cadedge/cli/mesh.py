@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
-from .refine import _number, add_refine_options, refine_options
+from .refine import parse_number, add_refine_options, refine_options
 
 
 def register(subparsers: Any) -> None:
@@ -47,8 +47,8 @@ def run(args: argparse.Namespace) -> int:
     opts = refine_options(args, source)
     if opts["max_growth"] is None:
         opts["max_growth"] = MESH_MAX_GROWTH
-    growth = _number("--growth", args.growth, source, low=0.0)
-    max_size = _number("--max-size", args.max_size, source, low=0.0)
+    growth = parse_number("--growth", args.growth, source, low=0.0)
+    max_size = parse_number("--max-size", args.max_size, source, low=0.0)
     out = Path(args.output)
     if out.suffix.lower() not in MESH_SUFFIXES + (".geo",):
         raise InputError(f"{args.output}: unsupported output suffix {out.suffix!r} "

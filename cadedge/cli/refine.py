@@ -33,8 +33,9 @@ def add_refine_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-growth", metavar="G", help="largest ratio of adjacent segment lengths, > 1")
 
 
-def _number(name: str, text: str | None, source: str, *, low: float, high: float = math.inf,
+def parse_number(name: str, text: str | None, source: str, *, low: float, high: float = math.inf,
             inclusive_low: bool = False) -> float | None:
+    """``text`` as a number above ``low`` (and below ``high``), or None; InputError naming ``source``."""
     if text is None:
         return None
     try:
@@ -50,10 +51,10 @@ def _number(name: str, text: str | None, source: str, *, low: float, high: float
 
 def refine_options(args: argparse.Namespace, source: str) -> dict[str, float | None]:
     """The keyword arguments of :func:`cadedge.refine_shape` from parsed options; InputError naming ``source``."""
-    opts = {"ald": _number("--ald", args.ald, source, low=0.0, high=1.0),
-            "min_length": _number("--min-length", args.min_length, source, low=0.0),
-            "max_length": _number("--max-length", args.max_length, source, low=0.0),
-            "max_growth": _number("--max-growth", args.max_growth, source, low=1.0)}
+    opts = {"ald": parse_number("--ald", args.ald, source, low=0.0, high=1.0),
+            "min_length": parse_number("--min-length", args.min_length, source, low=0.0),
+            "max_length": parse_number("--max-length", args.max_length, source, low=0.0),
+            "max_growth": parse_number("--max-growth", args.max_growth, source, low=1.0)}
     if opts["min_length"] is not None and opts["max_length"] is not None and opts["min_length"] > opts["max_length"]:
         raise InputError(f"{source}: --min-length {args.min_length} exceeds --max-length {args.max_length}")
     return opts
