@@ -210,3 +210,15 @@ def test_loose_edge_beside_a_solid_is_not_required_in_the_mesh():
     result = mesh_shape(cq.Compound.makeCompound([box, wire]), ald=ALD)
     assert result.ok, result.problems()
     assert len(result.check.shells) == 1 and result.check.shells[0].watertight
+
+
+def test_long_boundary_segments_near_small_features_are_split(fixtures_dir):
+    """The bracket's 24 mm boundary lines pass 7 mm from a finely meshed hole: without splitting them to
+    the size field the plate's face fills with slivers (1.7 degrees); with it, no triangle is that thin."""
+    result = mesh_shape(fixtures_dir / "bracket.step", ald=1e-3)
+    assert result.check.ok
+    assert result.check.min_angle_deg > 10.0
+    plain = cadedge.refine_shape(fixtures_dir / "bracket.step", ald=1e-3, max_growth=2.0)
+    assert result.grid.segments > plain.segments  # split, never coarsened
+    ends = {e.id: (e.points[0].tolist(), e.points[-1].tolist()) for e in plain.edges}
+    assert all(ends[e.id] == (e.points[0].tolist(), e.points[-1].tolist()) for e in result.grid.edges)

@@ -133,13 +133,19 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                          f"(use {', '.join(MESH_SUFFIXES)} or .geo)")
     if out is not None and not (out.parent if str(out.parent) else Path(".")).is_dir():
         raise InputError(f"{out}: output folder does not exist")
+    from .proximity import fit_to_sizes
     from .sizes import SizeField, write_geo
 
     t0 = time.perf_counter()
     grid = _grid_of(source, ald, min_length, max_length, max_growth)
     if not grid.faces:
         raise InputError(f"{grid.source}: the shape has no faces to mesh (only loose edges)")
-    field_ = SizeField(grid, growth=growth, min_size=min_length, max_size=max_size or max_length)
+    def make_field(g: ShapeGrid) -> SizeField:
+        return SizeField(g, growth=growth, min_size=min_length, max_size=max_size or max_length)
+
+    if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
+        grid = fit_to_sizes(grid, make_field)
+    field_ = make_field(grid)
     if out is not None and out.suffix.lower() == ".geo":
         write_geo(grid, out, growth=growth, max_size=max_size or max_length)
         return MeshResult(source=grid.source, mode="sizes", grid=grid, nodes=np.zeros((0, 3)),
