@@ -175,6 +175,24 @@ def polish(points: np.ndarray, nodes: np.ndarray, *, sweeps: int = 4, fixed: np.
     return nodes
 
 
+def _bisect(test, lo: float, hi: float, *, ok_below: bool, steps: int, rel: float):
+    """Bisect a cap on [lo, hi]; ``test(cap)`` gives (ok, value). Returns the value at the ok cap
+    closest to the boundary (ok caps lie below it if ``ok_below``, above it otherwise), or None."""
+    found = None
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        ok, value = test(mid)
+        if ok:
+            found = value
+        if ok == ok_below:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= rel * hi:
+            break
+    return found
+
+
 def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_length: float | None = None,
                  max_length: float | None = None, forced: np.ndarray | None = None) -> np.ndarray:
     """The fewest nodes (by greedy + bisection on the cap, then polish) whose chords miss at most ``budget``.
@@ -202,35 +220,17 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
             planned[key] = nodes, total - chord_length(points, nodes)
         return planned[key]
 
-    lo, hi = 0.0, max(budget, 0.0)
-    best, miss = plan(hi)
+    best, miss = plan(max(budget, 0.0))
     if miss > budget:  # the per-segment cap equal to the whole budget is too loose: bisect down
-        good = None
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            nodes, miss = plan(mid)
-            if miss <= budget:
-                good, lo = nodes, mid
-            else:
-                hi = mid
-            if hi - lo <= 1e-3 * hi:
-                break
-        if good is None:
-            good, _ = plan(0.0)
-        best = good
+        best = _bisect(lambda cap: (plan(cap)[1] <= budget, plan(cap)[0]), 0.0, max(budget, 0.0),
+                       ok_below=True, steps=60, rel=1e-3)
+        if best is None:
+            best, _ = plan(0.0)
     # The polished grid may leave room for fewer nodes: try dropping one at a time.
     while len(best) > 2:
-        cap_lo, cap_hi = 0.0, total
-        fewer = None
-        for _ in range(40):
-            mid = 0.5 * (cap_lo + cap_hi)
-            nodes = cover(mid)
-            if len(nodes) < len(best):
-                cap_hi, fewer = mid, nodes
-            else:
-                cap_lo = mid
-            if cap_hi - cap_lo <= 1e-4 * cap_hi:
-                break
+        count = len(best)
+        fewer = _bisect(lambda cap: (len(cover(cap)) < count, cover(cap)), 0.0, total,
+                        ok_below=False, steps=40, rel=1e-4)
         if fewer is None:
             break
         fewer = polish(points, fewer, sweeps=8, fixed=forced) if len(fewer) > 2 else fewer
