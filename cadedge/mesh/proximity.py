@@ -3,7 +3,7 @@
 An edge grid meets its ALD with very few segments on straight edges; but a face whose boundary has a
 24 mm segment 7 mm from a hole meshed at 0.5 mm can only be filled with slivers next to that
 segment, whatever the interior sizes. Before the grids are imposed, every segment longer than
-``ratio`` times the size field at its midpoint (graded from all edges' spacings, so a nearby edge
+``ratio`` (3) times the size field at its midpoint (graded from all edges' spacings, so a nearby edge
 counts even when it is not adjacent) is split into equal parameter steps on its OCCT curve. Edge
 ends are never moved, so shared vertices stay bit-identical, and splitting only lowers the ALD.
 """
@@ -18,7 +18,7 @@ import numpy as np
 from ..shapegrid import ShapeGrid
 
 #: A segment is split when it is longer than this many times the size field at its midpoint.
-RATIO = 1.5
+RATIO = 3.0
 #: Each pass rebuilds the field from the split grid; sizes settle in a few.
 PASSES = 3
 
