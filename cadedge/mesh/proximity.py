@@ -19,6 +19,10 @@ from ..shapegrid import ShapeGrid
 
 #: A segment is split when it is longer than this many times the size field at its midpoint.
 RATIO = 3.0
+#: Edges whose tolerance exceeds this share of the pieces they would be cut into are left alone: on
+#: a loose edge (vertices off the curve, curves off the faces) a new point can fall so far from the
+#: face's own boundary that gmsh builds near-degenerate triangles there.
+TOLERANCE_SHARE = 1e-3
 #: Each pass rebuilds the field from the split grid; sizes settle in a few.
 PASSES = 3
 
@@ -49,8 +53,8 @@ def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np
             seg = e.segment_lengths
             size = field(0.5 * (e.points[:-1] + e.points[1:]))
             pieces = np.where(seg > ratio * size, np.ceil(seg / np.maximum(size, 1e-300)), 1).astype(int)
-            if not np.any(pieces > 1):
-                continue
+            if not np.any(pieces > 1) or e.tolerance > TOLERANCE_SHARE * np.min(seg / pieces):
+                continue  # nothing to split, or a loose edge: new points would stray from its faces
             topo = topo or Topology(grid.shape)
             new_u = np.concatenate([e.params[k] + (e.params[k + 1] - e.params[k]) * np.arange(1, n) / n
                                     for k, n in enumerate(pieces) if n > 1])
