@@ -54,6 +54,18 @@ class ShapeEdgeGrid(Polyline):
         return (0.0, 0.0) if self.degenerate else super().spacing
 
 
+def vertex_spacings(edges: list[ShapeEdgeGrid]) -> dict[int, float]:
+    """Vertex id -> shortest end segment among the non-degenerate edges meeting there (the contract's
+    ``vertices[].spacing``: the spacing a surface mesher should use at that vertex)."""
+    spacing: dict[int, float] = {}
+    for e in edges:
+        if e.degenerate or len(e.points) < 2:
+            continue
+        for vid, h in zip(e.vertices, e.spacing):
+            spacing[vid] = min(spacing.get(vid, h), h)
+    return spacing
+
+
 @dataclass
 class ShapeGrid:
     """Edge grids of every edge of a shape, with vertices, adjacency, units and options.

@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..shapegrid import ShapeGrid
+from ..shapegrid import ShapeGrid, vertex_spacings
 
 #: A segment is split when it is longer than this many times the size field at its midpoint.
 RATIO = 3.0
@@ -25,15 +25,6 @@ RATIO = 3.0
 TOLERANCE_SHARE = 1e-3
 #: Each pass rebuilds the field from the split grid; sizes settle in a few.
 PASSES = 3
-
-
-def _vertex_spacing(grid: ShapeGrid) -> dict[int, float]:
-    spacing: dict[int, float] = {}
-    for e in grid.edges:
-        if not e.degenerate and len(e.points) > 1:
-            for vid, h in zip(e.vertices, e.spacing):
-                spacing[vid] = min(spacing.get(vid, np.inf), h)
-    return spacing
 
 
 def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np.ndarray], np.ndarray]], *,
@@ -65,6 +56,6 @@ def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np
             changed = True
         if not changed:
             break
-    spacing = _vertex_spacing(dataclasses.replace(grid, edges=edges))
+    spacing = vertex_spacings(edges)
     vertices = [dataclasses.replace(v, spacing=spacing.get(v.id, v.spacing)) for v in grid.vertices]
     return dataclasses.replace(grid, edges=edges, vertices=vertices)

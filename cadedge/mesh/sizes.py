@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 
 from ..atomic import atomic_path
 from ..errors import InputError
-from ..shapegrid import ShapeEdgeGrid, ShapeGrid
+from ..shapegrid import ShapeEdgeGrid, ShapeGrid, vertex_spacings
 from . import DEFAULT_GROWTH
 from .gmsh_model import EntityMap
 _NEIGHBOURS = 8
@@ -34,16 +34,9 @@ def node_spacings(edge: ShapeEdgeGrid) -> np.ndarray:
 
 
 def _vertex_spacing(grid: ShapeGrid) -> dict[int, float]:
-    out: dict[int, float] = {}
-    for e in grid.edges:
-        if e.degenerate or len(e.points) < 2:
-            continue
-        first, last = e.spacing
-        for vid, h in ((e.vertices[0], first), (e.vertices[1], last)):
-            out[vid] = min(out.get(vid, np.inf), h)
-    for v in grid.vertices:
-        if v.spacing:
-            out[v.id] = float(v.spacing)
+    """Each vertex's spacing: the grid's own where it has one, else the shortest end segment there."""
+    out = vertex_spacings(grid.edges)
+    out.update({v.id: float(v.spacing) for v in grid.vertices if v.spacing})
     return out
 
 

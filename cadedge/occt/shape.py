@@ -18,7 +18,7 @@ from OCP.BRep import BRep_Tool
 
 from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError, InputError
 from ..refine import refine_curve
-from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid
+from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
 from .edgecurve import EdgeCurve
 from .reader import load_shape
 from .topology import Topology
@@ -103,18 +103,6 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
                          evaluations=grid.evaluations, **common)
 
 
-def _vertex_spacing(edges: list[ShapeEdgeGrid], nvert: int) -> list[float | None]:
-    """Shortest end segment among the non-degenerate edges meeting at each vertex."""
-    spacing: list[float | None] = [None] * nvert
-    for e in edges:
-        if e.degenerate:
-            continue
-        for vid, s in zip(e.vertices, e.spacing):
-            cur = spacing[vid - 1]
-            spacing[vid - 1] = s if cur is None else min(cur, s)
-    return spacing
-
-
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
                  max_length: float | None = None, max_growth: float | None = None,
                  progress: Progress | None = None) -> ShapeGrid:
@@ -147,8 +135,8 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
             notes += grade_vertices(edges, topo, float(max_growth))
         except GeometryError as exc:
             raise GeometryError(f"{loaded.source}: grading edge ends at vertices: {exc}") from exc
-    spacing = _vertex_spacing(edges, len(vpoints))
-    vertices = [VertexGrid(id=k + 1, point=p, spacing=spacing[k],
+    spacing = vertex_spacings(edges)
+    vertices = [VertexGrid(id=k + 1, point=p, spacing=spacing.get(k + 1),
                            tolerance=float(BRep_Tool.Tolerance_s(topo.vertices[k])))
                 for k, p in enumerate(vpoints)]
     return ShapeGrid(source=loaded.source, units=loaded.units,
