@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .grid import row_norms
+
 #: Root triples for a curve that gives no hint of its own: features narrower than about
 #: 1/(2 * ROOTS) of the parameter domain can hide between the first samples.
 ROOTS = 64
@@ -39,17 +41,13 @@ class Exploration:
     @property
     def cumulative(self) -> np.ndarray:
         """Polyline length from the first sample to each sample."""
-        return np.concatenate([[0.0], np.cumsum(_norms(np.diff(self.points, axis=0)))])
-
-
-def _norms(v: np.ndarray) -> np.ndarray:
-    return np.sqrt(np.einsum("ij,ij->i", v, v))
+        return np.concatenate([[0.0], np.cumsum(row_norms(np.diff(self.points, axis=0)))])
 
 
 def _gains(pa: np.ndarray, pm: np.ndarray, pb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Gain of each midpoint and the length of the two half chords."""
-    two = _norms(pm - pa) + _norms(pb - pm)
-    return np.maximum(two - _norms(pb - pa), 0.0), two
+    two = row_norms(pm - pa) + row_norms(pb - pm)
+    return np.maximum(two - row_norms(pb - pa), 0.0), two
 
 
 def root_params(curve, a: float, b: float) -> np.ndarray:
@@ -135,6 +133,6 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
     u, p = u[order], p[order]
     keep = np.concatenate([[True], np.diff(u) > 0])
     u, p = u[keep], p[keep]
-    dense = float(np.sum(_norms(np.diff(p, axis=0))))
+    dense = float(np.sum(row_norms(np.diff(p, axis=0))))
     return Exploration(params=u, points=p, length_estimate=dense + remainder, remainder=remainder,
                        corners=np.unique(np.concatenate(corners)) if corners else np.zeros(0), notes=notes)

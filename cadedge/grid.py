@@ -7,6 +7,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+def row_norms(v: np.ndarray) -> np.ndarray:
+    """Euclidean length of each row of ``v`` (n, d): the refiners' innermost operation."""
+    return np.sqrt(np.einsum("ij,ij->i", v, v))
+
+
 class Polyline:
     """Lengths derived from ``points`` (n, 3), shared by the grids of a curve and of a B-rep edge."""
 
@@ -15,7 +20,7 @@ class Polyline:
     @property
     def segment_lengths(self) -> np.ndarray:
         """Length of each segment, shape (n - 1,)."""
-        return np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+        return row_norms(np.diff(self.points, axis=0))
 
     @property
     def length(self) -> float:

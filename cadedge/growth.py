@@ -11,18 +11,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from .grid import row_norms
+
 GRADED_PASSES = 12
 MAX_PASSES = 400
 BISECTION_STEPS = 24
 
 
-def _norms(v: np.ndarray) -> np.ndarray:
-    return np.sqrt(np.einsum("ij,ij->i", v, v))
-
-
 def worst_growth(p: np.ndarray) -> float:
     """Largest length ratio of adjacent segments of the polyline through ``p`` (1 for fewer than two)."""
-    seg = _norms(np.diff(p, axis=0))
+    seg = row_norms(np.diff(p, axis=0))
     if len(seg) < 2:
         return 1.0
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -40,7 +38,7 @@ def _points_at_distances(ev, ua, ub, ref, dist, *, from_start=True):
     for _ in range(BISECTION_STEPS):
         mid = 0.5 * (lo + hi)
         pm = ev(mid)
-        near = _norms(pm - ref) < dist
+        near = row_norms(pm - ref) < dist
         move_lo = near == fwd
         lo = np.where(move_lo, mid, lo)
         hi = np.where(move_lo, hi, mid)
@@ -49,7 +47,7 @@ def _points_at_distances(ev, ua, ub, ref, dist, *, from_start=True):
 
 def _graded_split(ev, u: np.ndarray, p: np.ndarray, g: float, min_length: float | None):
     """Insert graded points so segment sizes follow the size field of growth ``g``."""
-    seg = _norms(np.diff(p, axis=0))
+    seg = row_norms(np.diff(p, axis=0))
     alpha = 0.9 * (g - 1.0)
     n = len(seg)
     fwd = np.full(n + 1, np.inf)
@@ -97,7 +95,7 @@ def limit_growth(ev, params: np.ndarray, points: np.ndarray, max_growth: float, 
     """
     u, p = np.asarray(params, dtype=float), np.asarray(points, dtype=float)
     g = max_growth
-    start = _norms(np.diff(p, axis=0))
+    start = row_norms(np.diff(p, axis=0))
     start = start[start > 0]
     # No piece is ever accepted below half the shortest input segment: the work stays bounded
     # (at most length / floor segments) whatever the curve does between its points.
@@ -105,7 +103,7 @@ def limit_growth(ev, params: np.ndarray, points: np.ndarray, max_growth: float, 
     if len(u) > 2 and worst_growth(p) > g:
         u, p = _graded_split(ev, u, p, g, min_length)
     for _ in range(MAX_PASSES):
-        seg = _norms(np.diff(p, axis=0))
+        seg = row_norms(np.diff(p, axis=0))
         if len(seg) < 2:
             break
         left, right = seg[:-1], seg[1:]
@@ -134,7 +132,7 @@ def limit_growth(ev, params: np.ndarray, points: np.ndarray, max_growth: float, 
         # the piece sits at the short neighbour's side of the long segment
         ref = np.where(long_is_left[:, None], p[k + 1], p[k])
         um, pm = _points_at_distances(ev, u[k], u[k + 1], ref, x, from_start=~long_is_left)
-        fits = np.minimum(_norms(pm - p[k]), _norms(p[k + 1] - pm)) >= floor
+        fits = np.minimum(row_norms(pm - p[k]), row_norms(p[k + 1] - pm)) >= floor
         if not fits.any():
             break
         u = np.insert(u, k[fits] + 1, um[fits])

@@ -13,14 +13,12 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def _norms(v: np.ndarray) -> np.ndarray:
-    return np.sqrt(np.einsum("ij,ij->i", v, v))
+from .grid import row_norms
 
 
 def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
     """Length of the polyline through ``points[nodes]``."""
-    return float(np.sum(_norms(np.diff(points[nodes], axis=0))))
+    return float(np.sum(row_norms(np.diff(points[nodes], axis=0))))
 
 
 #: Largest number of samples for which fewest_nodes tabulates every chord deficit (n**2 floats).
@@ -58,7 +56,7 @@ def _greedy_reach(points: np.ndarray, cum: np.ndarray, cap: float, forced: np.nd
             break
         i, a, b = idx[open_], lo[open_], hi[open_]
         mid = (a + b + 1) // 2
-        ok = (cum[mid] - cum[i]) - _norms(points[mid] - points[i]) <= cap
+        ok = (cum[mid] - cum[i]) - row_norms(points[mid] - points[i]) <= cap
         lo[open_] = np.where(ok, mid, a)
         hi[open_] = np.where(ok, b, mid - 1)
     return _follow(lo.tolist(), last)
@@ -110,7 +108,7 @@ def greedy(points: np.ndarray, cum: np.ndarray, cap: float, *, min_length: float
         while True:
             j_hi = min(stop, i + window)
             seg = points[i + 1:j_hi + 1] - points[i]
-            chord = _norms(seg)
+            chord = row_norms(seg)
             deficit = (cum[i + 1:j_hi + 1] - cum[i]) - chord
             ok = deficit <= cap
             if max_length is not None:
@@ -122,7 +120,7 @@ def greedy(points: np.ndarray, cum: np.ndarray, cap: float, *, min_length: float
         reach = i + 1 + (int(bad[0]) - 1 if len(bad) else len(ok) - 1)
         reach = max(reach, i + 1)
         if min_length is not None and reach < stop and np.linalg.norm(points[reach] - points[i]) < min_length:
-            far = _norms(points[reach + 1:stop + 1] - points[i]) >= min_length
+            far = row_norms(points[reach + 1:stop + 1] - points[i]) >= min_length
             reach = reach + 1 + int(np.argmax(far)) if far.any() else stop
         nodes.append(reach)
         i = reach
@@ -155,9 +153,9 @@ def polish(points: np.ndarray, nodes: np.ndarray, *, sweeps: int = 4, fixed: np.
             group = np.repeat(np.arange(len(k)), sizes)
             starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
             cand = lo[group] + 1 + (np.arange(sizes.sum()) - starts[group])
-            two = _norms(points[cand] - points[lo[group]]) + _norms(points[hi[group]] - points[cand])
+            two = row_norms(points[cand] - points[lo[group]]) + row_norms(points[hi[group]] - points[cand])
             best = np.maximum.reduceat(two, starts)
-            current = _norms(points[nodes[k]] - points[lo]) + _norms(points[hi] - points[nodes[k]])
+            current = row_norms(points[nodes[k]] - points[lo]) + row_norms(points[hi] - points[nodes[k]])
             better = best > current * (1 + 1e-15)
             if not better.any():
                 continue
@@ -253,7 +251,7 @@ def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray | N
     n = len(points)
     rho = np.zeros(n)
     if n >= 3:
-        skip = _norms(points[2:] - points[:-2])
+        skip = row_norms(points[2:] - points[:-2])
         d = np.maximum(h[:-1] + h[1:] - skip, 0.0)
         denom = 3.0 * h[:-1] * h[1:] * (h[:-1] + h[1:])
         with np.errstate(divide="ignore", invalid="ignore"):
