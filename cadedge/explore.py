@@ -11,11 +11,12 @@ split again, whatever its gain looks like. All triples of a level are split in o
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .grid import row_norms
+from .grid import polyline_length, row_norms
 
 #: Root triples for a curve that gives no hint of its own: features narrower than about
 #: 1/(2 * ROOTS) of the parameter domain can hide between the first samples.
@@ -38,10 +39,23 @@ class Exploration:
     corners: np.ndarray = field(default_factory=lambda: np.zeros(0))  # params of kinks that never smoothed out
     notes: list[str] = field(default_factory=list)
 
+    def with_samples(self, params: np.ndarray, points: np.ndarray) -> "Exploration":
+        """This exploration with more samples merged in (where a parameter repeats, the old sample stays)."""
+        u, p = _sorted_unique(np.concatenate([self.params, params]), np.concatenate([self.points, points]))
+        return dataclasses.replace(self, params=u, points=p)
+
     @property
     def cumulative(self) -> np.ndarray:
         """Polyline length from the first sample to each sample."""
         return np.concatenate([[0.0], np.cumsum(row_norms(np.diff(self.points, axis=0)))])
+
+
+def _sorted_unique(u: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Samples sorted by parameter, the first of any repeated parameter kept."""
+    order = np.argsort(u, kind="stable")
+    u, p = u[order], p[order]
+    keep = np.concatenate([[True], np.diff(u) > 0])
+    return u[keep], p[keep]
 
 
 def _gains(pa: np.ndarray, pm: np.ndarray, pb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -127,12 +141,7 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
         t_pb = np.concatenate([pm_, pb])
         t_ratio = np.concatenate([ratio, ratio])
 
-    u = np.concatenate(done_u)
-    p = np.concatenate(done_p)
-    order = np.argsort(u, kind="stable")
-    u, p = u[order], p[order]
-    keep = np.concatenate([[True], np.diff(u) > 0])
-    u, p = u[keep], p[keep]
-    dense = float(np.sum(row_norms(np.diff(p, axis=0))))
+    u, p = _sorted_unique(np.concatenate(done_u), np.concatenate(done_p))
+    dense = polyline_length(p)
     return Exploration(params=u, points=p, length_estimate=dense + remainder, remainder=remainder,
                        corners=np.unique(np.concatenate(corners)) if corners else np.zeros(0), notes=notes)

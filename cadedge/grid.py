@@ -12,6 +12,11 @@ def row_norms(v: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("ij,ij->i", v, v))
 
 
+def polyline_length(points: np.ndarray) -> float:
+    """Length of the polyline through ``points`` (n, d)."""
+    return float(np.sum(row_norms(np.diff(points, axis=0))))
+
+
 class Polyline:
     """Lengths derived from ``points`` (n, 3), shared by the grids of a curve and of a B-rep edge."""
 

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .grid import row_norms
+from .grid import polyline_length, row_norms
 
 
 def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
     """Length of the polyline through ``points[nodes]``."""
-    return float(np.sum(row_norms(np.diff(points[nodes], axis=0))))
+    return polyline_length(points[nodes])
 
 
 #: Largest number of samples for which fewest_nodes tabulates every chord deficit (n**2 floats).

@@ -9,11 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .curves import Evaluator, as_curve
-
-
-def polyline_length(points: np.ndarray) -> float:
-    """Length of the polyline through ``points`` (n, d)."""
-    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+from .grid import polyline_length
 
 
 def reference_length(curve, domain: tuple[float, float] | None = None, n: int = 2 ** 20) -> float:

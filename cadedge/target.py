@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from .explore import explore
+from .grid import polyline_length, row_norms
 from .growth import worst_growth
 from .placement import chord_length, deficit_measure, equidistribute, fewest_nodes
 
@@ -62,7 +63,7 @@ def _equidistributed(ev, ex, corner_idx: np.ndarray, total: float, limit: float,
     for _ in range(MAX_TRIALS):
         params = equidistribute(u, cum, measure, n, corner_idx)
         pts = _evaluate_new(ev, u, params, p)
-        miss = total - chord_length(pts, np.arange(len(pts)))
+        miss = total - polyline_length(pts)
         # the cube law: the removable deficit falls with the square of the count
         predicted = math.ceil(n * math.sqrt(max(miss - fixed, 0.0) / budget)) if budget > 0 else n + 1
         if miss <= limit:
@@ -90,7 +91,7 @@ def _graded(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarr
     u, cum = ex.params, ex.cumulative
     alpha = 0.75 * (growth - 1.0)
     s_nodes = np.interp(params, u, cum)
-    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    seg = row_norms(np.diff(points, axis=0))
     seg_of = np.clip(np.searchsorted(s_nodes, cum, side="right") - 1, 0, len(seg) - 1)
     h = seg[seg_of].copy()
     # forward: segments ending at or before s; backward: segments starting at or after s
@@ -110,7 +111,7 @@ def _graded(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarr
     for _ in range(6):
         new = equidistribute(u, cum, measure, count, corner_idx)
         pts = _evaluate_new(ev, u, new, ex.points)
-        if total - chord_length(pts, np.arange(len(pts))) <= limit:
+        if total - polyline_length(pts) <= limit:
             return new, pts
         count = int(math.ceil(count * 1.1)) + 1
     return None
@@ -122,19 +123,13 @@ def _densify(ev, ex, spacing: float):
     A straight run is explored with its two ends only; a ``max_length`` placement needs samples
     along it to put nodes on.
     """
-    from .explore import Exploration
-
-    gap = np.linalg.norm(np.diff(ex.points, axis=0), axis=1)
+    gap = row_norms(np.diff(ex.points, axis=0))
     pieces = np.ceil(gap / spacing).astype(int)
     long_ = np.flatnonzero(pieces > 1)
     if not len(long_):
         return ex
     new = np.concatenate([np.linspace(ex.params[i], ex.params[i + 1], pieces[i] + 1)[1:-1] for i in long_])
-    u = np.concatenate([ex.params, new])
-    p = np.concatenate([ex.points, ev(new)])
-    order = np.argsort(u, kind="stable")
-    return Exploration(params=u[order], points=p[order], length_estimate=ex.length_estimate,
-                       remainder=ex.remainder, corners=ex.corners, notes=ex.notes)
+    return ex.with_samples(new, ev(new))
 
 
 def _sharp_nodes(points: np.ndarray, ald: float) -> np.ndarray:
@@ -153,18 +148,11 @@ def _sharp_nodes(points: np.ndarray, ald: float) -> np.ndarray:
 
 def _grade(ev, ex, corner_idx, params, points, growth, ald, total, limit):
     """Graded re-placement keeping corners and sharp nodes, then bounded splitting for what is left."""
-    from .explore import Exploration
     from .growth import limit_growth
 
     keep = _sharp_nodes(points, ald)
     if len(keep):  # make the sharp nodes samples (if they are not) and pin them like corners
-        u = np.concatenate([ex.params, params[keep]])
-        p = np.concatenate([ex.points, points[keep]])
-        order = np.argsort(u, kind="stable")
-        u, p = u[order], p[order]
-        first = np.concatenate([[True], np.diff(u) > 0])
-        ex = Exploration(params=u[first], points=p[first], length_estimate=ex.length_estimate,
-                         remainder=ex.remainder, corners=ex.corners, notes=ex.notes)
+        ex = ex.with_samples(params[keep], points[keep])
         corner_idx = np.unique(np.concatenate([np.searchsorted(ex.params, ex.corners),
                                                np.searchsorted(ex.params, params[keep])])).astype(int)
     for _ in range(GRADING_PASSES):  # each pass smooths the sizes of the one before
@@ -216,11 +204,11 @@ def refine_target(ev, a: float, b: float, *, ald: float, min_length: float | Non
     if min_length is None and max_length is None:
         eq = _equidistributed(ev, ex, corner_idx, total, limit, budget, min_segments=len(corner_idx) + 1)
         if eq is not None and (len(eq[0]) < len(params) or (
-                len(eq[0]) == len(params) and chord_length(eq[1], np.arange(len(eq[1]))) > chord_length(p, nodes))):
+                len(eq[0]) == len(params) and polyline_length(eq[1]) > chord_length(p, nodes))):
             params, points = eq
     if max_growth is not None and min_length is None and len(params) > 2 and worst_growth(points) > max_growth:
         params, points = _grade(ev, ex, corner_idx, params, points, max_growth, ald, total, limit)
-    length = chord_length(points, np.arange(len(points)))
+    length = polyline_length(points)
     estimate = max(1.0 - length / total, 0.0)
     if max_growth is not None and worst_growth(points) > max_growth * (1 + 1e-9):
         notes.append(f"max_growth {max_growth:g} not met everywhere: worst ratio of adjacent segments "

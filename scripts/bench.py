@@ -42,6 +42,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint, GCPnts_TangentialDeflection
 
 from cadedge.atomic import atomic_path, atomic_write_bytes
+from cadedge.grid import polyline_length
 from cadedge.occt.edgecurve import EdgeCurve
 from cadedge.occt.reader import load_shape
 from cadedge.occt.shape import refine_shape
@@ -65,10 +66,6 @@ def files(quick: bool) -> list[Path]:
     out = sorted(p for p in CORPUS.glob("*") if p.suffix.lower() in (".step", ".stp"))
     out += sorted(FIXTURES.glob("*.step"))
     return [p for p in out if p.name in QUICK] if quick else out
-
-
-def polyline_length(points: np.ndarray) -> float:
-    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
 class Model:
