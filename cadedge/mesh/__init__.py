@@ -140,18 +140,19 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     grid = _grid_of(source, ald, min_length, max_length, max_growth)
     if not grid.faces:
         raise InputError(f"{grid.source}: the shape has no faces to mesh (only loose edges)")
+
     def make_field(g: ShapeGrid) -> SizeField:
         return SizeField(g, growth=growth, min_size=min_length, max_size=max_size or max_length)
 
-    if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
-        grid = fit_to_sizes(grid, make_field)
-    field_ = make_field(grid)
     if out is not None and out.suffix.lower() == ".geo":
         write_geo(grid, out, growth=growth, max_size=max_size or max_length)
         return MeshResult(source=grid.source, mode="sizes", grid=grid, nodes=np.zeros((0, 3)),
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
+    if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
+        grid = fit_to_sizes(grid, make_field)
+    field_ = make_field(grid)
     return _run_gmsh(grid, field_, mode, out, t0)
 
 
