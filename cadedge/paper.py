@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .search import DEFAULT_SEARCH_TOL, golden_search
+from .grid import polyline_length
+from .search import DEFAULT_SEARCH_TOL, best_split, golden_search
 
 MAX_SEGMENTS = 100_000
 """Safety cap: beyond this many segments no segment is split (a note says so)."""
@@ -113,15 +114,14 @@ def refine_paper(ev, a: float, b: float, *, local_delta: float | None = None,
         stack = [root]
         while stack:
             s = stack.pop()
-            us, ps, twos = golden_search(ev, np.array([s.ua]), np.array([s.ub]), s.pa[None], s.pb[None], tol)
-            stack.extend(decide(s, float(us[0]), ps[0], float(twos[0])))
+            stack.extend(decide(s, *best_split(ev, s.ua, s.ub, s.pa, s.pb, tol)))
     else:
         raise InputError(f"order must be 'breadth' or 'depth', got {order!r}")
 
     final.sort(key=lambda item: item[0].ua)
     params = np.array([s.ua for s, _ in final] + [float(b)])
     points = np.array([s.pa for s, _ in final] + [final[-1][0].pb])
-    length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    length = polyline_length(points)
     g = RICHARDSON * sum(gain for _, gain in final)
     estimate = g / (length + g) if length + g > 0 else 0.0
     notes = []

@@ -10,6 +10,7 @@ import numpy as np
 
 from .curves import Evaluator, as_curve
 from .grid import polyline_length
+from .refine import resolve_domain
 
 
 def reference_length(curve, domain: tuple[float, float] | None = None, n: int = 2 ** 20) -> float:
@@ -20,7 +21,7 @@ def reference_length(curve, domain: tuple[float, float] | None = None, n: int = 
     True
     """
     c = as_curve(curve, domain)
-    a, b = domain if domain is not None else c.domain
+    a, b = resolve_domain(c, domain)
     pts = Evaluator(c)(np.linspace(a, b, n + 1))
     fine = polyline_length(pts)
     coarse = polyline_length(pts[::2])

@@ -91,9 +91,8 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
     uniq, inverse, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
     expected = np.full(len(uniq), 2)
     if edge_multiplicity:
-        key = {k: v for k, v in edge_multiplicity.items()}
         for j, (a, b) in enumerate(uniq):
-            expected[j] = key.get((int(a), int(b)), 2)
+            expected[j] = edge_multiplicity.get((int(a), int(b)), 2)
     either = expected == 0  # a single-face edge that may be a seam: once (free boundary) or twice
     bad = np.where(either, (counts < 1) | (counts > 2), counts != expected)
     boundary = (counts == 1) & ((expected == 1) | either)

@@ -24,11 +24,6 @@ class ImposedNodes:
     vertex_nodes: dict[int, int]
     edge_nodes: dict[int, np.ndarray]
 
-    def all_tags(self) -> np.ndarray:
-        parts = [np.fromiter(self.vertex_nodes.values(), dtype=np.int64)]
-        parts += list(self.edge_nodes.values())
-        return np.unique(np.concatenate(parts)) if parts else np.zeros(0, dtype=np.int64)
-
 
 def impose_edge_grids(grid: ShapeGrid, emap: EntityMap) -> ImposedNodes:
     """Add the grid nodes and line elements to the gmsh model; returns the node tags used."""

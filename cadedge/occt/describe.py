@@ -16,11 +16,9 @@ from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint
 from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
-from OCP.TopExp import TopExp
-from OCP.TopTools import TopTools_IndexedMapOfShape
 
 from ..errors import GeometryError
-from .reader import load_shape
+from .reader import _count, load_shape
 from .topology import Topology
 
 
@@ -60,12 +58,6 @@ class ShapeDescription:
     @property
     def max_tolerance(self) -> float:
         return max((e.tolerance for e in self.edges), default=0.0)
-
-
-def _count(shape: Any, kind: Any) -> int:
-    m = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, kind, m)
-    return m.Extent()
 
 
 def edge_length(topology: Topology, i: int) -> float:

@@ -17,6 +17,7 @@ import numpy as np
 from OCP.BRep import BRep_Tool
 
 from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError, InputError
+from ..grid import polyline_length
 from ..refine import refine_curve
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
 from .edgecurve import EdgeCurve
@@ -58,10 +59,10 @@ def _anchor(points: np.ndarray, first: np.ndarray, last: np.ndarray, estimate: f
 
     The refiner's estimate is ``1 - length / total``; ``total`` is recovered from it and kept.
     """
-    old = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    old = polyline_length(points)
     pts = points.copy()
     pts[0], pts[-1] = first, last
-    new = float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum())
+    new = polyline_length(pts)
     if old <= 0.0 or estimate >= 1.0:
         return pts, estimate
     total = old / (1.0 - estimate)

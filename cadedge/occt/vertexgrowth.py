@@ -83,8 +83,9 @@ def _caps(edges: list[ShapeEdgeGrid], g: float) -> dict[int, float]:
     ends: dict[int, list[float]] = defaultdict(list)
     for e in edges:
         if not e.degenerate:
-            ends[e.vertices[0]].append(e.spacing[0])
-            ends[e.vertices[1]].append(e.spacing[1])
+            first, last = e.spacing
+            ends[e.vertices[0]].append(first)
+            ends[e.vertices[1]].append(last)
     return {vid: g * min(s) for vid, s in ends.items() if len(s) > 1}
 
 
