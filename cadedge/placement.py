@@ -1,19 +1,28 @@
 """Choosing the fewest grid nodes among dense samples for a length budget.
 
 For a chord over a smooth stretch the deficit grows with the cube of its length, so the fewest
-segments for a total deficit are those that share it equally. ``greedy`` takes, from each node, the
-farthest sample whose chord misses at most ``cap`` of the dense polyline's length (farthest reach is
-optimal for a per-segment cap because the deficit only grows as a chord is extended); a bisection on
-``cap`` finds the fewest nodes for the total budget. ``polish`` then moves each interior node to the
-sample between its neighbours that makes the two chords longest (the paper's Algorithm 1 on samples),
-alternating odd and even nodes so every move is vectorised and the length never decreases.
+segments for a total deficit are those that share it equally. The greedy cover takes, from each
+node, the farthest sample whose chord misses at most ``cap`` of the dense polyline's length (farthest
+reach is optimal for a per-segment cap because the deficit only grows as a chord is extended); a
+bisection on ``cap`` finds the fewest nodes for the total budget. The polish then moves each interior
+node to the sample between its neighbours that makes the two chords longest (the paper's Algorithm 1
+on samples), odd nodes then even ones, so the length never decreases.
+
+These are tight scalar loops over samples (a few dozen covers and polishes per edge), so they are
+compiled with numba: a profile of the numpy version showed its per-call overhead dominating whole-model
+runs. ``deficit_measure`` and ``equidistribute`` stay vectorised numpy.
 """
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 from .grid import polyline_length, row_norms
+
+_jit = numba.njit(cache=True, nogil=True)
 
 
 def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
@@ -21,221 +30,156 @@ def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
     return polyline_length(points[nodes])
 
 
-#: Largest number of samples for which fewest_nodes tabulates every chord deficit (n**2 floats).
-TABLE_SAMPLES = 1000
+@_jit
+def _dist(points, i, j):
+    dx = points[j, 0] - points[i, 0]
+    dy = points[j, 1] - points[i, 1]
+    dz = points[j, 2] - points[i, 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-def _follow(reach: list[int], last: int) -> np.ndarray:
-    nodes = [0]
-    i = 0
-    while i < last:
-        i = reach[i]
-        nodes.append(i)
-    return np.array(nodes)
+@_jit
+def _chords(points, nodes, count):
+    s = 0.0
+    for k in range(count - 1):
+        s += _dist(points, nodes[k], nodes[k + 1])
+    return s
 
 
-def _stops(n: int, forced: np.ndarray | None) -> np.ndarray:
-    """For each sample but the last, the first forced node (or the last sample) after it."""
-    last = n - 1
-    stops = np.array([last]) if forced is None else np.unique(np.concatenate([forced, [last]]))
-    return stops[np.searchsorted(stops, np.arange(last), side="right")]
+@_jit
+def _cover(points, cum, cap, min_length, max_length, stops, out):
+    """Greedy farthest-reach nodes into ``out``; returns their count.
 
-
-def _greedy_reach(points: np.ndarray, cum: np.ndarray, cap: float, forced: np.ndarray | None) -> np.ndarray:
-    """:func:`greedy` without length bounds: the farthest reach of every sample in one vectorised bisection.
-
-    The deficit of a chord from sample i grows with its far end (triangle inequality), so the reach of
-    every i is found together in about log2(n) numpy passes; the nodes then follow the reach pointers.
+    Each chord misses at most ``cap`` of the samples' length and is at most ``max_length`` long, and
+    where the curve allows at least ``min_length`` (0 for none). ``stops`` (sorted, ending with the last
+    sample) are always nodes.
     """
     last = len(points) - 1
-    idx = np.arange(last)
-    lo, hi = idx + 1, _stops(len(points), forced)  # lo always admissible (reach is at least one sample on)
-    while True:
-        open_ = lo < hi
-        if not open_.any():
-            break
-        i, a, b = idx[open_], lo[open_], hi[open_]
-        mid = (a + b + 1) // 2
-        ok = (cum[mid] - cum[i]) - row_norms(points[mid] - points[i]) <= cap
-        lo[open_] = np.where(ok, mid, a)
-        hi[open_] = np.where(ok, b, mid - 1)
-    return _follow(lo.tolist(), last)
-
-
-class _DeficitTable:
-    """Every chord deficit between samples, tabulated once so each :func:`greedy` cap costs one pass.
-
-    Row i, column k holds the deficit of the chord from sample i to sample i + 1 + k (inf past a stop),
-    so the farthest reach under a cap is the first column over it: exactly :func:`greedy`'s choice.
-    """
-
-    def __init__(self, points: np.ndarray, cum: np.ndarray, forced: np.ndarray | None):
-        n = len(points)
-        self.last = n - 1
-        idx = np.arange(self.last)
-        j = idx[:, None] + 1 + np.arange(self.last)[None, :]
-        stop = _stops(n, forced)
-        valid = j <= stop[:, None]
-        jc = np.minimum(j, self.last)
-        d = (cum[jc] - cum[idx, None]) - np.linalg.norm(points[jc] - points[idx, None], axis=2)
-        self.table = np.where(valid, d, np.inf)
-        self.idx, self.stop = idx, stop
-
-    def greedy(self, cap: float) -> np.ndarray:
-        over = self.table > cap
-        first = np.where(over.any(axis=1), over.argmax(axis=1), self.stop - self.idx)  # columns admissible
-        reach = self.idx + np.maximum(first, 1)
-        return _follow(reach.tolist(), self.last)
-
-
-def greedy(points: np.ndarray, cum: np.ndarray, cap: float, *, min_length: float | None = None,
-           max_length: float | None = None, forced: np.ndarray | None = None) -> np.ndarray:
-    """Node indices by farthest reach: each chord misses at most ``cap`` of the samples' length.
-
-    Chords stay at most ``max_length`` long and, where the curve allows, at least ``min_length``.
-    ``forced`` sample indices (sharp corners) are always nodes.
-    """
-    if min_length is None and max_length is None and cap > 0.0:  # cap 0 keeps every sample off a rounding-noise chord
-        return _greedy_reach(points, cum, cap, forced)
-    n = len(points)
-    last = n - 1
-    stops = np.array([last]) if forced is None else np.unique(np.concatenate([forced, [last]]))
-    nodes = [0]
-    i = 0
-    window = 16
+    out[0] = 0
+    count, i, s = 1, 0, 0
     while i < last:
-        stop = int(stops[np.searchsorted(stops, i, side="right")])
-        while True:
-            j_hi = min(stop, i + window)
-            seg = points[i + 1:j_hi + 1] - points[i]
-            chord = row_norms(seg)
-            deficit = (cum[i + 1:j_hi + 1] - cum[i]) - chord
-            ok = deficit <= cap
-            if max_length is not None:
-                ok &= chord <= max_length
-            bad = np.flatnonzero(~ok)
-            if len(bad) or j_hi == stop:
+        while stops[s] <= i:
+            s += 1
+        stop = stops[s]
+        reach = stop
+        for j in range(i + 1, stop + 1):
+            chord = _dist(points, i, j)
+            if (cum[j] - cum[i]) - chord > cap or chord > max_length:
+                reach = j - 1
                 break
-            window *= 2
-        reach = i + 1 + (int(bad[0]) - 1 if len(bad) else len(ok) - 1)
         reach = max(reach, i + 1)
-        if min_length is not None and reach < stop and np.linalg.norm(points[reach] - points[i]) < min_length:
-            far = row_norms(points[reach + 1:stop + 1] - points[i]) >= min_length
-            reach = reach + 1 + int(np.argmax(far)) if far.any() else stop
-        nodes.append(reach)
+        if min_length > 0.0 and reach < stop and _dist(points, i, reach) < min_length:
+            far = stop
+            for j in range(reach + 1, stop + 1):
+                if _dist(points, i, j) >= min_length:
+                    far = j
+                    break
+            reach = far
+        out[count] = reach
+        count += 1
         i = reach
-    out = np.array(nodes)
-    if min_length is not None and len(out) > 2:
-        if np.linalg.norm(points[out[-1]] - points[out[-2]]) < min_length:
-            out = np.delete(out, -2)
-    return out
+    if min_length > 0.0 and count > 2 and _dist(points, out[count - 2], out[count - 1]) < min_length:
+        out[count - 2] = out[count - 1]
+        count -= 1
+    return count
 
 
-def polish(points: np.ndarray, nodes: np.ndarray, *, sweeps: int = 4, fixed: np.ndarray | None = None) -> np.ndarray:
-    """Move interior nodes to the sample between their neighbours that maximises the two chords."""
-    nodes = nodes.copy()
-    movable = np.ones(len(nodes), dtype=bool)
-    movable[[0, -1]] = False
-    if fixed is not None and len(fixed):
-        movable &= ~np.isin(nodes, fixed)
+@_jit
+def _polish(points, nodes, sweeps, fixed):
+    """Move interior nodes (not on ``fixed`` samples) to the sample between their neighbours that
+    maximises the two chords; odd positions then even ones, until nothing moves or ``sweeps`` runs."""
+    count = len(nodes)
     for _ in range(sweeps):
         moved = False
         for parity in (1, 0):
-            k = np.flatnonzero(movable & (np.arange(len(nodes)) % 2 == parity))
-            if not len(k):
-                continue
-            lo, hi = nodes[k - 1], nodes[k + 1]
-            sizes = hi - lo - 1
-            keep = sizes > 0
-            k, lo, hi, sizes = k[keep], lo[keep], hi[keep], sizes[keep]
-            if not len(k):
-                continue
-            group = np.repeat(np.arange(len(k)), sizes)
-            starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-            cand = lo[group] + 1 + (np.arange(sizes.sum()) - starts[group])
-            two = row_norms(points[cand] - points[lo[group]]) + row_norms(points[hi[group]] - points[cand])
-            best = np.maximum.reduceat(two, starts)
-            current = row_norms(points[nodes[k]] - points[lo]) + row_norms(points[hi] - points[nodes[k]])
-            better = best > current * (1 + 1e-15)
-            if not better.any():
-                continue
-            # first candidate reaching the group's maximum
-            hit = two >= best[group]
-            first = np.full(len(k), -1)
-            idx = np.flatnonzero(hit)
-            g_hit = group[idx]
-            first_pos = idx[np.concatenate([[True], g_hit[1:] != g_hit[:-1]])]
-            first[np.unique(g_hit)] = cand[first_pos]
-            nodes[k[better]] = first[better]
-            moved = True
+            for k in range(1, count - 1):
+                if k % 2 != parity or fixed[nodes[k]]:
+                    continue
+                lo, hi = nodes[k - 1], nodes[k + 1]
+                best, arg = -1.0, -1
+                for c in range(lo + 1, hi):
+                    two = _dist(points, lo, c) + _dist(points, c, hi)
+                    if two > best:
+                        best, arg = two, c
+                if arg < 0:
+                    continue
+                current = _dist(points, lo, nodes[k]) + _dist(points, nodes[k], hi)
+                if best > current * (1.0 + 1e-15):
+                    nodes[k] = arg
+                    moved = True
         if not moved:
             break
-    return nodes
 
 
-def _bisect(test, lo: float, hi: float, *, ok_below: bool, steps: int, rel: float):
-    """Bisect a cap on [lo, hi]; ``test(cap)`` gives (ok, value). Returns the value at the ok cap
-    closest to the boundary (ok caps lie below it if ``ok_below``, above it otherwise), or None."""
-    found = None
-    for _ in range(steps):
-        mid = 0.5 * (lo + hi)
-        ok, value = test(mid)
-        if ok:
-            found = value
-        if ok == ok_below:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo <= rel * hi:
+@_jit
+def _plan(points, cum, cap, min_length, max_length, stops, fixed, buf):
+    """Greedy cover under ``cap``, polished: (nodes, deficit against the samples' length)."""
+    nodes = buf[:_cover(points, cum, cap, min_length, max_length, stops, buf)].copy()
+    if len(nodes) > 2:
+        _polish(points, nodes, 4, fixed)
+    return nodes, cum[-1] - _chords(points, nodes, len(nodes))
+
+
+@_jit
+def _fewest(points, cum, budget, min_length, max_length, stops, fixed):
+    total = cum[-1]
+    buf = np.empty(len(points), dtype=np.int64)
+    best, miss = _plan(points, cum, max(budget, 0.0), min_length, max_length, stops, fixed, buf)
+    if miss > budget:  # the per-segment cap equal to the whole budget is too loose: bisect it down
+        lo, hi, found = 0.0, max(budget, 0.0), False
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            nodes, miss = _plan(points, cum, mid, min_length, max_length, stops, fixed, buf)
+            if miss <= budget:
+                best, found, lo = nodes, True, mid
+            else:
+                hi = mid
+            if hi - lo <= 1e-3 * hi:
+                break
+        if not found:
+            best, miss = _plan(points, cum, 0.0, min_length, max_length, stops, fixed, buf)
+    # The polished grid may leave room for fewer nodes: bisect for a cap that drops one, polish, check.
+    while len(best) > 2:
+        count = len(best)
+        lo, hi, found = 0.0, total, False
+        fewer = best
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            c = _cover(points, cum, mid, min_length, max_length, stops, buf)
+            if c < count:
+                fewer, found, hi = buf[:c].copy(), True, mid
+            else:
+                lo = mid
+            if hi - lo <= 1e-4 * hi:
+                break
+        if not found:
             break
-    return found
+        if len(fewer) > 2:
+            _polish(points, fewer, 8, fixed)
+        if total - _chords(points, fewer, len(fewer)) > budget:
+            break
+        best = fewer
+    return best
 
 
 def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_length: float | None = None,
                  max_length: float | None = None, forced: np.ndarray | None = None) -> np.ndarray:
-    """The fewest nodes (by greedy + bisection on the cap, then polish) whose chords miss at most ``budget``.
+    """The fewest node indices (greedy + bisection on the cap, then polish) whose chords miss at most
+    ``budget`` of ``cum[-1]``, the samples' polyline length.
 
-    ``budget`` is measured against the samples' polyline length ``cum[-1]``. If even every sample is
-    not enough (min_length), the densest admissible grid is returned.
+    Chords stay at most ``max_length`` long and, where the curve allows, at least ``min_length``;
+    ``forced`` sample indices (kinks) are always nodes. If even every sample is not enough
+    (min_length), the densest admissible grid is returned.
     """
-    total = cum[-1]
-    table = (_DeficitTable(points, cum, forced)
-             if min_length is None and max_length is None and len(points) <= TABLE_SAMPLES else None)
-
-    def cover(cap: float) -> np.ndarray:
-        if table is not None and cap > 0.0:
-            return table.greedy(cap)
-        return greedy(points, cum, cap, min_length=min_length, max_length=max_length, forced=forced)
-
-    planned: dict[bytes, tuple[np.ndarray, float]] = {}  # caps of the bisection often give the same nodes
-
-    def plan(cap: float) -> tuple[np.ndarray, float]:
-        nodes = cover(cap)
-        key = nodes.tobytes()
-        if key not in planned:
-            if len(nodes) > 2:
-                nodes = polish(points, nodes, fixed=forced)
-            planned[key] = nodes, total - chord_length(points, nodes)
-        return planned[key]
-
-    best, miss = plan(max(budget, 0.0))
-    if miss > budget:  # the per-segment cap equal to the whole budget is too loose: bisect down
-        best = _bisect(lambda cap: (plan(cap)[1] <= budget, plan(cap)[0]), 0.0, max(budget, 0.0),
-                       ok_below=True, steps=60, rel=1e-3)
-        if best is None:
-            best, _ = plan(0.0)
-    # The polished grid may leave room for fewer nodes: try dropping one at a time.
-    while len(best) > 2:
-        count = len(best)
-        fewer = _bisect(lambda cap: (len(cover(cap)) < count, cover(cap)), 0.0, total,
-                        ok_below=False, steps=40, rel=1e-4)
-        if fewer is None:
-            break
-        fewer = polish(points, fewer, sweeps=8, fixed=forced) if len(fewer) > 2 else fewer
-        if total - chord_length(points, fewer) > budget:
-            break
-        best = fewer
-    return best
+    points = np.ascontiguousarray(points, dtype=float)
+    n = len(points)
+    forced = np.zeros(0, dtype=np.int64) if forced is None else np.asarray(forced, dtype=np.int64)
+    stops = np.unique(np.concatenate([forced, [n - 1]])).astype(np.int64)
+    fixed = np.zeros(n, dtype=np.bool_)
+    fixed[forced] = True
+    return _fewest(points, np.ascontiguousarray(cum, dtype=float), float(budget),
+                   0.0 if min_length is None else float(min_length),
+                   math.inf if max_length is None else float(max_length), stops, fixed)
 
 
 def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray | None = None) -> np.ndarray:
