@@ -13,7 +13,7 @@ from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS, TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
-from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape, TopTools_ListOfShape
 
 from ..errors import GeometryError
 
@@ -25,6 +25,18 @@ CURVE_TYPES = ("Line", "Circle", "Ellipse", "Hyperbola", "Parabola", "BezierCurv
 def forward(edge: TopoDS_Edge) -> TopoDS_Edge:
     """The edge in FORWARD orientation: parameters run from its first vertex to its last."""
     return TopoDS.Edge_s(edge.Oriented(TopAbs_FORWARD))
+
+
+def _shapes(shapes: TopTools_ListOfShape) -> list[TopoDS_Shape]:
+    """The items of an OCCT list. Iterating the list itself from Python costs about 0.1 ms per list
+    (measured on 917_fusee: 0.15 s of 0.16 s for the whole topology), so a copy is popped instead."""
+    rest = TopTools_ListOfShape()
+    rest.Assign(shapes)
+    out = []
+    while not rest.IsEmpty():
+        out.append(rest.First())
+        rest.RemoveFirst()
+    return out
 
 
 def _indexed(shape: TopoDS_Shape, kind) -> TopTools_IndexedMapOfShape:
@@ -59,7 +71,7 @@ class Topology:
             ids: list[int] = []
             seam = False
             if ancestors.Contains(edge):
-                for face in ancestors.FindFromKey(edge):
+                for face in _shapes(ancestors.FindFromKey(edge)):
                     fid = fmap.FindIndex(face)
                     if fid not in ids:
                         ids.append(fid)
