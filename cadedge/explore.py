@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -44,9 +45,10 @@ class Exploration:
         u, p = _sorted_unique(np.concatenate([self.params, params]), np.concatenate([self.points, points]))
         return dataclasses.replace(self, params=u, points=p)
 
-    @property
+    @cached_property
     def cumulative(self) -> np.ndarray:
-        """Polyline length from the first sample to each sample."""
+        """Polyline length from the first sample to each sample (computed once; ``with_samples``
+        returns a new exploration)."""
         return np.concatenate([[0.0], np.cumsum(row_norms(np.diff(self.points, axis=0)))])
 
 
@@ -68,8 +70,7 @@ def root_params(curve, a: float, b: float) -> np.ndarray:
     """Parameters that start the exploration: the curve's own hint, or a uniform grid."""
     hint = getattr(curve, "initial_params", None)
     if hint is not None:
-        u = np.unique(np.clip(np.asarray(hint(a, b), dtype=float), a, b))
-        u = np.unique(np.concatenate([[a], u, [b]]))
+        u = np.unique(np.concatenate([[a], np.clip(np.asarray(hint(a, b), dtype=float).ravel(), a, b), [b]]))
         if len(u) >= 2:
             return u
     return np.linspace(a, b, ROOTS + 1)

@@ -22,7 +22,7 @@ from ..refine import refine_curve
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
 from .edgecurve import EdgeCurve
 from .reader import load_shape
-from .topology import Topology
+from .topology import Topology, curve_type_name
 from .vertexgrowth import grade_vertices
 
 Progress = Callable[[int, int], None]
@@ -76,18 +76,16 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
     v1, v2 = topo.edge_vertices[i]
     p1, p2 = vpoints[v1 - 1], vpoints[v2 - 1]
     degenerate = topo.is_degenerate(i)
-    try:
-        kind = topo.curve_type(i)
-    except GeometryError:
-        if not degenerate:
-            raise
-        kind = "OtherCurve"  # a degenerate edge without even a curve on a surface
-    common = dict(id=eid, vertices=(v1, v2), curve=kind, degenerate=degenerate, closed=topo.is_closed(i),
+    common = dict(id=eid, vertices=(v1, v2), degenerate=degenerate, closed=topo.is_closed(i),
                   faces=list(topo.edge_faces[i]), tolerance=float(BRep_Tool.Tolerance_s(edge)))
     if degenerate:
+        try:
+            kind = topo.curve_type(i)
+        except GeometryError:
+            kind = "OtherCurve"  # a degenerate edge without even a curve on a surface
         first, last = BRep_Tool.Range_s(edge)
         return ShapeEdgeGrid(params=np.array([first, last], dtype=float), points=np.array([p1, p1]),
-                             ald_estimate=0.0, evaluations=0, **common)
+                             ald_estimate=0.0, evaluations=0, curve=kind, **common)
     try:
         curve = EdgeCurve(edge, eid)
         grid = refine_curve(curve, curve.domain, **opts)
@@ -95,6 +93,7 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
         raise GeometryError(f"{src}: edge {eid}: {exc}") from exc
     except GeometryError as exc:  # EdgeCurve's messages already name the edge
         raise GeometryError(f"{src}: {exc}") from exc
+    common["curve"] = curve_type_name(curve.kind)
     points, estimate = _anchor(grid.points, p1, p2, grid.ald_estimate)
     notes.extend(f"edge {eid}: {w}" for w in grid.warnings)
     if estimate > opts["ald"] and grid.ald_estimate <= opts["ald"]:
