@@ -68,7 +68,8 @@ def _bspline(ad: BRepAdaptor_Curve) -> Points:
         bs = bs.Copy()
         bs.SetNotPeriodic()  # the same geometry over one period with clamped knots
     n = bs.NbPoles()
-    knots = np.array([bs.KnotSequence().Value(i) for i in range(1, n + bs.Degree() + 2)], dtype=float)
+    seq = bs.KnotSequence()  # a copy of the whole sequence per call: take it once
+    knots = np.array([seq.Value(i) for i in range(1, n + bs.Degree() + 2)], dtype=float)
     poles = np.array([bs.Pole(i).Coord() for i in range(1, n + 1)], dtype=float)
     weights = np.array([bs.Weight(i) for i in range(1, n + 1)], dtype=float) if bs.IsRational() else None
     return _spline(knots, poles, weights, bs.Degree(), period)
