@@ -11,21 +11,9 @@ import numpy as np
 from .curves import Evaluator, as_curve
 from .errors import CadedgeWarning, InputError
 from .grid import EdgeGrid
+from .options import positive, refine_options
 
 ORDERS = ("breadth", "depth")
-
-
-def _positive(name: str, value: float | None, *, upper: float | None = None) -> float | None:
-    if value is None:
-        return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v) or v <= 0 or (upper is not None and v >= upper):
-        bound = f" and below {upper:g}" if upper is not None else ""
-        raise InputError(f"{name} must be positive{bound}, got {value!r}")
-    return v
 
 
 def resolve_domain(curve: Any, domain: Any) -> tuple[float, float]:
@@ -64,26 +52,22 @@ def refine_curve(curve: Any, domain: tuple[float, float] | None = None, *, ald: 
     a, b = resolve_domain(c, domain)
     if order not in ORDERS:
         raise InputError(f"order must be one of {ORDERS}, got {order!r}")
-    local_delta = _positive("local_delta", local_delta, upper=1.0)
-    global_delta = _positive("global_delta", global_delta, upper=1.0)
-    min_length = _positive("min_length", min_length)
-    max_length = _positive("max_length", max_length)
-    search_tol = _positive("search_tol", search_tol, upper=0.5)
-    if max_growth is not None and (_positive("max_growth", max_growth) or 0) <= 1.0:
-        raise InputError(f"max_growth must be greater than 1, got {max_growth!r}")
-    if min_length is not None and max_length is not None and min_length > max_length:
-        raise InputError(f"min_length {min_length:g} exceeds max_length {max_length:g}")
-    ev = Evaluator(c)
+    local_delta = positive("local_delta", local_delta, upper=1.0)
+    global_delta = positive("global_delta", global_delta, upper=1.0)
+    search_tol = positive("search_tol", search_tol, upper=0.5)
     paper = local_delta is not None or global_delta is not None
+    if paper and ald is not None:
+        raise InputError("give either ald (target mode) or local_delta/global_delta (paper mode), not both")
+    opts = refine_options(1e-3 if ald is None else ald, min_length, max_length, max_growth)
+    min_length, max_length, max_growth = opts["min_length"], opts["max_length"], opts["max_growth"]
+    ev = Evaluator(c)
     if paper:
-        if ald is not None:
-            raise InputError("give either ald (target mode) or local_delta/global_delta (paper mode), not both")
         from .paper import refine_paper
         params, points, estimate, notes = refine_paper(
             ev, a, b, local_delta=local_delta, global_delta=global_delta, min_length=min_length,
             max_length=max_length, order=order, search_tol=search_tol)
     else:
-        ald = _positive("ald", 1e-3 if ald is None else ald, upper=1.0)
+        ald = opts["ald"]
         from .target import refine_target
         params, points, estimate, notes = refine_target(
             ev, a, b, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth,

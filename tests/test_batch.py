@@ -95,7 +95,10 @@ def test_index_record_replace_and_names(tmp_path):
 def test_run_batch_rejects_bad_options_before_any_work(tmp_path):
     for kwargs, msg in [({"ald": 0.0}, "ald"), ({"ald": 1.5}, "ald"), ({"timeout": -1}, "timeout"),
                         ({"workers": 0}, "workers"), ({"max_growth": 1.0}, "max_growth"),
-                        ({"workers": 2, "scheduler": "tcp://x:1"}, "not both")]:
+                        ({"workers": 2, "scheduler": "tcp://x:1"}, "not both"),
+                        ({"ald": None}, "ald must be a number"),
+                        ({"min_length": 2.0, "max_length": 1.0}, "min_length 2 exceeds max_length 1"),
+                        ({"workers": True}, "workers")]:
         with pytest.raises(InputError, match=msg):
             run_batch([FIXTURES], tmp_path / "out", **kwargs)
     assert not (tmp_path / "out").exists()

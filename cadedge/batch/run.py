@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import json
-import math
 import os
 import time
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from ..errors import InputError
+from ..options import positive, refine_options
 from .index import INDEX_NAME, BatchIndex, IndexRow, options_key
 from .inputs import expand_inputs, output_names
 from .report import BatchProgress, BatchReport, FileResult
@@ -21,23 +21,15 @@ DEFAULT_TIMEOUT = 600.0
 
 def _check_options(ald: float, min_length: float | None, max_length: float | None,
                    max_growth: float | None, workers: int | None, scheduler: str | None,
-                   timeout: float) -> None:
-    def positive(name: str, value: float | None) -> None:
-        if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise InputError(f"{name} must be a positive number, got {value!r}")
-
-    positive("ald", ald)
-    if ald >= 1:
-        raise InputError(f"ald must be below 1, got {ald!r}")
-    positive("min_length", min_length)
-    positive("max_length", max_length)
+                   timeout: float) -> dict[str, float | None]:
+    """The refinement options as checked floats; bad batch options raise InputError."""
+    options = refine_options(ald, min_length, max_length, max_growth)
     positive("timeout", timeout)
-    if max_growth is not None and not (isinstance(max_growth, (int, float)) and max_growth > 1):
-        raise InputError(f"max_growth must be greater than 1, got {max_growth!r}")
-    if workers is not None and (not isinstance(workers, int) or workers < 1):
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise InputError(f"workers must be a whole number of at least 1, got {workers!r}")
     if workers is not None and scheduler is not None:
         raise InputError("give workers (a local cluster) or scheduler (an existing one), not both")
+    return options
 
 
 def _result(row: IndexRow) -> FileResult:
@@ -65,15 +57,13 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
     before the first task and after each. Raises :class:`InputError` for bad options, missing
     inputs or no inputs.
     """
-    _check_options(ald, min_length, max_length, max_growth, workers, scheduler, timeout)
+    options: dict[str, Any] = _check_options(ald, min_length, max_length, max_growth, workers, scheduler, timeout)
     t0 = time.perf_counter()
     paths = expand_inputs(inputs)
     out = Path(outdir)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: output exists and is not a folder")
     out.mkdir(parents=True, exist_ok=True)
-    options: dict[str, Any] = {"ald": ald, "min_length": min_length, "max_length": max_length,
-                               "max_growth": max_growth}
     opts = options_key(options)
     report = BatchReport(outdir=out, index=out / INDEX_NAME)
     with BatchIndex(report.index) as index:

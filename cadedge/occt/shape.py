@@ -16,8 +16,9 @@ from typing import Any, Callable
 import numpy as np
 from OCP.BRep import BRep_Tool
 
-from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError, InputError
+from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError
 from ..grid import polyline_length
+from ..options import refine_options
 from ..refine import refine_curve
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
 from .edgecurve import EdgeCurve
@@ -26,28 +27,6 @@ from .topology import Topology, curve_type_name
 from .vertexgrowth import grade_vertices
 
 Progress = Callable[[int, int], None]
-
-
-def _check_options(ald: float, min_length: float | None, max_length: float | None,
-                   max_growth: float | None) -> None:
-    """Reject bad options before the (possibly slow) file is read."""
-    def num(name: str, v: Any) -> float:
-        try:
-            x = float(v)
-        except (TypeError, ValueError):
-            raise InputError(f"{name} must be a number, got {v!r}") from None
-        if not np.isfinite(x) or x <= 0:
-            raise InputError(f"{name} must be positive, got {v!r}")
-        return x
-
-    if num("ald", ald) >= 1.0:
-        raise InputError(f"ald must be below 1, got {ald!r}")
-    lo = num("min_length", min_length) if min_length is not None else None
-    hi = num("max_length", max_length) if max_length is not None else None
-    if lo is not None and hi is not None and lo > hi:
-        raise InputError(f"min_length {lo:g} exceeds max_length {hi:g}")
-    if max_growth is not None and num("max_growth", max_growth) <= 1.0:
-        raise InputError(f"max_growth must be greater than 1, got {max_growth!r}")
 
 
 def _point(vertex) -> np.ndarray:
@@ -112,7 +91,7 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     flagged. ``progress(done, total)`` is called after each edge. Per-edge notes from the refiner go
     to ``ShapeGrid.warnings`` (prefixed with the edge id) instead of the warnings module.
     """
-    _check_options(ald, min_length, max_length, max_growth)
+    opts = refine_options(ald, min_length, max_length, max_growth)  # before the (possibly slow) read
     t0 = time.perf_counter()
     loaded = load_shape(source)
     try:
@@ -120,7 +99,6 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     except GeometryError as exc:
         raise GeometryError(f"{loaded.source}: {exc}") from exc
     vpoints = [_point(v) for v in topo.vertices]
-    opts = dict(ald=float(ald), min_length=min_length, max_length=max_length, max_growth=max_growth)
     notes: list[str] = []
     edges: list[ShapeEdgeGrid] = []
     total = len(topo.edges)
@@ -130,9 +108,9 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
             edges.append(_refine_edge(topo, i, vpoints, loaded.source, opts, notes))
             if progress is not None:
                 progress(i + 1, total)
-    if max_growth is not None:
+    if opts["max_growth"] is not None:
         try:
-            notes += grade_vertices(edges, topo, float(max_growth))
+            notes += grade_vertices(edges, topo, opts["max_growth"])
         except GeometryError as exc:
             raise GeometryError(f"{loaded.source}: grading edge ends at vertices: {exc}") from exc
     spacing = vertex_spacings(edges)
@@ -140,7 +118,6 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
                            tolerance=float(BRep_Tool.Tolerance_s(topo.vertices[k])))
                 for k, p in enumerate(vpoints)]
     return ShapeGrid(source=loaded.source, units=loaded.units,
-                     options={"ald": float(ald), "min_length": min_length, "max_length": max_length,
-                              "max_growth": max_growth},
+                     options=dict(opts),
                      vertices=vertices, edges=edges, faces=len(topo.faces),
                      seconds=time.perf_counter() - t0, warnings=loaded.warnings + notes, shape=loaded.shape)
