@@ -12,9 +12,11 @@ split again, whatever its gain looks like. All triples of a level are split in o
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
+import numba
 import numpy as np
 
 from .grid import polyline_length, row_norms
@@ -27,6 +29,8 @@ ROOTS = 64
 ASYMPTOTIC_RATIO = 0.35
 #: Gains below this share of the triple's length count as straight (rounding noise, lines).
 STRAIGHT = 1e-13
+
+_jit = numba.njit(cache=True, nogil=True)
 
 
 @dataclass
@@ -60,10 +64,86 @@ def _sorted_unique(u: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return u[keep], p[keep]
 
 
-def _gains(pa: np.ndarray, pm: np.ndarray, pb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Gain of each midpoint and the length of the two half chords."""
-    two = row_norms(pm - pa) + row_norms(pb - pm)
-    return np.maximum(two - row_norms(pb - pa), 0.0), two
+@_jit
+def _norm(p, i, q, j):
+    dx = q[j, 0] - p[i, 0]
+    dy = q[j, 1] - p[i, 1]
+    dz = q[j, 2] - p[i, 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@_jit
+def _gain(pa, i, pm, j, pb, k):
+    """(gain, two half chords) of the triple pa[i], pm[j], pb[k]."""
+    two = _norm(pa, i, pm, j) + _norm(pm, j, pb, k)
+    return max(two - _norm(pa, i, pb, k), 0.0), two
+
+
+@_jit
+def _classify(ua, um, ub, pa, pm, pb, ratio, tol, scale, min_width):
+    """One level: which live triples are finished, what they leave unresolved, which split.
+
+    Returns (remainder of the finished, params of new corners, indices to split, their gains, scale);
+    ``scale`` < 0 asks for it to be set from this (first) level's half chords.
+    """
+    n = len(ua)
+    g = np.empty(n)
+    two = np.empty(n)
+    for i in range(n):
+        g[i], two[i] = _gain(pa, i, pm, i, pb, i)
+    if scale < 0.0:
+        scale = max(two.sum(), 0.0)
+    remainder = 0.0
+    corners = np.empty(n)
+    split = np.empty(n, dtype=np.int64)
+    n_corners = n_split = 0
+    for i in range(n):
+        straight = g[i] <= STRAIGHT * max(two[i], scale * 1e-3)
+        resolved = g[i] / 3.0 <= tol * two[i] and ratio[i] <= ASYMPTOTIC_RATIO
+        tiny = (ub[i] - ua[i]) <= min_width
+        if straight:
+            continue
+        if resolved or tiny:
+            remainder += g[i] / 3.0
+            if tiny and not resolved:
+                corners[n_corners] = um[i]
+                n_corners += 1
+        else:
+            split[n_split] = i
+            n_split += 1
+    return remainder, corners[:n_corners].copy(), split[:n_split].copy(), g[split[:n_split]], scale
+
+
+@_jit
+def _quarters(ua, um, ub, split):
+    q = np.empty(2 * len(split))
+    for k in range(len(split)):
+        i = split[k]
+        q[2 * k] = 0.5 * (ua[i] + um[i])
+        q[2 * k + 1] = 0.5 * (um[i] + ub[i])
+    return q
+
+
+@_jit
+def _children(ua, um, ub, pa, pm, pb, split, gains, q, pq):
+    """The live triples of the next level: (a, q1, m) and (m, q3, b) of each split (a, m, b), all
+    left halves first, each with (G_left + G_right) / G_parent."""
+    n = len(split)
+    c_ua, c_um, c_ub = np.empty(2 * n), np.empty(2 * n), np.empty(2 * n)
+    c_pa, c_pm, c_pb = np.empty((2 * n, 3)), np.empty((2 * n, 3)), np.empty((2 * n, 3))
+    c_ratio = np.empty(2 * n)
+    for k in range(n):
+        i = split[k]
+        gl = _gain(pa, i, pq, 2 * k, pm, i)[0]
+        gr = _gain(pm, i, pq, 2 * k + 1, pb, i)[0]
+        r = (gl + gr) / gains[k] if gains[k] > 0 else np.inf
+        left, right = k, n + k
+        c_ua[left], c_um[left], c_ub[left] = ua[i], q[2 * k], um[i]
+        c_ua[right], c_um[right], c_ub[right] = um[i], q[2 * k + 1], ub[i]
+        c_pa[left], c_pm[left], c_pb[left] = pa[i], pq[2 * k], pm[i]
+        c_pa[right], c_pm[right], c_pb[right] = pm[i], pq[2 * k + 1], pb[i]
+        c_ratio[left] = c_ratio[right] = r
+    return c_ua, c_um, c_ub, c_pa, c_pm, c_pb, c_ratio
 
 
 def root_params(curve, a: float, b: float) -> np.ndarray:
@@ -90,7 +170,7 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
     pm = ev(um)
     min_width = 1e-12 * (b - a)
 
-    # Live triples (one per current leaf interval); finished ones are moved to `done`.
+    # Live triples (one per current leaf interval); finished ones leave the live set.
     t_ua, t_ub, t_um = ua[:-1], ua[1:], um
     t_pa, t_pb, t_pm = pa_all[:-1], pa_all[1:], pm
     t_ratio = np.full(len(t_ua), np.nan)  # (G_self + G_sibling) / G_parent; nan for roots
@@ -99,48 +179,26 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
     remainder = 0.0
     corners: list[np.ndarray] = []
     samples = len(ua) + len(um)
-    scale = None
+    scale = -1.0
     while len(t_ua):
-        g, two = _gains(t_pa, t_pm, t_pb)
-        if scale is None:  # overall size, for the straightness test
-            scale = max(float(np.sum(two)), 0.0)
-        straight = g <= STRAIGHT * np.maximum(two, scale * 1e-3)
-        asymptotic = t_ratio <= ASYMPTOTIC_RATIO
-        small = g / 3.0 <= tol * two
-        tiny = (t_ub - t_ua) <= min_width
-        finished = straight | (small & asymptotic) | tiny
-        remainder += float(np.sum(g[finished & ~straight]) / 3.0)
-        corners.append(t_um[tiny & ~straight & ~(small & asymptotic)])
-        split = ~finished
-        if not split.any():
+        rem, new_corners, split, gains, scale = _classify(t_ua, t_um, t_ub, t_pa, t_pm, t_pb, t_ratio, tol,
+                                                          scale, min_width)
+        remainder += rem
+        corners.append(new_corners)
+        if not len(split):
             break
-        n_split = int(split.sum())
-        if samples + 2 * n_split > max_samples:
-            remainder += float(np.sum(g[split]) / 3.0)
+        if samples + 2 * len(split) > max_samples:
+            remainder += float(np.sum(gains) / 3.0)
             notes.append(f"exploration stopped at {samples} samples; the length estimate may be low")
             break
         # Split: each triple (a, m, b) becomes (a, q1, m) and (m, q3, b); evaluate all quarter points at once.
-        sa, sm, sb = t_ua[split], t_um[split], t_ub[split]
-        pa, pm_, pb = t_pa[split], t_pm[split], t_pb[split]
-        q = np.empty(2 * n_split)
-        q[0::2] = 0.5 * (sa + sm)
-        q[1::2] = 0.5 * (sm + sb)
+        q = _quarters(t_ua, t_um, t_ub, split)
         pq = ev(q)
         samples += len(q)
         done_u.append(q)
         done_p.append(pq)
-        gl, _ = _gains(pa, pq[0::2], pm_)
-        gr, _ = _gains(pm_, pq[1::2], pb)
-        gp = g[split]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.where(gp > 0, (gl + gr) / gp, np.inf)
-        t_ua = np.concatenate([sa, sm])
-        t_um = np.concatenate([q[0::2], q[1::2]])
-        t_ub = np.concatenate([sm, sb])
-        t_pa = np.concatenate([pa, pm_])
-        t_pm = np.concatenate([pq[0::2], pq[1::2]])
-        t_pb = np.concatenate([pm_, pb])
-        t_ratio = np.concatenate([ratio, ratio])
+        t_ua, t_um, t_ub, t_pa, t_pm, t_pb, t_ratio = _children(t_ua, t_um, t_ub, t_pa, t_pm, t_pb, split,
+                                                                gains, q, pq)
 
     u, p = _sorted_unique(np.concatenate(done_u), np.concatenate(done_p))
     dense = polyline_length(p)
