@@ -3,8 +3,9 @@
 Lines, circles, ellipses, B-splines (rational or not, periodic or not) and Bezier curves are
 evaluated from their definition in one vectorised call instead of one ``BRepAdaptor_Curve.Value``
 per point. The geometry is taken from the adaptor (``Line()``, ``Circle()``, ``BSpline()``, ...),
-which applies the edge's location; the B-spline formula is scipy's de Boor evaluation on homogeneous
-poles. Every evaluator is cross-checked on construction against ``BRepAdaptor_Curve.Value`` at
+which applies the edge's location; B-splines and Bezier curves are evaluated by de Boor's algorithm on
+homogeneous poles, compiled with numba (an edge is evaluated a few times only, so scipy's
+``BSpline`` cost more to build than to call). Every evaluator is cross-checked on construction against ``BRepAdaptor_Curve.Value`` at
 ``CHECK_POINTS`` parameters of the edge's range; if any point differs by more than ``RTOL`` of the
 curve's size, :func:`fast_evaluator` returns ``None`` and the caller keeps OCCT's per-point loop.
 """
@@ -14,12 +15,12 @@ from __future__ import annotations
 import math
 from typing import Callable
 
+import numba
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
                          GeomAbs_Line)
 from OCP.Standard import Standard_Failure
-from scipy.interpolate import BSpline
 
 #: Parameters of the edge's range at which the numpy evaluation must agree with OCCT.
 CHECK_POINTS = 9
@@ -44,17 +45,39 @@ def _conic(pos, rx: float, ry: float) -> Points:
     return lambda u: loc + (rx * np.cos(u))[:, None] * x + (ry * np.sin(u))[:, None] * y
 
 
+@numba.njit(cache=True, nogil=True)
+def _de_boor(knots, coef, degree, u):
+    """Points of the spline (knots, coef (n, d), degree) at ``u``; outside the knots the end pieces
+    are extended."""
+    n, dim = coef.shape
+    out = np.empty((len(u), dim))
+    d = np.empty((degree + 1, dim))
+    for m in range(len(u)):
+        x = u[m]
+        span = min(max(np.searchsorted(knots, x, side="right") - 1, degree), n - 1)
+        for j in range(degree + 1):
+            d[j] = coef[j + span - degree]
+        for r in range(1, degree + 1):
+            for j in range(degree, r - 1, -1):
+                lo = knots[j + span - degree]
+                width = knots[j + 1 + span - r] - lo
+                alpha = (x - lo) / width if width > 0 else 0.0
+                d[j] = (1.0 - alpha) * d[j - 1] + alpha * d[j]
+        out[m] = d[degree]
+    return out
+
+
 def _spline(knots: np.ndarray, poles: np.ndarray, weights: np.ndarray | None, degree: int,
             period: float | None) -> Points:
     """de Boor on homogeneous poles; ``period`` wraps parameters into the first period."""
     coef = poles if weights is None else np.column_stack([poles * weights[:, None], weights])
-    spline = BSpline(knots, coef, degree, extrapolate=True)
+    coef = np.ascontiguousarray(coef, dtype=float)
     start = knots[degree]
 
     def evaluate(u: np.ndarray) -> np.ndarray:
         if period is not None:
             u = start + np.mod(u - start, period)
-        h = spline(u)
+        h = _de_boor(knots, coef, degree, np.ascontiguousarray(u, dtype=float))
         return h if weights is None else h[:, :3] / h[:, 3:]
 
     return evaluate
