@@ -35,7 +35,7 @@ def one_line(text: str) -> str:
     (["*.nothing"], ["*.nothing", "pattern matches no"]),
     ([str(FIXTURES / "sphere.step"), "--ald", "0"], ["--ald", "greater than 0"]),
     ([str(FIXTURES / "sphere.step"), "--workers", "0"], ["workers", "at least 1"]),
-    ([str(FIXTURES / "sphere.step"), "--timeout", "-5"], ["timeout must be a positive number"]),
+    ([str(FIXTURES / "sphere.step"), "--timeout", "-5"], ["timeout must be positive", "-5"]),
     ([str(FIXTURES / "sphere.step"), "--workers", "2", "--scheduler", "tcp://127.0.0.1:9"], ["not allowed"]),
 ])
 def test_bad_usage_exit_2_with_one_line(tmp_path, capsys, monkeypatch, args, words):
