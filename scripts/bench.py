@@ -23,7 +23,9 @@ and every ``eps``, in one process on the same loaded shape (STEP reading exclude
 The achieved ALD of an edge is ``1 - polyline length / L``, ``L = GCPnts_AbscissaPoint::Length`` with
 tolerance 1e-12 (the default one is off by a few 1e-6, which matters at eps 1e-4).
 Degenerate edges are left out everywhere. A row passes when cadedge's worst edge meets ``eps``, its
-segments are at most OCCT's and at most 1.10x the DP optimum, and its time is at most 3x OCCT's.
+segments are at most OCCT's and at most 1.10x the DP optimum, and its time is at most 3x one OCCT
+pass. *time/tuning* puts cadedge's time against OCCT's whole tuning instead (what it costs OCCT to
+reach the same per-model guarantee); it is reported, not judged.
 ``--write`` puts the table and figures into ``docs/performance.md`` / ``docs/figures/``.
 """
 
@@ -260,8 +262,8 @@ def _num(x, fmt: str = "{}") -> str:
 
 
 HEADER = ("| model | edges | eps | cadedge seg | OCCT seg | gmsh seg | DP seg | seg/OCCT | seg/DP | cadedge ALD "
-          "| OCCT ALD | gmsh ALD | cadedge s | OCCT s (tune s) | gmsh s | time/OCCT | evals/seg | misses |")
-RULE = "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+          "| OCCT ALD | gmsh ALD | cadedge s | OCCT s (tune s) | gmsh s | time/OCCT | time/tuning | evals/seg | misses |")
+RULE = "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
 
 
 def format_row(row: dict) -> str:
@@ -270,11 +272,12 @@ def format_row(row: dict) -> str:
     r_o = c["segments"] / o["segments"] if o.get("segments") else None
     r_d = c["segments"] / d["segments"] if d.get("segments") else None
     r_t = c["seconds"] / o["seconds"] if o.get("seconds") else None
+    r_tune = c["seconds"] / o["tuning"] if o.get("tuning") else None
     return (f"| {row['model']} | {row['edges']} | {row['eps']:g} | {c['segments']} | {_num(o['segments'])} "
             f"| {_num(g.get('segments'))} | {_num(d.get('segments'))} | {_num(r_o, '{:.3f}')} | {_num(r_d, '{:.3f}')} "
             f"| {c['ald']:.2e} | {_num(o['ald'], '{:.2e}')} | {_num(g.get('ald'), '{:.2e}')} | {c['seconds']:.3f} "
             f"| {_num(o['seconds'], '{:.3f}')} ({_num(o['tuning'], '{:.1f}')}) | {_num(g.get('seconds'), '{:.3f}')} "
-            f"| {_num(r_t, '{:.1f}')} | {c['evaluations'] / max(c['segments'], 1):.1f} | {'ok' if ok else ', '.join(miss)} |")
+            f"| {_num(r_t, '{:.1f}')} | {_num(r_tune, '{:.2f}')} | {c['evaluations'] / max(c['segments'], 1):.1f} | {'ok' if ok else ', '.join(miss)} |")
 
 
 def totals(rows: list[dict]) -> list[str]:
@@ -283,10 +286,10 @@ def totals(rows: list[dict]) -> list[str]:
         rs = [r for r in rows if r["eps"] == eps]
         tot = lambda side, key: sum((r[side] or {}).get(key) or 0 for r in rs)  # noqa: E731
         cs, os_, ds, gs = tot("cadedge", "segments"), tot("occt", "segments"), tot("dp", "segments"), tot("gmsh", "segments")
-        ct, ot = tot("cadedge", "seconds"), tot("occt", "seconds")
+        ct, ot, tt = tot("cadedge", "seconds"), tot("occt", "seconds"), tot("occt", "tuning")
         out.append(f"| **total** | {sum(r['edges'] for r in rs)} | {eps:g} | {cs} | {os_} | {gs or '-'} | {ds or '-'} "
                    f"| {cs / max(os_, 1):.3f} | {_num(cs / ds if ds else None, '{:.3f}')} | | | | {ct:.2f} | {ot:.3f} | "
-                   f"| {ct / max(ot, 1e-9):.1f} | | {sum(verdict(r)[0] for r in rs)}/{len(rs)} ok |")
+                   f"| {ct / max(ot, 1e-9):.1f} | {ct / max(tt, 1e-9):.2f} | | {sum(verdict(r)[0] for r in rs)}/{len(rs)} ok |")
     return out
 
 
