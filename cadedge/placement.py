@@ -20,7 +20,7 @@ import math
 import numba
 import numpy as np
 
-from .grid import polyline_length, row_norms
+from .grid import polyline_length
 
 _jit = numba.njit(cache=True, nogil=True)
 
@@ -182,6 +182,26 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
                    math.inf if max_length is None else float(max_length), stops, fixed)
 
 
+@_jit
+def _deficit_measure(points, cum, corners):
+    n = len(points)
+    rho = np.zeros(n)
+    for i in range(1, n - 1):
+        h1, h2 = cum[i] - cum[i - 1], cum[i + 1] - cum[i]
+        denom = 3.0 * h1 * h2 * (h1 + h2)
+        if denom > 0:
+            rho[i] = np.cbrt(max(h1 + h2 - _dist(points, i - 1, i + 1), 0.0) / denom)
+    if n >= 3:
+        rho[0], rho[-1] = rho[1], rho[-2]
+    for c in corners:
+        rho[c] = 0.0
+    measure = np.empty(n)
+    measure[0] = 0.0
+    for i in range(n - 1):
+        measure[i + 1] = measure[i] + 0.5 * (rho[i] + rho[i + 1]) * (cum[i + 1] - cum[i])
+    return measure
+
+
 def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray | None = None) -> np.ndarray:
     """Cumulative measure M along the samples such that a chord spanning dM misses about dM**3.
 
@@ -191,20 +211,35 @@ def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray | N
     the segments that share a deficit budget equally: the fewest for that budget. Samples listed in
     ``corners`` (kinks, which a node must sit on) contribute nothing.
     """
-    h = np.diff(cum)
-    n = len(points)
-    rho = np.zeros(n)
-    if n >= 3:
-        skip = row_norms(points[2:] - points[:-2])
-        d = np.maximum(h[:-1] + h[1:] - skip, 0.0)
-        denom = 3.0 * h[:-1] * h[1:] * (h[:-1] + h[1:])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rho[1:-1] = np.where(denom > 0, np.cbrt(d / denom), 0.0)
-        rho[0], rho[-1] = rho[1], rho[-2]
-    if corners is not None and len(corners):
-        rho[corners] = 0.0
-    step = 0.5 * (rho[:-1] + rho[1:]) * h
-    return np.concatenate([[0.0], np.cumsum(step)])
+    corners = np.zeros(0, dtype=np.int64) if corners is None else np.asarray(corners, dtype=np.int64)
+    return _deficit_measure(np.ascontiguousarray(points, dtype=float), np.ascontiguousarray(cum, dtype=float),
+                            corners)
+
+
+@_jit
+def _place(params, cum, measure, cut, alloc):
+    """Parameters at equal steps of ``measure`` within each piece between ``cut`` samples (``alloc``
+    segments each), interpolated in arc length then in parameter; strictly increasing."""
+    out = np.empty(1 + np.maximum(alloc, 1).sum())
+    out[0] = params[0]
+    w = 1
+    for piece in range(len(alloc)):
+        i0, i1, k = cut[piece], cut[piece + 1], alloc[piece]
+        if k > 1:
+            ms, cs, ps = measure[i0:i1 + 1], cum[i0:i1 + 1], params[i0:i1 + 1]
+            steps = np.arange(1, k).astype(np.float64)
+            if measure[i1] > measure[i0]:
+                s = np.interp(measure[i0] + (measure[i1] - measure[i0]) * steps / k, ms, cs)
+            else:
+                s = np.linspace(cum[i0], cum[i1], k + 1)[1:-1]
+            for x in np.interp(s, cs, ps):
+                if x > out[w - 1]:
+                    out[w] = x
+                    w += 1
+        if params[i1] > out[w - 1]:
+            out[w] = params[i1]
+            w += 1
+    return out[:w].copy()
 
 
 def equidistribute(params: np.ndarray, cum: np.ndarray, measure: np.ndarray, count: int,
@@ -214,29 +249,21 @@ def equidistribute(params: np.ndarray, cum: np.ndarray, measure: np.ndarray, cou
     Pieces between corners get whole numbers of segments in proportion to their measure (at least
     one each). Positions between samples are interpolated linearly in arc length, then in parameter.
     """
-    cut = np.unique(np.concatenate([[0], [] if corners is None else corners, [len(params) - 1]])).astype(int)
-    m = measure[cut]
-    share = np.diff(m)
-    total = share.sum()
-    pieces = len(share)
-    if total <= 0:
-        alloc = np.ones(pieces, dtype=int)
+    last = len(params) - 1
+    if corners is None or not len(corners):
+        cut, alloc = np.array([0, last]), np.array([max(count, 1) if measure[last] > measure[0] else 1])
     else:
-        raw = share / total * max(count, pieces)
-        alloc = np.maximum(np.floor(raw).astype(int), 1)
-        short = max(count, pieces) - alloc.sum()
-        if short > 0:
-            alloc[np.argsort(-(raw - alloc))[:short]] += 1
-    out = [params[:1]]
-    for (i0, i1), k in zip(zip(cut[:-1], cut[1:]), alloc):
-        if k > 1 and measure[i1] > measure[i0]:
-            targets = measure[i0] + (measure[i1] - measure[i0]) * np.arange(1, k) / k
-            sl = slice(i0, i1 + 1)
-            s = np.interp(targets, measure[sl], cum[sl])
-            out.append(np.interp(s, cum[sl], params[sl]))
-        elif k > 1:
-            out.append(np.interp(np.linspace(cum[i0], cum[i1], k + 1)[1:-1], cum[i0:i1 + 1], params[i0:i1 + 1]))
-        out.append(params[i1:i1 + 1])
-    u = np.concatenate(out)
-    keep = np.concatenate([[True], np.diff(u) > 0])
-    return u[keep]
+        cut = np.unique(np.concatenate([[0], corners, [last]])).astype(np.int64)
+        share = np.diff(measure[cut])
+        total = share.sum()
+        pieces = len(share)
+        if total <= 0:
+            alloc = np.ones(pieces, dtype=np.int64)
+        else:
+            raw = share / total * max(count, pieces)
+            alloc = np.maximum(np.floor(raw).astype(np.int64), 1)
+            short = max(count, pieces) - alloc.sum()
+            if short > 0:
+                alloc[np.argsort(-(raw - alloc))[:short]] += 1
+    return _place(np.ascontiguousarray(params, dtype=float), np.ascontiguousarray(cum, dtype=float),
+                  np.ascontiguousarray(measure, dtype=float), cut.astype(np.int64), alloc.astype(np.int64))
