@@ -56,14 +56,17 @@ def _de_boor(knots, coef, degree, u):
         x = u[m]
         span = min(max(np.searchsorted(knots, x, side="right") - 1, degree), n - 1)
         for j in range(degree + 1):
-            d[j] = coef[j + span - degree]
+            for c in range(dim):
+                d[j, c] = coef[j + span - degree, c]
         for r in range(1, degree + 1):
             for j in range(degree, r - 1, -1):
                 lo = knots[j + span - degree]
                 width = knots[j + 1 + span - r] - lo
                 alpha = (x - lo) / width if width > 0 else 0.0
-                d[j] = (1.0 - alpha) * d[j - 1] + alpha * d[j]
-        out[m] = d[degree]
+                for c in range(dim):
+                    d[j, c] = (1.0 - alpha) * d[j - 1, c] + alpha * d[j, c]
+        for c in range(dim):
+            out[m, c] = d[degree, c]
     return out
 
 
