@@ -28,6 +28,7 @@ CONIC_ROOTS, SPAN_ROOTS = 8, 2
 LENGTH_TOL = 1e-12
 #: Root intervals for any other curve (as the exploration's own default).
 DEFAULT_ROOTS = 64
+_SPAN_STEPS = np.arange(SPAN_ROOTS) / SPAN_ROOTS
 
 
 class EdgeCurve:
@@ -73,9 +74,8 @@ class EdgeCurve:
             return np.linspace(a, b, max(2, math.ceil(CONIC_ROOTS * (b - a) / (2 * math.pi))) + 1)
         if self.kind in (GeomAbs_BSplineCurve, GeomAbs_BezierCurve) and self.adaptor.Is3DCurve():
             knots = self._knots(a, b)
-            steps = np.linspace(0.0, 1.0, SPAN_ROOTS + 1)[:-1]
-            u = (knots[:-1, None] + np.diff(knots)[:, None] * steps[None, :]).ravel()
-            return np.unique(np.concatenate([u, [b]]))
+            u = (knots[:-1, None] + np.diff(knots)[:, None] * _SPAN_STEPS[None, :]).ravel()
+            return np.append(u, b)  # sorted and distinct, as the knots are
         return np.linspace(a, b, DEFAULT_ROOTS + 1)
 
     def exact_length(self, a: float, b: float) -> float | None:
@@ -96,13 +96,13 @@ class EdgeCurve:
         if self.kind == GeomAbs_BezierCurve:
             return np.array([a, b])
         bs = self.adaptor.BSpline()
-        k = np.array([bs.Knot(i) for i in range(1, bs.NbKnots() + 1)], dtype=float)
+        k = np.array([bs.Knot(i) for i in range(1, bs.NbKnots() + 1)], dtype=float)  # increasing
         if bs.IsPeriodic():
             per = float(bs.Period())
             shifts = np.arange(math.floor((a - k[-1]) / per), math.ceil((b - k[0]) / per) + 1) * per
-            k = (k[None, :] + shifts[:, None]).ravel()
+            k = np.unique((k[None, :] + shifts[:, None]).ravel())  # the period's ends coincide
         tol = 1e-9 * (b - a)  # a knot a hair inside an end would only make a sliver of a span
-        return np.unique(np.concatenate([[a], k[(k > a + tol) & (k < b - tol)], [b]]))
+        return np.concatenate([[a], k[(k > a + tol) & (k < b - tol)], [b]])
 
     def __repr__(self) -> str:
         return f"EdgeCurve({self._name()}, domain={self.domain})"
