@@ -13,7 +13,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
 from .refine import parse_number, add_refine_options, refine_options
 
 
@@ -41,7 +40,7 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..mesh import MESH_MAX_GROWTH, MESH_SUFFIXES, mesh_shape
+    from ..mesh import MESH_MAX_GROWTH, mesh_shape
 
     source = os.path.basename(args.input) or args.input
     opts = refine_options(args, source)
@@ -49,12 +48,7 @@ def run(args: argparse.Namespace) -> int:
         opts["max_growth"] = MESH_MAX_GROWTH
     growth = parse_number("--growth", args.growth, source, low=0.0)
     max_size = parse_number("--max-size", args.max_size, source, low=0.0)
-    out = Path(args.output)
-    if out.suffix.lower() not in MESH_SUFFIXES + (".geo",):
-        raise InputError(f"{args.output}: unsupported output suffix {out.suffix!r} "
-                         f"(use {', '.join(MESH_SUFFIXES)} or .geo)")
-    if str(out.parent) and not out.parent.is_dir():
-        raise InputError(f"{args.output}: folder {os.fspath(out.parent)!r} does not exist")
+    out = Path(args.output)  # mesh_shape checks its suffix and folder before any work
     result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size, **opts)
     if not args.quiet:
         for line in result.lines()[: len(result.lines()) - len(result.problems())]:
