@@ -29,6 +29,9 @@ ROOTS = 64
 ASYMPTOTIC_RATIO = 0.35
 #: Gains below this share of the triple's length count as straight (rounding noise, lines).
 STRAIGHT = 1e-13
+#: Gains below this share of the largest coordinate count as straight too: the points themselves are
+#: only that exact, so a small edge far from the origin shows rounding noise that never shrinks.
+NOISE = 16 * np.finfo(float).eps
 
 _jit = numba.njit(cache=True, nogil=True)
 
@@ -80,7 +83,7 @@ def _gain(pa, i, pm, j, pb, k):
 
 
 @_jit
-def _classify(ua, um, ub, pa, pm, pb, ratio, tol, scale, min_width):
+def _classify(ua, um, ub, pa, pm, pb, ratio, tol, scale, min_width, noise):
     """One level: which live triples are finished, what they leave unresolved, which split.
 
     Returns (remainder of the finished, params of new corners, indices to split, their gains, scale);
@@ -98,7 +101,7 @@ def _classify(ua, um, ub, pa, pm, pb, ratio, tol, scale, min_width):
     split = np.empty(n, dtype=np.int64)
     n_corners = n_split = 0
     for i in range(n):
-        straight = g[i] <= STRAIGHT * max(two[i], scale * 1e-3)
+        straight = g[i] <= max(STRAIGHT * max(two[i], scale * 1e-3), noise)
         resolved = g[i] / 3.0 <= tol * two[i] and ratio[i] <= ASYMPTOTIC_RATIO
         tiny = (ub[i] - ua[i]) <= min_width
         if straight:
@@ -169,6 +172,7 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
     um = 0.5 * (ua[:-1] + ua[1:])
     pm = ev(um)
     min_width = 1e-12 * (b - a)
+    noise = NOISE * max(float(np.abs(pa_all).max()), float(np.abs(pm).max()))
 
     # Live triples (one per current leaf interval); finished ones leave the live set.
     t_ua, t_ub, t_um = ua[:-1], ua[1:], um
@@ -182,7 +186,7 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
     scale = -1.0
     while len(t_ua):
         rem, new_corners, split, gains, scale = _classify(t_ua, t_um, t_ub, t_pa, t_pm, t_pb, t_ratio, tol,
-                                                          scale, min_width)
+                                                          scale, min_width, noise)
         remainder += rem
         corners.append(new_corners)
         if not len(split):

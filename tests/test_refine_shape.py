@@ -161,3 +161,35 @@ def test_edge_with_only_a_curve_on_surface():
     sg = refine_shape(edge, ald=1e-3)
     assert len(sg.edges) == 1 and sg.edges[0].curve == "OtherCurve" and sg.edges[0].segments > 1
     check_grid(sg, Topology(sg.shape), 1e-3)
+
+
+def _s_edge(size: float, offset: tuple[float, float, float]):
+    """A cubic B-spline S-curve (one inflection, one interior knot) about ``size`` long at ``offset``."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+    from OCP.Geom import Geom_BSplineCurve
+    from OCP.gp import gp_Pnt
+    from OCP.TColgp import TColgp_Array1OfPnt
+    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+
+    shape = np.array([(0, 0, 0), (10, 20, 0), (30, -10, 0), (40, 15, 0), (60, 0, 0)], float) / 68.7
+    poles = TColgp_Array1OfPnt(1, len(shape))
+    for i, p in enumerate(shape * size + np.asarray(offset)):
+        poles.SetValue(i + 1, gp_Pnt(*map(float, p)))
+    knots, mults = TColStd_Array1OfReal(1, 3), TColStd_Array1OfInteger(1, 3)
+    for i, (k, m) in enumerate(((0.0, 4), (0.5, 1), (1.0, 4))):
+        knots.SetValue(i + 1, k)
+        mults.SetValue(i + 1, m)
+    return BRepBuilderAPI_MakeEdge(Geom_BSplineCurve(poles, knots, mults, 3, False)).Edge()
+
+
+@pytest.mark.parametrize("size, offset", [(1e-4, (-719.4, -457.0, 523.1)), (1e-4, (195.9, -967.6, -159.4)),
+                                          (1.37e-5, (0.0, 80.0, 0.0))])
+def test_small_edge_far_from_the_origin_is_not_lost_in_rounding(size, offset):
+    """Near the inflection the gains of a small edge far out fall to the rounding noise of its
+    coordinates, which never shrinks; read as kinks it once gave 257-3437 segments and up to 3e5
+    evaluations where the same edge at the origin takes 21 segments and about 220."""
+    at_origin = refine_shape(_s_edge(size, (0.0, 0.0, 0.0)), ald=1e-3).edges[0]
+    far = refine_shape(_s_edge(size, offset), ald=1e-3).edges[0]
+    assert far.segments <= at_origin.segments + 1
+    assert far.evaluations <= 2 * at_origin.evaluations
+    assert 1.0 - far.length / occt_length(_s_edge(size, offset)) <= 1e-3
