@@ -281,15 +281,26 @@ def format_row(row: dict) -> str:
 
 
 def totals(rows: list[dict]) -> list[str]:
+    """One line per eps. Ratios to OCCT sum only the rows where OCCT met eps at some angle (the others
+    are counted in the model column as "n without OCCT")."""
     out = []
     for eps in sorted({r["eps"] for r in rows}, reverse=True):
         rs = [r for r in rows if r["eps"] == eps]
-        tot = lambda side, key: sum((r[side] or {}).get(key) or 0 for r in rs)  # noqa: E731
-        cs, os_, ds, gs = tot("cadedge", "segments"), tot("occt", "segments"), tot("dp", "segments"), tot("gmsh", "segments")
-        ct, ot, tt = tot("cadedge", "seconds"), tot("occt", "seconds"), tot("occt", "tuning")
-        out.append(f"| **total** | {sum(r['edges'] for r in rs)} | {eps:g} | {cs} | {os_} | {gs or '-'} | {ds or '-'} "
-                   f"| {cs / max(os_, 1):.3f} | {_num(cs / ds if ds else None, '{:.3f}')} | | | | {ct:.2f} | {ot:.3f} | "
-                   f"| {ct / max(ot, 1e-9):.1f} | {ct / max(tt, 1e-9):.2f} | | {sum(verdict(r)[0] for r in rs)}/{len(rs)} ok |")
+        with_occt = [r for r in rs if r["occt"]["segments"] is not None]
+
+        def tot(side: str, key: str, among: list[dict] = rs) -> float:
+            return sum((r[side] or {}).get(key) or 0 for r in among)
+
+        cs, ds, gs = tot("cadedge", "segments"), tot("dp", "segments"), tot("gmsh", "segments")
+        cs_o, os_ = tot("cadedge", "segments", with_occt), tot("occt", "segments", with_occt)
+        ct, ct_o = tot("cadedge", "seconds"), tot("cadedge", "seconds", with_occt)
+        ot, tt = tot("occt", "seconds", with_occt), tot("occt", "tuning", with_occt)
+        missing = f" ({len(rs) - len(with_occt)} without OCCT)" if len(with_occt) < len(rs) else ""
+        ratio = lambda a, b, fmt: _num(a / b if b else None, fmt)  # noqa: E731
+        out.append(f"| **total**{missing} | {sum(r['edges'] for r in rs)} | {eps:g} | {cs} | {os_} | {gs or '-'} "
+                   f"| {ds or '-'} | {ratio(cs_o, os_, '{:.3f}')} | {ratio(cs, ds, '{:.3f}')} | | | | {ct:.2f} "
+                   f"| {ot:.3f} | | {ratio(ct_o, ot, '{:.1f}')} | {ratio(ct_o, tt, '{:.2f}')} | "
+                   f"| {sum(verdict(r)[0] for r in rs)}/{len(rs)} ok |")
     return out
 
 
