@@ -176,9 +176,8 @@ class Evaluator:
         pts = np.asarray(self.curve.evaluate(u), dtype=float)
         if pts.ndim != 2 or pts.shape[0] != len(u) or pts.shape[1] not in (2, 3):
             raise CurveEvaluationError(f"curve returned shape {pts.shape} for {len(u)} parameters")
-        bad = ~np.all(np.isfinite(pts), axis=1)
-        if bad.any():
-            ui = float(u[np.argmax(bad)])
+        if not np.isfinite(pts).all():
+            ui = float(u[np.argmax(~np.all(np.isfinite(pts), axis=1))])
             raise CurveEvaluationError(f"curve returned a non-finite point at u={ui!r}", ui)
         if pts.shape[1] == 2:
             pts = np.column_stack([pts, np.zeros(len(u))])

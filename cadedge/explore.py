@@ -206,5 +206,6 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
 
     u, p = _sorted_unique(np.concatenate(done_u), np.concatenate(done_p))
     dense = polyline_length(p)
+    kinks = np.concatenate(corners) if corners else np.zeros(0)
     return Exploration(params=u, points=p, length_estimate=dense + remainder, remainder=remainder,
-                       corners=np.unique(np.concatenate(corners)) if corners else np.zeros(0), notes=notes)
+                       corners=np.unique(kinks) if len(kinks) else kinks, notes=notes)

@@ -174,7 +174,7 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
     points = np.ascontiguousarray(points, dtype=float)
     n = len(points)
     forced = np.zeros(0, dtype=np.int64) if forced is None else np.asarray(forced, dtype=np.int64)
-    stops = np.unique(np.concatenate([forced, [n - 1]])).astype(np.int64)
+    stops = np.unique(np.append(forced, n - 1)) if len(forced) else np.array([n - 1], dtype=np.int64)
     fixed = np.zeros(n, dtype=np.bool_)
     fixed[forced] = True
     return _fewest(points, np.ascontiguousarray(cum, dtype=float), float(budget),
