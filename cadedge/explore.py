@@ -143,8 +143,9 @@ def _children(ua, um, ub, pa, pm, pb, split, gains, q, pq):
         left, right = k, n + k
         c_ua[left], c_um[left], c_ub[left] = ua[i], q[2 * k], um[i]
         c_ua[right], c_um[right], c_ub[right] = um[i], q[2 * k + 1], ub[i]
-        c_pa[left], c_pm[left], c_pb[left] = pa[i], pq[2 * k], pm[i]
-        c_pa[right], c_pm[right], c_pb[right] = pm[i], pq[2 * k + 1], pb[i]
+        for d in range(3):  # element loops: row assignments compile several times slower
+            c_pa[left, d], c_pm[left, d], c_pb[left, d] = pa[i, d], pq[2 * k, d], pm[i, d]
+            c_pa[right, d], c_pm[right, d], c_pb[right, d] = pm[i, d], pq[2 * k + 1, d], pb[i, d]
         c_ratio[left] = c_ratio[right] = r
     return c_ua, c_um, c_ub, c_pa, c_pm, c_pb, c_ratio
 

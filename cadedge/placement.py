@@ -217,22 +217,49 @@ def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray | N
 
 
 @_jit
+def _interp_sorted(x, xp, fp):
+    """``np.interp(x, xp, fp)`` for increasing ``x`` and non-decreasing ``xp``, by one forward sweep
+    (the same bracketing and formula, so the same values; far less to compile)."""
+    out = np.empty(len(x))
+    last = len(xp) - 1
+    j = 0
+    for k in range(len(x)):
+        v = x[k]
+        if v >= xp[last]:
+            out[k] = fp[last]
+            continue
+        if v < xp[0]:
+            out[k] = fp[0]
+            continue
+        while xp[j + 1] <= v:
+            j += 1
+        out[k] = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (v - xp[j]) + fp[j]
+    return out
+
+
+@_jit
 def _place(params, cum, measure, cut, alloc):
     """Parameters at equal steps of ``measure`` within each piece between ``cut`` samples (``alloc``
     segments each), interpolated in arc length then in parameter; strictly increasing."""
-    out = np.empty(1 + np.maximum(alloc, 1).sum())
+    total = 1
+    for k in alloc:
+        total += max(k, 1)
+    out = np.empty(total)
     out[0] = params[0]
     w = 1
     for piece in range(len(alloc)):
         i0, i1, k = cut[piece], cut[piece + 1], alloc[piece]
         if k > 1:
             ms, cs, ps = measure[i0:i1 + 1], cum[i0:i1 + 1], params[i0:i1 + 1]
-            steps = np.arange(1, k).astype(np.float64)
+            s = np.empty(k - 1)
+            for j in range(1, k):
+                if measure[i1] > measure[i0]:
+                    s[j - 1] = measure[i0] + (measure[i1] - measure[i0]) * float(j) / k
+                else:
+                    s[j - 1] = cum[i0] + (cum[i1] - cum[i0]) * float(j) / k
             if measure[i1] > measure[i0]:
-                s = np.interp(measure[i0] + (measure[i1] - measure[i0]) * steps / k, ms, cs)
-            else:
-                s = np.linspace(cum[i0], cum[i1], k + 1)[1:-1]
-            for x in np.interp(s, cs, ps):
+                s = _interp_sorted(s, ms, cs)
+            for x in _interp_sorted(s, cs, ps):
                 if x > out[w - 1]:
                     out[w] = x
                     w += 1
