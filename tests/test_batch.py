@@ -202,3 +202,13 @@ def test_unreachable_scheduler_is_an_input_error(tmp_path):
     with dask.config.set({"distributed.comm.timeouts.connect": "1s"}), \
             pytest.raises(InputError, match="cannot connect to dask scheduler tcp://127.0.0.1:9"):
         run_batch([FIXTURES / "sphere.step"], tmp_path / "out", scheduler="tcp://127.0.0.1:9")
+
+
+def test_scheduler_without_workers_is_an_input_error(tmp_path):
+    import dask
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as empty, \
+            dask.config.set({"distributed.comm.timeouts.connect": "2s"}), \
+            pytest.raises(InputError, match="has no workers"):
+        run_batch([FIXTURES / "sphere.step"], tmp_path / "out", scheduler=empty.scheduler_address)

@@ -59,7 +59,8 @@ def default_workers() -> int:
 def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iterator[Any]:
     """A dask ``Client``: on the scheduler at ``scheduler``, else on a new LocalCluster of processes.
 
-    Connecting gives up after dask's ``distributed.comm.timeouts.connect`` (30 s by default).
+    Connecting, and waiting for a scheduler's first worker, each give up after dask's
+    ``distributed.comm.timeouts.connect`` (30 s by default) with an :class:`InputError`.
     The LocalCluster has ``workers`` single-threaded worker processes with nannies (so crashed or
     hung workers are restarted), no dashboard, no task retries after a worker death, and its logs
     silenced: every failure is reported per input instead.
@@ -68,11 +69,16 @@ def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iter
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
+        wait = dask.config.get("distributed.comm.timeouts.connect")
         try:
-            client = Client(scheduler, timeout=dask.config.get("distributed.comm.timeouts.connect"))
+            client = Client(scheduler, timeout=wait)
         except (OSError, TimeoutError, ValueError) as exc:
             raise InputError(f"cannot connect to dask scheduler {scheduler}: {exc}") from None
         with client:
+            try:  # tasks on a scheduler without workers would wait for ever
+                client.wait_for_workers(1, timeout=dask.utils.parse_timedelta(wait, default="seconds"))
+            except TimeoutError:
+                raise InputError(f"dask scheduler {scheduler} has no workers (waited {wait})") from None
             yield client
         return
     config = {"distributed.scheduler.allowed-failures": 0,
