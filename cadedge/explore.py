@@ -169,11 +169,11 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
     """
     notes: list[str] = []
     ua = root_params(ev.curve, a, b)
-    pa_all = ev(ua)
     um = 0.5 * (ua[:-1] + ua[1:])
-    pm = ev(um)
+    first = ev(np.concatenate([ua, um]))  # the roots and their midpoints in one batch
+    pa_all, pm = first[:len(ua)], first[len(ua):]
     min_width = 1e-12 * (b - a)
-    noise = NOISE * max(float(np.abs(pa_all).max()), float(np.abs(pm).max()))
+    noise = NOISE * float(np.abs(first).max())
 
     # Live triples (one per current leaf interval); finished ones leave the live set.
     t_ua, t_ub, t_um = ua[:-1], ua[1:], um
