@@ -12,13 +12,12 @@ split again, whatever its gain looks like. All triples of a level are split in o
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
-import numba
 import numpy as np
 
+from .compiled import distance, jit
 from .grid import polyline_length, row_norms
 
 #: Root triples for a curve that gives no hint of its own: features narrower than about
@@ -33,7 +32,6 @@ STRAIGHT = 1e-13
 #: only that exact, so a small edge far from the origin shows rounding noise that never shrinks.
 NOISE = 16 * np.finfo(float).eps
 
-_jit = numba.njit(cache=True, nogil=True)
 
 
 @dataclass
@@ -67,22 +65,14 @@ def _sorted_unique(u: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return u[keep], p[keep]
 
 
-@_jit
-def _norm(p, i, q, j):
-    dx = q[j, 0] - p[i, 0]
-    dy = q[j, 1] - p[i, 1]
-    dz = q[j, 2] - p[i, 2]
-    return math.sqrt(dx * dx + dy * dy + dz * dz)
-
-
-@_jit
+@jit
 def _gain(pa, i, pm, j, pb, k):
     """(gain, two half chords) of the triple pa[i], pm[j], pb[k]."""
-    two = _norm(pa, i, pm, j) + _norm(pm, j, pb, k)
-    return max(two - _norm(pa, i, pb, k), 0.0), two
+    two = distance(pa, i, pm, j) + distance(pm, j, pb, k)
+    return max(two - distance(pa, i, pb, k), 0.0), two
 
 
-@_jit
+@jit
 def _classify(ua, um, ub, pa, pm, pb, ratio, tol, scale, min_width, noise):
     """One level: which live triples are finished, what they leave unresolved, which split.
 
@@ -117,7 +107,7 @@ def _classify(ua, um, ub, pa, pm, pb, ratio, tol, scale, min_width, noise):
     return remainder, corners[:n_corners].copy(), split[:n_split].copy(), g[split[:n_split]], scale
 
 
-@_jit
+@jit
 def _quarters(ua, um, ub, split):
     q = np.empty(2 * len(split))
     for k in range(len(split)):
@@ -127,7 +117,7 @@ def _quarters(ua, um, ub, split):
     return q
 
 
-@_jit
+@jit
 def _children(ua, um, ub, pa, pm, pb, split, gains, q, pq):
     """The live triples of the next level: (a, q1, m) and (m, q3, b) of each split (a, m, b), all
     left halves first, each with (G_left + G_right) / G_parent."""

@@ -8,21 +8,20 @@ bisection on ``cap`` finds the fewest nodes for the total budget. The polish the
 node to the sample between its neighbours that makes the two chords longest (the paper's Algorithm 1
 on samples), odd nodes then even ones, so the length never decreases.
 
-These are tight scalar loops over samples (a few dozen covers and polishes per edge), so they are
-compiled with numba: a profile of the numpy version showed its per-call overhead dominating whole-model
-runs. ``deficit_measure`` and ``equidistribute`` stay vectorised numpy.
+These are tight scalar loops over samples (a few dozen covers and polishes per edge), compiled with
+numba (:mod:`cadedge.compiled`): a profile of the numpy version showed its per-call overhead dominating
+whole-model runs. So are the deficit measure and the equidistribution along it, which run once or
+twice per edge.
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from .compiled import distance, jit
 from .grid import polyline_length
-
-_jit = numba.njit(cache=True, nogil=True)
 
 
 def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
@@ -30,15 +29,12 @@ def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
     return polyline_length(points[nodes])
 
 
-@_jit
+@jit
 def _dist(points, i, j):
-    dx = points[j, 0] - points[i, 0]
-    dy = points[j, 1] - points[i, 1]
-    dz = points[j, 2] - points[i, 2]
-    return math.sqrt(dx * dx + dy * dy + dz * dz)
+    return distance(points, i, points, j)
 
 
-@_jit
+@jit
 def _chords(points, nodes, count):
     s = 0.0
     for k in range(count - 1):
@@ -46,7 +42,7 @@ def _chords(points, nodes, count):
     return s
 
 
-@_jit
+@jit
 def _cover(points, cum, cap, min_length, max_length, stops, out):
     """Greedy farthest-reach nodes into ``out``; returns their count.
 
@@ -84,7 +80,7 @@ def _cover(points, cum, cap, min_length, max_length, stops, out):
     return count
 
 
-@_jit
+@jit
 def _polish(points, nodes, sweeps, fixed):
     """Move interior nodes (not on ``fixed`` samples) to the sample between their neighbours that
     maximises the two chords; odd positions then even ones, until nothing moves or ``sweeps`` runs."""
@@ -111,7 +107,7 @@ def _polish(points, nodes, sweeps, fixed):
             break
 
 
-@_jit
+@jit
 def _plan(points, cum, cap, min_length, max_length, stops, fixed, buf):
     """Greedy cover under ``cap``, polished: (nodes, deficit against the samples' length)."""
     nodes = buf[:_cover(points, cum, cap, min_length, max_length, stops, buf)].copy()
@@ -120,7 +116,7 @@ def _plan(points, cum, cap, min_length, max_length, stops, fixed, buf):
     return nodes, cum[-1] - _chords(points, nodes, len(nodes))
 
 
-@_jit
+@jit
 def _fewest(points, cum, budget, min_length, max_length, stops, fixed):
     total = cum[-1]
     buf = np.empty(len(points), dtype=np.int64)
@@ -182,7 +178,7 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
                    math.inf if max_length is None else float(max_length), stops, fixed)
 
 
-@_jit
+@jit
 def _deficit_measure(points, cum, corners):
     n = len(points)
     rho = np.zeros(n)
@@ -216,7 +212,7 @@ def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray | N
                             corners)
 
 
-@_jit
+@jit
 def _interp_sorted(x, xp, fp):
     """``np.interp(x, xp, fp)`` for increasing ``x`` and non-decreasing ``xp``, by one forward sweep
     (the same bracketing and formula, so the same values; far less to compile)."""
@@ -237,7 +233,7 @@ def _interp_sorted(x, xp, fp):
     return out
 
 
-@_jit
+@jit
 def _place(params, cum, measure, cut, alloc):
     """Parameters at equal steps of ``measure`` within each piece between ``cut`` samples (``alloc``
     segments each), interpolated in arc length then in parameter; strictly increasing."""

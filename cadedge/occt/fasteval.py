@@ -15,12 +15,13 @@ from __future__ import annotations
 import math
 from typing import Callable
 
-import numba
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
                          GeomAbs_Line)
 from OCP.Standard import Standard_Failure
+
+from ..compiled import jit
 
 #: Parameters of the edge's range at which the numpy evaluation must agree with OCCT.
 CHECK_POINTS = 9
@@ -45,7 +46,7 @@ def _conic(pos, rx: float, ry: float) -> Points:
     return lambda u: loc + (rx * np.cos(u))[:, None] * x + (ry * np.sin(u))[:, None] * y
 
 
-@numba.njit(cache=True, nogil=True)
+@jit
 def _de_boor(knots, coef, degree, u):
     """Points of the spline (knots, coef (n, d), degree) at ``u``; outside the knots the end pieces
     are extended."""
