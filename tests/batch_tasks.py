@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from cadedge.batch import refine_task
+from cadedge.batch.runner import NO_DASHBOARD
 
 CRASH_STEM = "crash_me"
 HANG_STEM = "hang_me"
@@ -43,6 +44,6 @@ def local_cluster(n_workers: int = 2) -> Iterator[Any]:
     with dask.config.set({"distributed.scheduler.allowed-failures": 0,
                           "distributed.scheduler.worker-saturation": 1.0}):
         cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.CRITICAL)
+                               silence_logs=logging.CRITICAL, **NO_DASHBOARD)
     with cluster:
         yield cluster

@@ -206,9 +206,7 @@ def test_unreachable_scheduler_is_an_input_error(tmp_path):
 
 def test_scheduler_without_workers_is_an_input_error(tmp_path):
     import dask
-    from distributed import LocalCluster
 
-    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as empty, \
-            dask.config.set({"distributed.comm.timeouts.connect": "2s"}), \
+    with local_cluster(0) as empty, dask.config.set({"distributed.comm.timeouts.connect": "2s"}), \
             pytest.raises(InputError, match="has no workers"):
         run_batch([FIXTURES / "sphere.step"], tmp_path / "out", scheduler=empty.scheduler_address)

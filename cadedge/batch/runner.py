@@ -27,6 +27,10 @@ from ..errors import InputError
 POLL_SECONDS = 0.2
 RESTART_SECONDS = 30.0
 WORKER_DIED = "worker process died (killed or crashed)"
+#: LocalCluster options for no dashboard. The scheduler always serves HTTP (health, metrics); with
+#: ``dashboard_address=None`` it takes port 8787 and warns when another cluster holds it, so it gets
+#: a free port instead.
+NO_DASHBOARD = {"dashboard_address": ":0", "scheduler_kwargs": {"dashboard": False}}
 
 Task = Callable[[str, str, dict], dict]
 
@@ -85,7 +89,7 @@ def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iter
               "distributed.scheduler.worker-saturation": 1.0}
     with dask.config.set(config):
         cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                               processes=True, dashboard_address=None, silence_logs=logging.CRITICAL)
+                               processes=True, silence_logs=logging.CRITICAL, **NO_DASHBOARD)
     with cluster, Client(cluster) as client:
         yield client
 
