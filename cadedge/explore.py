@@ -33,7 +33,6 @@ STRAIGHT = 1e-13
 NOISE = 16 * np.finfo(float).eps
 
 
-
 @dataclass
 class Exploration:
     """Dense samples of a curve with a Richardson estimate of its length."""

@@ -35,9 +35,10 @@ def _dist(points, i, j):
 
 
 @jit
-def _chords(points, nodes, count):
+def _chords(points, nodes):
+    """Length of the polyline through ``points[nodes]``."""
     s = 0.0
-    for k in range(count - 1):
+    for k in range(len(nodes) - 1):
         s += _dist(points, nodes[k], nodes[k + 1])
     return s
 
@@ -113,7 +114,7 @@ def _plan(points, cum, cap, min_length, max_length, stops, fixed, buf):
     nodes = buf[:_cover(points, cum, cap, min_length, max_length, stops, buf)].copy()
     if len(nodes) > 2:
         _polish(points, nodes, 4, fixed)
-    return nodes, cum[-1] - _chords(points, nodes, len(nodes))
+    return nodes, cum[-1] - _chords(points, nodes)
 
 
 @jit
@@ -152,7 +153,7 @@ def _fewest(points, cum, budget, min_length, max_length, stops, fixed):
             break
         if len(fewer) > 2:
             _polish(points, fewer, 8, fixed)
-        if total - _chords(points, fewer, len(fewer)) > budget:
+        if total - _chords(points, fewer) > budget:
             break
         best = fewer
     return best
@@ -208,8 +209,8 @@ def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray | N
     ``corners`` (kinks, which a node must sit on) contribute nothing.
     """
     corners = np.zeros(0, dtype=np.int64) if corners is None else np.asarray(corners, dtype=np.int64)
-    return _deficit_measure(np.ascontiguousarray(points, dtype=float), np.ascontiguousarray(cum, dtype=float),
-                            corners)
+    return _deficit_measure(np.ascontiguousarray(points, dtype=float),
+                            np.ascontiguousarray(cum, dtype=float), corners)
 
 
 @jit

@@ -57,7 +57,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
     before the first task and after each. Raises :class:`InputError` for bad options, missing
     inputs or no inputs.
     """
-    options: dict[str, Any] = _check_options(ald, min_length, max_length, max_growth, workers, scheduler, timeout)
+    options: dict[str, Any] = _check_options(ald, min_length, max_length, max_growth, workers, scheduler,
+                                             timeout)
     t0 = time.perf_counter()
     paths = expand_inputs(inputs)
     out = Path(outdir)

@@ -3,11 +3,12 @@
 Lines, circles, ellipses, B-splines (rational or not, periodic or not) and Bezier curves are
 evaluated from their definition in one vectorised call instead of one ``BRepAdaptor_Curve.Value``
 per point. The geometry is taken from the adaptor (``Line()``, ``Circle()``, ``BSpline()``, ...),
-which applies the edge's location; B-splines and Bezier curves are evaluated by de Boor's algorithm on
-homogeneous poles, compiled with numba (an edge is evaluated a few times only, so scipy's
-``BSpline`` cost more to build than to call). Every evaluator is cross-checked on construction against ``BRepAdaptor_Curve.Value`` at
-``CHECK_POINTS`` parameters of the edge's range; if any point differs by more than ``RTOL`` of the
-curve's size, :func:`fast_evaluator` returns ``None`` and the caller keeps OCCT's per-point loop.
+which applies the edge's location; B-splines and Bezier curves are evaluated by de Boor's algorithm
+on homogeneous poles, compiled with numba (an edge is evaluated a few times only, so scipy's
+``BSpline`` cost more to build than to call). Every evaluator is cross-checked on construction
+against ``BRepAdaptor_Curve.Value`` at ``CHECK_POINTS`` parameters of the edge's range; if any point
+differs by more than ``RTOL`` of the curve's size, :func:`fast_evaluator` returns ``None`` and the
+caller keeps OCCT's per-point loop.
 """
 
 from __future__ import annotations
