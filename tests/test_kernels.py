@@ -1,0 +1,61 @@
+"""The compiled kernels against the numpy/scipy definitions they replace (exact or to rounding)."""
+
+import numpy as np
+import pytest
+
+from cadedge.placement import _interp_sorted, deficit_measure, equidistribute, fewest_nodes
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_interp_sorted_is_numpy_interp(seed):
+    rng = np.random.default_rng(seed)
+    xp = np.sort(rng.uniform(0, 1, 30))
+    xp[5:9] = xp[5]  # flat stretches, as a deficit measure has on straight runs
+    fp = np.cumsum(rng.uniform(0, 1, 30))
+    x = np.sort(np.concatenate([rng.uniform(-0.2, 1.2, 50), xp[[0, 5, -1]]]))
+    assert np.array_equal(_interp_sorted(x, xp, fp), np.interp(x, xp, fp))
+
+
+def _arc(n, turn=3.0):
+    t = np.linspace(0, turn, n)
+    p = np.c_[np.cos(t), np.sin(t), np.zeros(n)]
+    return p, np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
+
+
+def test_fewest_nodes_meets_the_budget_keeps_forced_nodes_and_is_minimal():
+    p, cum = _arc(400)
+    budget = 1e-3 * cum[-1]
+    nodes = fewest_nodes(p, cum, budget, forced=np.array([123]))
+    length = np.linalg.norm(np.diff(p[nodes], axis=0), axis=1).sum()
+    assert nodes[0] == 0 and nodes[-1] == 399 and 123 in nodes and np.all(np.diff(nodes) > 0)
+    assert cum[-1] - length <= budget
+    free = fewest_nodes(p, cum, budget)  # without the forced node it cannot need more
+    assert len(free) <= len(nodes)
+    # one node fewer is impossible: even evenly spread samples miss the budget
+    k = len(free) - 1
+    even = np.round(np.linspace(0, 399, k)).astype(int)
+    assert cum[-1] - np.linalg.norm(np.diff(p[even], axis=0), axis=1).sum() > budget
+
+
+def test_equidistribution_of_a_circle_is_uniform():
+    p, cum = _arc(2001, turn=2.0)
+    u = np.linspace(0.0, 2.0, 2001)
+    params = equidistribute(u, cum, deficit_measure(p, cum), 10)
+    assert len(params) == 11 and params[0] == 0.0 and params[-1] == 2.0
+    assert np.allclose(np.diff(params), 0.2, rtol=1e-6)
+
+
+def test_de_boor_matches_scipy():
+    scipy_interpolate = pytest.importorskip("scipy.interpolate")
+    pytest.importorskip("OCP")
+    from cadedge.occt.fasteval import _de_boor
+
+    rng = np.random.default_rng(1)
+    for degree in (1, 2, 3, 5):
+        n = degree + 6
+        inner = np.sort(rng.uniform(0, 1, n - degree - 1))
+        knots = np.r_[[0.0] * (degree + 1), inner, [1.0] * (degree + 1)]
+        coef = rng.normal(size=(n, 4))
+        u = np.r_[0.0, np.sort(rng.uniform(0, 1, 40)), inner[2], 1.0]
+        ref = scipy_interpolate.BSpline(knots, coef, degree, extrapolate=True)(u)
+        assert np.allclose(_de_boor(knots, coef, degree, u), ref, rtol=0, atol=1e-13)
