@@ -1,11 +1,10 @@
 """Exporters: every format written from a hand-built ShapeGrid and read back by a real reader
-(jsonschema, vtk, gmsh, trimesh), plus atomicity and suffix errors. Real STEP fixtures are in
-tests/test_cli_refine.py."""
+(jsonschema, gmsh here; meshio, vtk, pyvista, trimesh and plyfile in tests/test_exporters_readers.py),
+plus atomicity and suffix errors. Real STEP fixtures are in tests/test_cli_refine.py."""
 
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -127,31 +126,6 @@ def test_csv_one_row_per_grid_point(grid, tmp_path):
         assert np.array_equal(mine[:, 2], e.params) and np.array_equal(mine[:, 3:], e.points)
 
 
-def test_vtp_reads_back_with_vtk(grid, tmp_path):
-    vtk = pytest.importorskip("vtk")
-    from vtk.util.numpy_support import vtk_to_numpy
-
-    path = tmp_path / "g.vtp"
-    write(grid, path)
-    reader = vtk.vtkXMLPolyDataReader()
-    reader.SetFileName(str(path))
-    reader.Update()
-    poly = reader.GetOutput()
-    live = [e for e in grid.edges if not e.degenerate]
-    assert poly.GetNumberOfLines() == len(live)
-    assert poly.GetNumberOfPoints() == sum(len(e.params) for e in live)
-    points = vtk_to_numpy(poly.GetPoints().GetData())
-    assert np.array_equal(points, np.concatenate([e.points for e in live]))
-    assert np.array_equal(vtk_to_numpy(poly.GetCellData().GetArray("edge_id")), [e.id for e in live])
-    assert np.array_equal(vtk_to_numpy(poly.GetPointData().GetArray("param")),
-                          np.concatenate([e.params for e in live]))
-    lines = poly.GetLines()
-    ids = vtk.vtkIdList()
-    lines.InitTraversal()
-    lines.GetNextCell(ids)
-    assert ids.GetNumberOfIds() == len(live[0].params)
-
-
 @pytest.fixture
 def gmsh_session():
     gmsh = pytest.importorskip("gmsh")
@@ -209,52 +183,6 @@ def test_geo_opens_in_gmsh_and_meshes_back_to_the_grid(grid, tmp_path, gmsh_sess
         assert count == e.segments
         tags, _ = gmsh.model.mesh.getNodesForPhysicalGroup(1, e.id)
         assert len(tags) == len(np.unique(e.points, axis=0))
-
-
-def _read_obj(path: Path) -> tuple[np.ndarray, dict[str, list[int]]]:
-    vertices, groups, group = [], {}, None
-    for line in path.read_text().splitlines():
-        head, _, rest = line.partition(" ")
-        if head == "v":
-            vertices.append([float(x) for x in rest.split()])
-        elif head == "g":
-            group = rest
-        elif head == "l":
-            groups[group] = [int(i) - 1 for i in rest.split()]
-    return np.array(vertices), groups
-
-
-def test_obj_polylines(grid, tmp_path):
-    trimesh = pytest.importorskip("trimesh")
-    path = tmp_path / "g.obj"
-    write(grid, path)
-    vertices, groups = _read_obj(path)
-    live = [e for e in grid.edges if not e.degenerate]
-    assert list(groups) == [f"edge_{e.id}" for e in live]
-    for e in live:
-        assert np.array_equal(vertices[groups[f"edge_{e.id}"]], e.points)
-    cloud = trimesh.load(path)  # trimesh reads the vertices of a line-only OBJ as a point cloud
-    assert np.allclose(cloud.vertices, vertices)
-
-
-def test_ply_reloads_as_trimesh_path(grid, tmp_path):
-    trimesh = pytest.importorskip("trimesh")
-    path = tmp_path / "g.ply"
-    write(grid, path)
-    loaded = trimesh.load(path)
-    assert isinstance(loaded, trimesh.path.Path3D)
-    live = [e for e in grid.edges if not e.degenerate]
-    assert len(loaded.vertices) == sum(len(e.params) for e in live)
-    assert np.array_equal(loaded.vertices, np.concatenate([e.points for e in live]))
-    assert math.isclose(loaded.length, sum(e.length for e in live), rel_tol=1e-12)
-    raw = path.read_bytes()
-    body = raw[raw.index(b"end_header\n") + len(b"end_header\n"):]
-    from cadedge.exporters.ply import EDGE, VERTEX
-    vertices = np.frombuffer(body[: len(loaded.vertices) * VERTEX.itemsize], dtype=VERTEX)
-    edges = np.frombuffer(body[len(loaded.vertices) * VERTEX.itemsize:], dtype=EDGE)
-    assert len(edges) == sum(e.segments for e in live)
-    assert np.array_equal(vertices["edge_id"], np.concatenate([[e.id] * len(e.params) for e in live]))
-    assert np.array_equal(vertices["param"], np.concatenate([e.params for e in live]))
 
 
 @pytest.mark.parametrize("suffix", sorted(FORMATS))
@@ -336,20 +264,6 @@ def test_real_msh_is_conforming_in_gmsh(real_grid, tmp_path, gmsh_session):
     all_tags, _, _ = gmsh.model.mesh.getNodes()
     interior = sum(len(e.params) - 2 for e in live)
     assert len(all_tags) == len(real_grid.vertices) + interior  # shared vertex nodes appear once
-
-
-def test_real_vtp_and_ply_point_counts(real_grid, tmp_path):
-    vtk = pytest.importorskip("vtk")
-    trimesh = pytest.importorskip("trimesh")
-    live = [e for e in real_grid.edges if not e.degenerate]
-    real_grid.write(tmp_path / "real.vtp")
-    reader = vtk.vtkXMLPolyDataReader()
-    reader.SetFileName(str(tmp_path / "real.vtp"))
-    reader.Update()
-    assert reader.GetOutput().GetNumberOfLines() == len(live)
-    real_grid.write(tmp_path / "real.ply")
-    path = trimesh.load(tmp_path / "real.ply")
-    assert math.isclose(path.length, sum(e.length for e in live), rel_tol=1e-12)
 
 
 @pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")

@@ -118,7 +118,7 @@ def register(subparsers: Any) -> None:
     p = subparsers.add_parser("refine", help="edge grids of a STEP file",
                               description="Refine every edge of INPUT to the arc-length deficit EPS and write "
                                           "the grids; the format comes from OUT's suffix "
-                                          "(.json .csv .vtp .msh .geo .obj .ply).")
+                                          "(.json .csv .vtp .vtu .vtk .msh .geo .obj .ply).")
     p.add_argument("input", metavar="INPUT", help="STEP file (.step/.stp)")
     add_refine_options(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="output file")

@@ -1,7 +1,12 @@
-"""Wavefront OBJ exporter: polylines as ``l`` records, one group ``edge_<id>`` per non-degenerate edge.
+"""Wavefront OBJ exporter: one object ``o edge_<id>`` with one ``l`` polyline per non-degenerate edge.
 
-trimesh writes OBJ only for triangle meshes, so the few lines are written here; vertices carry full
-float precision. Edges do not share vertices (each edge lists its own points), as in the CSV.
+Vertices are shared (``v`` number ``k`` is B-rep vertex ``k``, interior points follow) and written
+with shortest round-trip floats (exact). ``l`` is OBJ's only polyline record, but not every reader
+keeps it: vtk/pyvista/ParaView and Blender read the polylines; trimesh's and meshio's OBJ readers
+parse faces only, so they return the points without the lines (see docs/formats.md). trimesh writes
+OBJ only for triangle meshes and meshio only for polygons, hence this writer. Objects (``o``), not
+groups (``g``): vtk's OBJ reader turns groups of lines into an empty ``GroupIds`` array that pyvista
+warns about on every read.
 """
 
 from __future__ import annotations
@@ -9,15 +14,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..shapegrid import ShapeGrid
-from ._common import comment, polylines, table
+from ._common import comment, edge_graph, table
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
-    """OBJ text: ``v`` records, then one ``g edge_<id>`` group with one ``l`` polyline per edge."""
-    p = polylines(grid, skip_degenerate=True)
-    lines = [f"# {comment(grid)}\n", "o cadedge_edges\n"]
-    lines.append(table([np.full(len(p.params), "v"), p.points[:, 0], p.points[:, 1], p.points[:, 2]]))
-    for eid, start, count in zip(p.edge_ids.tolist(), p.offsets.tolist(), p.counts.tolist()):
-        idx = " ".join(map(str, range(start + 1, start + count + 1)))
-        lines.append(f"g edge_{eid}\nl {idx}\n")
+    """OBJ text: ``v`` records, then per edge an ``o edge_<id>`` line and its ``l`` polyline."""
+    g = edge_graph(grid)
+    lines = [f"# {comment(grid)}\n", "# v k = cadedge vertex k for k <= number of vertices\n"]
+    lines.append(table([np.full(len(g.points), "v"), g.points[:, 0], g.points[:, 1], g.points[:, 2]]))
+    for j, eid in enumerate(g.edge_ids.tolist()):
+        chain = g.connectivity[g.chain_offsets[j]:g.chain_offsets[j + 1]] + 1
+        lines.append(f"o edge_{eid}\nl {' '.join(map(str, chain.tolist()))}\n")
     return "".join(lines).encode("utf-8")

@@ -1,8 +1,15 @@
-"""PLY exporter: polylines as the ``edge`` element (``vertex1``, ``vertex2``), binary little-endian.
+"""PLY exporter: the segments as 2-vertex ``face`` records, ASCII, shared vertex nodes.
 
-Written here rather than by trimesh's path exporter because that one stores float32 coordinates and
-drops the edge ids; the layout is the one trimesh reads back as a ``Path3D``. Vertices carry float64
-``x y z``, the curve parameter ``param`` and the cadedge ``edge_id``; degenerate edges are left out.
+The layout every common reader opens without failing: meshio's PLY reader accepts only ``vertex``
+and ``face`` elements (an ``edge`` element makes ``meshio.read`` exit the process) and turns 2-vertex
+faces into ``line`` cells; plyfile reads everything; vtk/pyvista read the segments as 2-point
+polygons; trimesh reads the points (a mesh without faces). ASCII, because meshio's binary reader
+misreads any face property besides the index list, and shortest round-trip floats keep coordinates
+exact. Written here: meshio's PLY writer drops cell data (the edge ids).
+
+Vertex properties: ``x y z`` (double), ``vertex_id`` (B-rep vertex id, 0 for interior points),
+``edge_id`` (edge of an interior point, 0 at vertices), ``param`` (NaN at vertices); face
+properties: ``vertex_indices`` and ``edge_id``. Point ``k - 1`` is B-rep vertex ``k``.
 """
 
 from __future__ import annotations
@@ -10,27 +17,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..shapegrid import ShapeGrid
-from ._common import comment, polylines
-
-VERTEX = np.dtype([("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("param", "<f8"), ("edge_id", "<i4")])
-EDGE = np.dtype([("vertex1", "<i4"), ("vertex2", "<i4")])
+from ._common import comment, edge_graph, table
 
 
 def to_bytes(grid: ShapeGrid) -> bytes:
-    """Binary PLY: float64 vertices with ``param`` and ``edge_id``, and 2-vertex ``edge`` records."""
-    p = polylines(grid, skip_degenerate=True)
-    vertices = np.empty(len(p.params), dtype=VERTEX)
-    vertices["x"], vertices["y"], vertices["z"] = p.points.T
-    vertices["param"], vertices["edge_id"] = p.params, p.point_edge
-    # segment k joins point k and k + 1 unless k is the last point of its edge
-    last = p.offsets + p.counts - 1
-    start = np.setdiff1d(np.arange(len(p.params)), last)
-    edges = np.empty(len(start), dtype=EDGE)
-    edges["vertex1"], edges["vertex2"] = start, start + 1
-    header = ("ply\nformat binary_little_endian 1.0\n"
+    """ASCII PLY: vertices with ids and parameters, one 2-vertex face with ``edge_id`` per segment."""
+    g = edge_graph(grid)
+    header = ("ply\nformat ascii 1.0\n"
               f"comment {comment(grid)}\n"
-              f"element vertex {len(vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
-              "property double param\nproperty int edge_id\n"
-              f"element edge {len(edges)}\nproperty int vertex1\nproperty int vertex2\n"
+              f"element vertex {len(g.points)}\nproperty double x\nproperty double y\nproperty double z\n"
+              "property int vertex_id\nproperty int edge_id\nproperty double param\n"
+              f"element face {len(g.segments)}\nproperty list uchar int vertex_indices\nproperty int edge_id\n"
               "end_header\n")
-    return header.encode("ascii") + vertices.tobytes() + edges.tobytes()
+    vertices = table([g.points[:, 0], g.points[:, 1], g.points[:, 2], g.vertex_id, g.edge_id, g.param])
+    faces = table([np.full(len(g.segments), 2), g.segments[:, 0], g.segments[:, 1], g.segment_edge])
+    return (header + vertices + faces).encode("ascii")
