@@ -35,6 +35,8 @@ def register(subparsers: Any) -> None:
                    help=f"interior size growth per unit distance from the edges (default {DEFAULT_GROWTH})")
     p.add_argument("--max-size", metavar="H", help="largest triangle size (default: --max-length, else the "
                                                    "largest edge spacing)")
+    p.add_argument("--plot", metavar="FILE", help="also draw the mesh and the edge grids: .png (static) or .html "
+                                                  "(interactive 3-D page, works offline)")
     p.add_argument("--quiet", action="store_true", help="print only problems")
     p.set_defaults(func=run)
 
@@ -49,7 +51,13 @@ def run(args: argparse.Namespace) -> int:
     growth = parse_number("--growth", args.growth, source, low=0.0)
     max_size = parse_number("--max-size", args.max_size, source, low=0.0)
     out = Path(args.output)  # mesh_shape checks its suffix and folder before any work
+    if args.plot:
+        from ..plot import check_plot_path
+        check_plot_path(args.plot)
     result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size, **opts)
+    if args.plot:
+        from ..plot import plot_mesh
+        plot_mesh(result, args.plot)
     if not args.quiet:
         for line in result.lines()[: len(result.lines()) - len(result.problems())]:
             print(line)
@@ -57,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"note: {note}")
         if out.suffix.lower() != ".geo":  # the .geo note already says what was written
             print(f"wrote {out}")
+        if args.plot:
+            print(f"wrote {args.plot}")
     for problem in result.problems():
         print(f"cadedge mesh: {source}: {problem}", file=sys.stderr)
     return 0 if result.ok else 1

@@ -122,7 +122,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("input", metavar="INPUT", help="STEP file (.step/.stp)")
     add_refine_options(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="output file")
-    p.add_argument("--plot", metavar="PNG", help="also draw the grids to this PNG")
+    p.add_argument("--plot", metavar="FILE", help="also draw the grids: .png (static) or .html (interactive "
+                                                  "3-D page, works offline)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.set_defaults(func=run)
 
