@@ -79,10 +79,16 @@ def test_mesh_figure_colours_triangles_by_face():
     pytest.importorskip("plotly")
     from cadedge.plot.html import mesh_figure
 
-    fig = mesh_figure(hand_mesh())
+    mesh = hand_mesh()
+    fig = mesh_figure(mesh)
     surface = fig.data[0]
-    assert surface.type == "mesh3d" and list(surface.i) == [0, 1] and list(surface.intensity) == [1.0, 2.0]
-    assert surface.intensitymode == "cell" and "face %{intensity}" in surface.hovertemplate
+    assert surface.type == "mesh3d" and "face %{customdata}" in surface.hovertemplate
+    xyz = np.column_stack([surface.x, surface.y, surface.z])
+    corners = np.column_stack([surface.i, surface.j, surface.k])
+    assert len(xyz) == 6  # nodes 1 and 2 are on both faces: once per face
+    assert np.array_equal(xyz[corners], mesh.nodes[mesh.triangles])
+    assert [set(np.asarray(surface.customdata)[c].tolist()) for c in corners] == [{1}, {2}]
+    assert len(set(np.asarray(surface.intensity)[corners[0]])) == 1  # one flat colour per face
     assert [t.name for t in fig.data[1:]] == ["edges", "edges", "vertices"]
     assert list(fig.layout.updatemenus[0].buttons[0].args[1]) == [1, 2]
 

@@ -112,3 +112,19 @@ def test_mesh_page_shows_faces_and_edges(browser, tmp_path):
     match = hover_labels(browser, xs, ys, re.compile(r"face (\d+)"))
     assert int(match[1]) in set(np.unique(result.triangle_faces).tolist())
     assert browser.errors == []
+
+
+def test_mesh_page_with_more_faces_than_plotly_has_shades(browser, tmp_path):
+    """plotly.js shades a mesh with at most 256 colours; 300 faces must still draw without an error."""
+    from cadedge.mesh import MeshResult
+
+    grid = cadedge.refine_shape(FIXTURES / "bracket.step", ald=1e-2)
+    u, v = np.meshgrid(np.linspace(0, 1, 31), np.linspace(0, 1, 11))
+    nodes = np.column_stack([60 * u.ravel() - 30, 20 * v.ravel() - 10, np.full(u.size, -6.0)])
+    quads = np.array([[r * 31 + c, r * 31 + c + 1, (r + 1) * 31 + c] for r in range(10) for c in range(30)])
+    result = MeshResult(source="strip", mode="nodes", grid=grid, nodes=nodes, triangles=quads,
+                        triangle_faces=np.arange(1, len(quads) + 1), failures=[], check=None)
+    page = tmp_path / "many.html"
+    plot_mesh(result, page)
+    xs, ys = coloured_pixels(open_page(browser, page))
+    assert len(xs) > 20000

@@ -129,32 +129,48 @@ def grid_html(grid: ShapeGrid, path: str | os.PathLike, *, color_by: str = "segm
     _write(fig, path)
 
 
-def _face_colorscale(n_faces: int) -> list[list[Any]]:
-    """A stepped colourscale: face id k (intensity k on [0.5, n + 0.5]) gets palette colour k - 1, cycled."""
+def _palette() -> list[str]:
     from plotly.colors import qualitative
 
-    palette = qualitative.Pastel + qualitative.Set3
-    scale = []
-    for k in range(n_faces):
-        colour = palette[k % len(palette)]
-        scale += [[k / n_faces, colour], [(k + 1) / n_faces, colour]]
-    return scale
+    return list(qualitative.Pastel + qualitative.Set3)
+
+
+def _stepped_colorscale(colours: list[str]) -> list[list[Any]]:
+    """Intensity k (on [-0.5, len - 0.5]) gets ``colours[k]``, unblended."""
+    n = len(colours)
+    return [stop for k, c in enumerate(colours) for stop in ([k / n, c], [(k + 1) / n, c])]
+
+
+def _split_by_face(nodes: np.ndarray, triangles: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Nodes repeated once per face that uses them, so every node belongs to one face: plotly's mesh
+    hover reports a node, and its ``customdata`` is then that face's id. Returns the new nodes, the
+    triangles on them and each new node's face id."""
+    n = max(len(nodes), 1)
+    keys = np.repeat(faces, 3) * n + triangles.ravel()
+    unique, inverse = np.unique(keys, return_inverse=True)
+    return nodes[unique % n], inverse.reshape(-1, 3), unique // n
 
 
 def mesh_figure(result: MeshResult, *, color_by: str = "segments", title: str | None = None) -> Any:
-    """The plotly ``Figure`` of the triangles of ``result`` (coloured by B-rep face) and its edge grids."""
+    """The plotly ``Figure`` of the triangles of ``result`` (coloured by B-rep face) and its edge grids.
+
+    Faces take the colours of a small palette in turn (plotly.js shades a mesh with at most 256
+    colours, so there cannot be one per face on a large model); hovering shows the face id.
+    """
     import plotly.graph_objects as go
 
     grid = result.grid
-    nodes = np.asarray(result.nodes, dtype=float).reshape(-1, 3)
     triangles = np.asarray(result.triangles, dtype=np.int64).reshape(-1, 3)
     faces = np.asarray(result.triangle_faces, dtype=np.int64)
-    n_faces = max(int(grid.faces), int(faces.max(initial=0)), 1)
+    nodes, corners, node_face = _split_by_face(np.asarray(result.nodes, dtype=float).reshape(-1, 3),
+                                               triangles, faces)
+    palette = _palette()
     surface = go.Mesh3d(
-        x=nodes[:, 0], y=nodes[:, 1], z=nodes[:, 2], i=triangles[:, 0], j=triangles[:, 1], k=triangles[:, 2],
-        intensity=faces.astype(float), intensitymode="cell", colorscale=_face_colorscale(n_faces),
-        cmin=0.5, cmax=n_faces + 0.5, showscale=False, flatshading=True, name="faces", showlegend=True,
-        hovertemplate="face %{intensity}<extra></extra>",
+        x=nodes[:, 0], y=nodes[:, 1], z=nodes[:, 2], i=corners[:, 0], j=corners[:, 1], k=corners[:, 2],
+        intensity=((node_face - 1) % len(palette)).astype(float), intensitymode="vertex",
+        colorscale=_stepped_colorscale(palette), cmin=-0.5, cmax=len(palette) - 0.5, showscale=False,
+        flatshading=True, name="faces", showlegend=True, customdata=node_face,
+        hovertemplate="face %{customdata}<extra></extra>",
         lighting=dict(ambient=0.7, diffuse=0.4, specular=0.05, roughness=1.0, fresnel=0.0,
                       facenormalsepsilon=0.0, vertexnormalsepsilon=0.0))  # small triangles keep their light
     title = title or (f"{result.source}: {len(triangles)} triangles on {len(np.unique(faces))} faces, "
