@@ -29,7 +29,8 @@ CONFIG = {"displaylogo": False, "responsive": True, "scrollZoom": True}
 
 def _edge_columns(grid: ShapeGrid) -> dict[str, np.ndarray]:
     """All non-degenerate polylines in one array, a NaN row after each edge (a gap in the line), with
-    per-point copies of their edge's id, curve, segments, length and ALD."""
+    per-point copies of their edge's id, curve, segments, length and ALD (rounded to what the hover
+    label shows, which keeps the page small)."""
     live = [e for e in grid.edges if not e.degenerate]
     if not live:
         return {"xyz": np.zeros((0, 3)), "custom": np.zeros((0, 5), dtype=object),
@@ -37,8 +38,8 @@ def _edge_columns(grid: ShapeGrid) -> dict[str, np.ndarray]:
     counts = np.array([len(e.points) + 1 for e in live])
     xyz = np.concatenate([np.vstack([np.asarray(e.points, dtype=float), np.full((1, 3), np.nan)]) for e in live])
     per_edge = {"id": [e.id for e in live], "curve": [e.curve for e in live],
-                "segments": [e.segments for e in live], "length": [float(e.length) for e in live],
-                "ald": [float(e.ald_estimate) for e in live]}
+                "segments": [e.segments for e in live], "length": [float(f"{e.length:.7g}") for e in live],
+                "ald": [float(f"{e.ald_estimate:.4g}") for e in live]}
     custom = np.empty((len(xyz), 5), dtype=object)
     for k, key in enumerate(("id", "curve", "segments", "length", "ald")):
         custom[:, k] = np.repeat(np.array(per_edge[key], dtype=object), counts)
@@ -47,9 +48,9 @@ def _edge_columns(grid: ShapeGrid) -> dict[str, np.ndarray]:
 
 
 def _edge_traces(grid: ShapeGrid, color_by: str) -> list[Any]:
-    """The polylines (a line trace), their grid points (a marker trace carrying the colour bar and the
-    legend entry of both: plotly.js cannot draw a legend swatch for a line coloured by an array) and
-    the B-rep vertices."""
+    """The polylines (a line trace with the hover labels), their grid points (a marker trace carrying
+    the colour bar and the legend entry of both: plotly.js cannot draw a legend swatch for a line
+    coloured by an array) and the B-rep vertices."""
     import plotly.graph_objects as go
 
     cols = _edge_columns(grid)
@@ -57,12 +58,12 @@ def _edge_traces(grid: ShapeGrid, color_by: str) -> list[Any]:
     values = cols[color_by]
     hover = ("edge %{customdata[0]} (%{customdata[1]})<br>segments %{customdata[2]}<br>"
              f"length %{{customdata[3]:.6~g}} {html.escape(grid.units)}<br>ALD %{{customdata[4]:.3~g}}<extra></extra>")
-    common = dict(x=x, y=y, z=z, customdata=cols["custom"], hovertemplate=hover, legendgroup=EDGE_TRACE)
-    lines = go.Scatter3d(mode="lines", showlegend=False, name=EDGE_TRACE,
-                         line=dict(color=values, colorscale=COLORSCALE, width=5), **common)
-    points = go.Scatter3d(mode="markers", name=EDGE_TRACE,
+    lines = go.Scatter3d(x=x, y=y, z=z, mode="lines", showlegend=False, name=EDGE_TRACE, legendgroup=EDGE_TRACE,
+                         customdata=cols["custom"], hovertemplate=hover,
+                         line=dict(color=values, colorscale=COLORSCALE, width=5))
+    points = go.Scatter3d(x=x, y=y, z=z, mode="markers", name=EDGE_TRACE, legendgroup=EDGE_TRACE, hoverinfo="skip",
                           marker=dict(size=2, color=values, colorscale=COLORSCALE, showscale=True,
-                                      colorbar=dict(title=dict(text=_label(color_by)))), **common)
+                                      colorbar=dict(title=dict(text=_label(color_by)))))
     vpoints = np.array([np.reshape(v.point, 3) for v in grid.vertices], dtype=float).reshape(-1, 3)
     vertices = go.Scatter3d(
         x=vpoints[:, 0], y=vpoints[:, 1], z=vpoints[:, 2], mode="markers", name="vertices",
