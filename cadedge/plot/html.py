@@ -2,8 +2,8 @@
 
 plotly.js is inlined (``include_plotlyjs=True``, about 4.7 MB), so the page needs no network at view
 time. The edges form a line trace (grid points as small dots) coloured by the number of segments
-or the estimated ALD of their edge, with buttons to switch; hovering a grid point shows its edge's
-id, curve type, segments, length and ALD. B-rep vertices are a marker trace; a mesh's triangles are
+or the estimated ALD of their edge, with buttons to switch; hovering an edge shows its id, curve
+type, segments, length and ALD. B-rep vertices are a marker trace; a mesh's triangles are
 one ``Mesh3d`` trace coloured by B-rep face, hovering shows the face id. The legend hides or shows
 each trace.
 """
@@ -47,13 +47,12 @@ def _edge_columns(grid: ShapeGrid) -> dict[str, np.ndarray]:
             "ald": np.repeat(np.array(per_edge["ald"]), counts)}
 
 
-def _edge_traces(grid: ShapeGrid, color_by: str) -> list[Any]:
+def _edge_traces(grid: ShapeGrid, cols: dict[str, np.ndarray], color_by: str) -> list[Any]:
     """The polylines (a line trace with the hover labels), their grid points (a marker trace carrying
     the colour bar and the legend entry of both: plotly.js cannot draw a legend swatch for a line
     coloured by an array) and the B-rep vertices."""
     import plotly.graph_objects as go
 
-    cols = _edge_columns(grid)
     x, y, z = cols["xyz"].T
     values = cols[color_by]
     hover = ("edge %{customdata[0]} (%{customdata[1]})<br>segments %{customdata[2]}<br>"
@@ -76,9 +75,8 @@ def _label(color_by: str) -> str:
     return "segments" if color_by == "segments" else "ALD"
 
 
-def _color_buttons(grid: ShapeGrid, first: int) -> list[dict[str, Any]]:
+def _color_buttons(cols: dict[str, np.ndarray], first: int) -> list[dict[str, Any]]:
     """Buttons that recolour the edge traces (``first`` and ``first + 1``) by segments or by ALD."""
-    cols = _edge_columns(grid)
     buttons = []
     for key in ("segments", "ald"):
         values = cols[key].tolist()
@@ -89,9 +87,10 @@ def _color_buttons(grid: ShapeGrid, first: int) -> list[dict[str, Any]]:
                  buttons=buttons, showactive=True)]
 
 
-def _layout(fig: Any, grid: ShapeGrid, title: str, first_edge_trace: int, color_by: str) -> None:
+def _layout(fig: Any, grid: ShapeGrid, cols: dict[str, np.ndarray], title: str, first_edge_trace: int,
+            color_by: str) -> None:
     unit = f" [{grid.units}]"
-    menus = _color_buttons(grid, first_edge_trace)
+    menus = _color_buttons(cols, first_edge_trace)
     menus[0]["active"] = 0 if color_by == "segments" else 1
     fig.update_layout(
         title=dict(text=html.escape(title), x=0.5, font=dict(size=14)), updatemenus=menus,
@@ -118,8 +117,9 @@ def grid_figure(grid: ShapeGrid, *, color_by: str = "segments", title: str | Non
 
     title = title or (f"{grid.source}: {len(grid.edges)} edges, {grid.segments} segments, "
                       f"ALD <= {grid.max_ald_estimate:.2g}")
-    fig = go.Figure(_edge_traces(grid, color_by))
-    _layout(fig, grid, title, 0, color_by)
+    cols = _edge_columns(grid)
+    fig = go.Figure(_edge_traces(grid, cols, color_by))
+    _layout(fig, grid, cols, title, 0, color_by)
     return fig
 
 
@@ -176,8 +176,9 @@ def mesh_figure(result: MeshResult, *, color_by: str = "segments", title: str | 
                       facenormalsepsilon=0.0, vertexnormalsepsilon=0.0))  # small triangles keep their light
     title = title or (f"{result.source}: {len(triangles)} triangles on {len(np.unique(faces))} faces, "
                       f"{grid.segments} edge segments")
-    fig = go.Figure([surface, *_edge_traces(grid, color_by)])
-    _layout(fig, grid, title, 1, color_by)
+    cols = _edge_columns(grid)
+    fig = go.Figure([surface, *_edge_traces(grid, cols, color_by)])
+    _layout(fig, grid, cols, title, 1, color_by)
     return fig
 
 
