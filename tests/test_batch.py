@@ -106,6 +106,7 @@ def test_run_batch_rejects_bad_options_before_any_work(tmp_path):
 
 # --- real cluster, real refine ---------------------------------------------------------------------
 
+@pytest.mark.corpus
 def test_real_refine_on_cluster_with_duplicate_stems(tmp_path, scheduler):
     inputs = copy_fixtures(tmp_path / "one") + copy_fixtures(tmp_path / "two", ["cylinder"])
     out = tmp_path / "out"
