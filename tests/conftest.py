@@ -1,7 +1,7 @@
 """Shared test paths: the committed fixtures and the third-party STEP corpus (never copied in).
 
-The corpus is found as ``scripts/corpus_path.py`` says: ``$CADEDGE_CORPUS``, else ``../shared/corpus``
-beside the repository. Tests that read it carry the ``corpus`` marker (parametrized ones take their
+The corpus is found as ``scripts/corpus_path.py`` says (``$CADEDGE_CORPUS``, else a default folder
+beside the repository). Tests that read it carry the ``corpus`` marker (parametrized ones take their
 files from :func:`corpus_params`); without the corpus they skip with one line saying why, so a fresh
 clone runs everything else. With ``CADEDGE_REQUIRE_CORPUS=1`` (CI) a missing corpus stops the run and a
 skipped corpus test fails.

@@ -1,5 +1,5 @@
 """cadedge.batch: inputs and names, the SQLite index, and run_batch on a real dask LocalCluster with
-the real refine task on real STEP files (fixtures/ and ../shared/corpus/), including a worker that
+the real refine task on real STEP files (fixtures/ and the third-party corpus), including a worker that
 dies mid-run, a hung task, and reruns that resume."""
 
 from __future__ import annotations
