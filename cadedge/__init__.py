@@ -1,6 +1,6 @@
 """cadedge: edge grids for CAD curves by arc-length-deficit optimisation.
 
-Public API (see ../shared/CONTRACT.md): :func:`refine_curve`, :func:`refine_shape`, :class:`EdgeGrid`,
+Public API (reference: docs/api.md): :func:`refine_curve`, :func:`refine_shape`, :class:`EdgeGrid`,
 :class:`ShapeGrid`, the curve adapters and the error hierarchy. OpenCASCADE is imported only when a
 shape is refined, so curve refinement works without it.
 """

@@ -45,7 +45,11 @@ def tricuspid() -> AnalyticCurve:
 
 
 def cochleoid() -> AnalyticCurve:
-    """Polar cochleoid r = sin(th)/th, th in (0, 2 pi], limit point (1, 0) at 0 (Fig. 8; see NOTES.md)."""
+    """Polar cochleoid r = sin(th)/th, th in (0, 2 pi], limit point (1, 0) at 0 (Fig. 8), length 2.9470.
+
+    The paper prints x = 2t + 3 sin 7t, y = t + 8 cos 3t, a garbled formula (length 22.37 on [0, 1], not
+    the table's 2.94); this is the curve that matches its tables (docs/paper.md).
+    """
     def fn(u):
         th = TWO_PI * u
         r = np.sinc(th / np.pi)  # sin(th)/th with the limit 1 at th = 0

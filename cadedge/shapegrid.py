@@ -1,7 +1,7 @@
 """Edge grids of a whole B-rep shape: plain data, no OCCT.
 
 Filled by :func:`cadedge.refine_shape` (the OCCT layer) and consumed by the exporters, the mesher and
-the CLI. Ids are 1-based in ``TopExp::MapShapes`` order (see ../shared/CONTRACT.md).
+the CLI. Ids are 1-based in ``TopExp::MapShapes`` order (docs/api.md).
 """
 
 from __future__ import annotations

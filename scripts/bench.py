@@ -3,7 +3,7 @@
     python scripts/bench.py [--eps 1e-2 1e-3 1e-4] [--quick] [--file PATH ...] [--no-gmsh] [--no-dp]
                             [--json OUT.json] [--from-json OUT.json] [--write]
 
-For every model (the STEP corpus in ``../shared/corpus/`` and ``fixtures/``; ``--quick`` a small subset)
+For every model (the STEP corpus, found as ``scripts/corpus_path.py`` says, and ``fixtures/``; ``--quick`` a small subset)
 and every ``eps``, in one process on the same loaded shape (STEP reading excluded everywhere):
 
 - **cadedge**: ``refine_shape(shape, ald=eps)`` timed with ``time.perf_counter`` (topology included).
@@ -43,6 +43,8 @@ import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint, GCPnts_TangentialDeflection
 
+from corpus_path import require_corpus, step_files
+
 from cadedge.atomic import atomic_path, atomic_write_bytes
 from cadedge.grid import polyline_length
 from cadedge.occt.edgecurve import EdgeCurve
@@ -52,7 +54,6 @@ from cadedge.occt.topology import Topology
 from cadedge.optimum import sampled_optimum
 
 ROOT = Path(__file__).resolve().parents[1]
-CORPUS = ROOT.parent / "shared" / "corpus"
 FIXTURES = ROOT / "fixtures"
 DOC = ROOT / "docs" / "performance.md"
 FIGURES = ROOT / "docs" / "figures"
@@ -65,7 +66,7 @@ LENGTH_TOL = 1e-12  # GCPnts_AbscissaPoint's default tolerance leaves lengths of
 
 
 def files(quick: bool) -> list[Path]:
-    out = sorted(p for p in CORPUS.glob("*") if p.suffix.lower() in (".step", ".stp"))
+    out = step_files(require_corpus())
     out += sorted(FIXTURES.glob("*.step"))
     return [p for p in out if p.name in QUICK] if quick else out
 

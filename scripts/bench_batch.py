@@ -3,7 +3,9 @@
 Each run starts its own LocalCluster (start-up included in the wall time) and writes into a fresh
 temporary folder, so nothing is skipped. Prints a Markdown table (paste into docs/batch.md).
 
-    python scripts/bench_batch.py [--corpus ../shared/corpus] [--ald 1e-3] [--workers 1 2] [--repeat 1]
+    python scripts/bench_batch.py [--corpus FOLDER] [--ald 1e-3] [--workers 1 2] [--repeat 1]
+
+``--corpus`` defaults to the third-party corpus found as ``scripts/corpus_path.py`` says.
 """
 
 from __future__ import annotations
@@ -14,9 +16,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from cadedge.batch import expand_inputs, run_batch
+from corpus_path import require_corpus
 
-ROOT = Path(__file__).resolve().parents[1]
+from cadedge.batch import expand_inputs, run_batch
 
 
 def bench(corpus: Path, ald: float, workers: int) -> dict:
@@ -31,11 +33,12 @@ def bench(corpus: Path, ald: float, workers: int) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--corpus", type=Path, default=ROOT.parent / "shared" / "corpus")
+    parser.add_argument("--corpus", type=Path, default=None, help="a folder of STEP files (default: the corpus)")
     parser.add_argument("--ald", type=float, default=1e-3)
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--repeat", type=int, default=1, help="runs per worker count; the best is kept")
     args = parser.parse_args()
+    args.corpus = args.corpus or require_corpus()
     n = len(expand_inputs([args.corpus]))
     print(f"corpus {args.corpus} ({n} files), ald {args.ald:g}, {platform.processor() or platform.machine()}, "
           f"python {platform.python_version()}")

@@ -9,7 +9,7 @@ Per model: triangles, minimum angle, seconds, watertight (cadedge's check on bot
 
 Prints a markdown table (the one in docs/mesh.md):
 
-    cd /work/main && /work/venv/bin/python scripts/bench_mesh.py --ald 1e-2 --timeout 300
+    python scripts/bench_mesh.py --ald 1e-2 --timeout 300
 
 gmsh alone runs in a child process with a time limit (a hang or crash costs one row).
 """
@@ -34,9 +34,13 @@ from cadedge.errors import CadedgeError  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
 from cadedge.mesh.check import check_triangles  # noqa: E402
 
-CORPUS = ROOT.parent / "shared" / "corpus"
-DEFAULT_MODELS = [ROOT / "fixtures" / f"{n}.step" for n in ("bracket", "cylinder", "sphere", "two_solids")] + \
-    sorted(p for p in CORPUS.glob("*") if p.suffix.lower() in (".step", ".stp"))
+from corpus_path import require_corpus, step_files  # noqa: E402
+
+
+def default_models() -> list[Path]:
+    """Four fixtures and every corpus file (the table in docs/mesh.md)."""
+    fixtures = [ROOT / "fixtures" / f"{n}.step" for n in ("bracket", "cylinder", "sphere", "two_solids")]
+    return fixtures + step_files(require_corpus())
 
 
 def gmsh_own(path: Path, ald: float, max_size: float) -> dict:
@@ -91,7 +95,7 @@ def _closed(check) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("models", nargs="*", type=Path, default=DEFAULT_MODELS)
+    parser.add_argument("models", nargs="*", type=Path, help="STEP files (default: four fixtures and the corpus)")
     parser.add_argument("--ald", type=float, default=1e-2)
     parser.add_argument("--timeout", type=float, default=300.0, help="seconds allowed to gmsh alone per model")
     parser.add_argument("--gmsh-only", action="store_true", help=argparse.SUPPRESS)
@@ -105,7 +109,7 @@ def main() -> int:
     print("| model | cadedge triangles | min angle | s | closed shells | check | gmsh triangles | min angle | s "
           "| closed shells |")
     print("|---|---:|---:|---:|---:|---|---:|---:|---:|---:|")
-    for path in args.models:
+    for path in args.models or default_models():
         t0 = time.perf_counter()
         try:
             r = mesh_shape(path, ald=args.ald)

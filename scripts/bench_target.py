@@ -99,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     table = markdown(rows)
     print(table)
     if args.write:
-        command = "cd /work/main && /work/venv/bin/python scripts/bench_target.py"
+        command = "python scripts/bench_target.py"
         if argv or sys.argv[1:]:
             command += " " + " ".join(a for a in (argv if argv is not None else sys.argv[1:]))
         write_doc(table, command)

@@ -17,20 +17,21 @@ from pathlib import Path
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint
 
+from corpus_path import require_corpus, step_files
+
 from cadedge.atomic import atomic_write_bytes
 from cadedge.errors import CadedgeError
 from cadedge.occt.shape import refine_shape
 from cadedge.occt.topology import Topology
 
 ROOT = Path(__file__).resolve().parents[1]
-CORPUS = ROOT.parent / "shared" / "corpus"
 FIXTURES = ROOT / "fixtures"
 #: Tolerance for OCCT's length integration; its default is off by a few 1e-6 on some B-splines.
 LENGTH_TOL = 1e-12
 
 
 def files() -> list[Path]:
-    corpus = sorted(p for p in CORPUS.glob("*") if p.suffix.lower() in (".step", ".stp"))
+    corpus = step_files(require_corpus())
     return corpus + sorted(FIXTURES.glob("*.step"))
 
 
@@ -82,7 +83,8 @@ def main(argv: list[str] | None = None) -> int:
         "B-rep vertex points; the worst edge of each file is shown. Degenerate edges are flagged and",
         "not refined. *Warnings* counts the reader's check messages and the loose-tolerance warning",
         "(edge tolerance large for the model size or the declared precision). The corpus files are",
-        "described in `../shared/corpus/SOURCES.tsv`; the fixtures are built by `scripts/build_fixtures.py`.",
+        "described in the corpus's `SOURCES.tsv` (found through `CADEDGE_CORPUS`, see `scripts/corpus_path.py`);",
+        "the fixtures are built by `scripts/build_fixtures.py`.",
         "",
         "Reproduce (from the repository root):",
         "",

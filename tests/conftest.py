@@ -1,23 +1,87 @@
-"""Shared test paths: the committed fixtures and the third-party STEP corpus (never copied in)."""
+"""Shared test paths: the committed fixtures and the third-party STEP corpus (never copied in).
+
+The corpus is found as ``scripts/corpus_path.py`` says (``$CADEDGE_CORPUS``, else a default folder
+beside the repository). Tests that read it carry the ``corpus`` marker (parametrized ones take their
+files from :func:`corpus_params`); without the corpus they skip with one line saying why, so a fresh
+clone runs everything else. With ``CADEDGE_REQUIRE_CORPUS=1`` (CI) a missing corpus stops the run and a
+skipped corpus test fails.
+"""
 
 from __future__ import annotations
 
+import importlib.util
+import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = ROOT / "fixtures"
-CORPUS = (ROOT.parent / "shared" / "corpus").resolve()
 FIXTURE_FILES = sorted(FIXTURES.glob("*.step"))
-CORPUS_FILES = sorted(p for p in CORPUS.glob("*") if p.suffix.lower() in (".step", ".stp"))
+
+
+def _load_corpus_path():
+    """scripts/corpus_path.py, importable as ``corpus_path`` (the scripts the tests load import it so)."""
+    if "corpus_path" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("corpus_path", ROOT / "scripts" / "corpus_path.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["corpus_path"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["corpus_path"]
+
+
+corpus_path = _load_corpus_path()
+#: The corpus folder, or None.
+CORPUS_DIR: Path | None = corpus_path.find_corpus()
+#: Where corpus files are named from; without a corpus the default path, which only ``corpus`` tests use.
+CORPUS: Path = CORPUS_DIR or corpus_path.DEFAULT
+CORPUS_FILES: list[Path] = corpus_path.step_files(CORPUS_DIR)
+NO_CORPUS = corpus_path.missing_reason()
 
 
 def corpus_sources() -> dict[str, dict[str, str]]:
-    """Rows of ``SOURCES.tsv`` (what each corpus file holds), keyed by file name."""
-    lines = (CORPUS / "SOURCES.tsv").read_text().splitlines()
-    header = lines[0].split("\t")
-    return {row[0]: dict(zip(header, row)) for row in (line.split("\t") for line in lines[1:] if line.strip())}
+    """Rows of ``SOURCES.tsv`` (what each corpus file holds), keyed by file name; empty without the corpus."""
+    return corpus_path.sources(CORPUS_DIR)
+
+
+def corpus_params(values=None) -> list:
+    """Parameters over corpus items (default: every corpus STEP file), each marked ``corpus``.
+
+    Without the corpus, one placeholder that skips, so the test reports the reason instead of vanishing.
+    """
+    if CORPUS_DIR is None:
+        return [pytest.param(None, id="corpus", marks=pytest.mark.corpus)]
+    values = CORPUS_FILES if values is None else values
+    return [pytest.param(v, id=getattr(v, "name", str(v)), marks=pytest.mark.corpus) for v in values]
+
+
+def pytest_configure(config):
+    if CORPUS_DIR is None and corpus_path.corpus_required():
+        raise pytest.UsageError(f"{corpus_path.REQUIRE_ENV} is set, but the {NO_CORPUS}")
+
+
+def pytest_report_header(config):
+    if CORPUS_DIR is None:
+        return f"cadedge corpus: none, corpus tests skip ({NO_CORPUS})"
+    return f"cadedge corpus: {CORPUS_DIR} ({len(CORPUS_FILES)} STEP files)"
+
+
+def pytest_collection_modifyitems(config, items):
+    if CORPUS_DIR is None:
+        skip = pytest.mark.skip(reason=NO_CORPUS)
+        for item in items:
+            if item.get_closest_marker("corpus"):
+                item.add_marker(skip)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    report = outcome.get_result()
+    if report.skipped and item.get_closest_marker("corpus") and corpus_path.corpus_required():
+        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else str(report.longrepr)
+        report.outcome = "failed"
+        report.longrepr = f"corpus test skipped although {corpus_path.REQUIRE_ENV} is set: {reason}"
 
 
 @pytest.fixture(scope="session")
@@ -27,6 +91,7 @@ def fixtures_dir() -> Path:
 
 @pytest.fixture(scope="session")
 def corpus_dir() -> Path:
-    if not CORPUS_FILES:
-        pytest.fail(f"no STEP files in the corpus folder {CORPUS}")
-    return CORPUS
+    """The corpus folder; skips (fails under ``CADEDGE_REQUIRE_CORPUS``) without it."""
+    if CORPUS_DIR is None:
+        pytest.skip(NO_CORPUS)
+    return CORPUS_DIR

@@ -1,5 +1,5 @@
 """cadedge.batch: inputs and names, the SQLite index, and run_batch on a real dask LocalCluster with
-the real refine task on real STEP files (fixtures/ and ../shared/corpus/), including a worker that
+the real refine task on real STEP files (fixtures/ and the third-party corpus), including a worker that
 dies mid-run, a hung task, and reruns that resume."""
 
 from __future__ import annotations
@@ -106,6 +106,7 @@ def test_run_batch_rejects_bad_options_before_any_work(tmp_path):
 
 # --- real cluster, real refine ---------------------------------------------------------------------
 
+@pytest.mark.corpus
 def test_real_refine_on_cluster_with_duplicate_stems(tmp_path, scheduler):
     inputs = copy_fixtures(tmp_path / "one") + copy_fixtures(tmp_path / "two", ["cylinder"])
     out = tmp_path / "out"

@@ -90,6 +90,7 @@ def _kill_busy_workers(address: str, stop: threading.Event, killed: list) -> Non
             time.sleep(0.02)
 
 
+@pytest.mark.corpus
 def test_existing_scheduler_workers_killed_mid_run_then_retry(tmp_path, capsys):
     small = [FIXTURES / "sphere.step", FIXTURES / "open_face.step"]
     out = tmp_path / "out"

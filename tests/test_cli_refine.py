@@ -85,6 +85,7 @@ def test_refine_plot(tmp_path, capsys):
     ("LLNL__axom_data__sliced_cylinder.step", "STEP load fail"),  # Rhino file with unquoted names
     ("live-clones__gmsh__mesh_T106_V3.step", "loose tolerance"),  # healed edge tolerance 0.73 mm
 ])
+@pytest.mark.corpus
 def test_refine_prints_model_warnings(tmp_path, capsys, name, expected):
     out = tmp_path / "s.json"
     assert main(["refine", str(CORPUS / name), "-o", str(out)]) == 0
@@ -94,6 +95,7 @@ def test_refine_prints_model_warnings(tmp_path, capsys, name, expected):
     validate(json.loads(out.read_text()))
 
 
+@pytest.mark.corpus
 def test_progress_bar_draws_for_many_edges():
     import cadedge
 
@@ -183,6 +185,7 @@ def test_debug_shows_traceback(tmp_path, capsys):
     assert not (tmp_path / "o.json").exists()
 
 
+@pytest.mark.corpus
 def test_info_lists_edges_and_counts(capsys):
     assert main(["info", str(CUBE_FILET)]) == 0
     out = capsys.readouterr().out
@@ -218,6 +221,7 @@ def test_info_bad_input(tmp_path, capsys, name):
     assert rc == 2 and len(lines) == 1 and name in lines[0] and lines[0].startswith("cadedge info: error: ")
 
 
+@pytest.mark.corpus
 def test_info_flags_seams_and_closed_edges(capsys):
     assert main(["info", str(CORPUS / "live-clones__gmsh__periodic_u_cst.step")]) == 0
     rows = [line.split() for line in capsys.readouterr().out.splitlines() if re.match(r"\s*\d+\s+[A-Z]", line)]

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,18 +14,15 @@ from OCP.BRepAdaptor import BRepAdaptor_Curve  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_Transform  # noqa: E402
 from OCP.Geom import Geom_BSplineCurve  # noqa: E402
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec  # noqa: E402
-from OCP.TColgp import TColgp_Array1OfPnt  # noqa: E402
-from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal  # noqa: E402
-from OCP.TopoDS import TopoDS  # noqa: E402
 
 from cadedge import refine_curve  # noqa: E402
+from cadedge.occt.compat import TColgp_Array1OfPnt, TopoDS, TColStd_Array1OfInteger, TColStd_Array1OfReal  # noqa: E402
 from cadedge.occt.edgecurve import EdgeCurve  # noqa: E402
 from cadedge.occt.fasteval import fast_evaluator  # noqa: E402
 from cadedge.occt.reader import load_shape  # noqa: E402
 from cadedge.occt.topology import Topology  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-CORPUS = ROOT.parent / "shared" / "corpus"
+from conftest import CORPUS  # noqa: E402
 
 
 def _occt(curve: EdgeCurve, u: np.ndarray) -> np.ndarray:
@@ -100,8 +96,10 @@ def test_unsupported_type_keeps_occt():
     edge = cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(1, 0, 0)).wrapped
     ad = BRepAdaptor_Curve(edge)
     assert fast_evaluator(ad, (0.0, 1.0)) is not None
-    if not CORPUS.is_dir():
-        pytest.skip("shared corpus not present")
+
+
+@pytest.mark.corpus
+def test_hyperbola_keeps_occt():
     hyper = [e for e in Topology(load_shape(CORPUS / "gumyr__build123d__M6-1x12-countersunk-screw.step").shape).edges
              if BRepAdaptor_Curve(e).GetType().name == "GeomAbs_Hyperbola"]
     assert hyper, "the screw has hyperbola edges"

@@ -195,6 +195,7 @@ def test_cadquery_shapes_with_poles_seams_and_apex():
 
 
 @pytest.mark.parametrize("name", ["live-clones__gmsh__Kurbelwelle.stp", "LLNL__axom_data__sliced_cylinder.step"])
+@pytest.mark.corpus
 def test_corpus_solids(name):
     path = CORPUS / name
     if not path.exists():

@@ -16,7 +16,7 @@ from OCP.TopoDS import TopoDS_Shape  # noqa: E402
 
 from cadedge.errors import InputError  # noqa: E402
 from cadedge.occt.reader import LoadedShape, load_shape  # noqa: E402
-from conftest import CORPUS, CORPUS_FILES, FIXTURE_FILES, FIXTURES  # noqa: E402
+from conftest import CORPUS, FIXTURE_FILES, FIXTURES, corpus_params  # noqa: E402
 
 EMPTY_STEP = """ISO-10303-21;
 HEADER;
@@ -33,11 +33,10 @@ END-ISO-10303-21;
 def _diag(shape: TopoDS_Shape) -> float:
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)
-    x0, y0, z0, x1, y1, z1 = box.Get()
-    return math.dist((x0, y0, z0), (x1, y1, z1))
+    return box.SquareExtent() ** 0.5
 
 
-@pytest.mark.parametrize("path", FIXTURE_FILES + CORPUS_FILES, ids=lambda p: p.name)
+@pytest.mark.parametrize("path", FIXTURE_FILES + corpus_params(), ids=lambda p: p.name)
 def test_every_file_loads_in_millimetres(path):
     loaded = load_shape(path)
     assert isinstance(loaded, LoadedShape)
@@ -54,6 +53,7 @@ def test_str_path_and_upper_case_suffixes(tmp_path):
         assert load_shape(str(tmp_path / name)).source == name
 
 
+@pytest.mark.corpus
 def test_metre_file_is_converted_to_millimetres():
     # wing_fuselage declares METRE; SOURCES.tsv gives its diagonal as 918.8 after OCCT's transfer to mm
     loaded = load_shape(CORPUS / "live-clones__gmsh__wing_fuselage.step")
@@ -61,6 +61,7 @@ def test_metre_file_is_converted_to_millimetres():
     assert _diag(loaded.shape) == pytest.approx(918.8, rel=1e-3)
 
 
+@pytest.mark.corpus
 def test_reader_check_messages_become_warnings():
     loaded = load_shape(CORPUS / "live-clones__gmsh__wing_fuselage.step")
     assert any("Poor result from projection vertex / curve 3d" in w for w in loaded.warnings)
@@ -69,6 +70,7 @@ def test_reader_check_messages_become_warnings():
 
 
 @pytest.mark.parametrize("name", ["live-clones__gmsh__mesh_T106_V3.step", "LLNL__axom_data__boxed_sphere.step"])
+@pytest.mark.corpus
 def test_loose_tolerance_is_a_warning_naming_edge_and_model_size(name):
     loaded = load_shape(CORPUS / name)
     loose = [w for w in loaded.warnings if w.startswith("loose tolerance")]
@@ -78,6 +80,7 @@ def test_loose_tolerance_is_a_warning_naming_edge_and_model_size(name):
 
 @pytest.mark.parametrize("name", ["live-clones__gmsh__Kurbelwelle.stp", "live-clones__gmsh__917_fusee.stp",
                                   "live-clones__gmsh__wing_fuselage.step"])
+@pytest.mark.corpus
 def test_tolerances_within_declared_precision_do_not_warn(name):
     assert not any(w.startswith("loose tolerance") for w in load_shape(CORPUS / name).warnings)
 
@@ -163,6 +166,7 @@ def test_build123d_part_and_raw_topods():
     _one_line_error(TopoDS_Shape(), "empty")
 
 
+@pytest.mark.corpus
 def test_units_follow_occts_cascade_unit_setting():
     from OCP.Interface import Interface_Static
 

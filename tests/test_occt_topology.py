@@ -17,13 +17,12 @@ from OCP.Geom2d import Geom2d_Line  # noqa: E402
 from OCP.gp import gp, gp_Ax3, gp_Dir2d, gp_Pnt2d  # noqa: E402
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED, TopAbs_VERTEX  # noqa: E402
 from OCP.TopExp import TopExp  # noqa: E402
-from OCP.TopoDS import TopoDS  # noqa: E402
-from OCP.TopTools import TopTools_IndexedMapOfShape  # noqa: E402
+from cadedge.occt.compat import TopoDS, TopTools_IndexedMapOfShape  # noqa: E402
 
 from cadedge.occt.edgecurve import EdgeCurve  # noqa: E402
 from cadedge.occt.reader import load_shape  # noqa: E402
 from cadedge.occt.topology import CURVE_TYPES, Topology  # noqa: E402
-from conftest import CORPUS, FIXTURES, corpus_sources  # noqa: E402
+from conftest import CORPUS, FIXTURES, corpus_params, corpus_sources  # noqa: E402
 
 SOURCES = corpus_sources()
 
@@ -38,7 +37,7 @@ def counts(t: Topology) -> dict:
                 closed=sum(t.is_closed(i) for i in range(n)))
 
 
-@pytest.mark.parametrize("name", sorted(SOURCES))
+@pytest.mark.parametrize("name", corpus_params(sorted(SOURCES)))
 def test_corpus_counts_match_sources_tsv(name):
     row = SOURCES[name]
     t = topo(name)

@@ -16,7 +16,7 @@ import cadedge  # noqa: E402
 from cadedge.errors import InputError  # noqa: E402
 from cadedge.occt.shape import refine_shape  # noqa: E402
 from cadedge.occt.topology import Topology  # noqa: E402
-from conftest import CORPUS, CORPUS_FILES, FIXTURE_FILES, FIXTURES  # noqa: E402
+from conftest import CORPUS, FIXTURE_FILES, FIXTURES, corpus_params  # noqa: E402
 
 LENGTH_TOL = 1e-12
 #: The two largest corpus files (486 and 723 edges) run at a coarser target to keep this file fast;
@@ -62,7 +62,7 @@ def check_grid(sg, topo: Topology, ald: float) -> None:
         assert v.spacing == (min(ends[v.id]) if v.id in ends else None)
 
 
-@pytest.mark.parametrize("path", FIXTURE_FILES + CORPUS_FILES, ids=lambda p: p.name)
+@pytest.mark.parametrize("path", FIXTURE_FILES + corpus_params(), ids=lambda p: p.name)
 def test_every_edge_meets_the_ald(path):
     ald = COARSE.get(path.name, 1e-3)
     sg = refine_shape(path, ald=ald)
@@ -89,6 +89,7 @@ def test_sphere_degenerate_edges_are_flagged_not_refined():
     assert seam.curve == "Circle" and seam.segments >= 2
 
 
+@pytest.mark.corpus
 def test_loose_tolerance_warning_reaches_the_shape_grid():
     sg = refine_shape(CORPUS / "live-clones__gmsh__mesh_T106_V3.step", ald=1e-2)
     assert any(w.startswith("loose tolerance") for w in sg.warnings)
@@ -168,8 +169,7 @@ def _s_edge(size: float, offset: tuple[float, float, float]):
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
     from OCP.Geom import Geom_BSplineCurve
     from OCP.gp import gp_Pnt
-    from OCP.TColgp import TColgp_Array1OfPnt
-    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+    from cadedge.occt.compat import TColgp_Array1OfPnt, TColStd_Array1OfInteger, TColStd_Array1OfReal
 
     shape = np.array([(0, 0, 0), (10, 20, 0), (30, -10, 0), (40, 15, 0), (60, 0, 0)], float) / 68.7
     poles = TColgp_Array1OfPnt(1, len(shape))

@@ -1,4 +1,4 @@
-"""JSON exporter: the ``cadedge.edgegrid/1`` document (see ../shared/CONTRACT.md).
+"""JSON exporter: the ``cadedge.edgegrid/1`` document (docs/api.md).
 
 Floats are written with Python's shortest round-trip ``repr``, so a vertex point shared bit-identically
 by several edges stays bit-identical after ``json.loads``. The JSON Schema ships as package data

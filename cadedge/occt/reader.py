@@ -26,13 +26,12 @@ from OCP.Message import Message
 from OCP.StepBasic import StepBasic_UncertaintyMeasureWithUnit
 from OCP.Standard import Standard_Failure
 from OCP.STEPControl import STEPControl_Reader
-from OCP.TColStd import TColStd_SequenceOfAsciiString
 from OCP.TopAbs import TopAbs_EDGE
 from OCP.TopExp import TopExp
-from OCP.TopoDS import TopoDS, TopoDS_Compound, TopoDS_Shape
-from OCP.TopTools import TopTools_IndexedMapOfShape
+from OCP.TopoDS import TopoDS_Compound, TopoDS_Shape
 
 from ..errors import GeometryError, InputError
+from .compat import TColStd_SequenceOfAsciiString, TopoDS, TopTools_IndexedMapOfShape
 
 STEP_SUFFIXES = (".step", ".stp")
 #: Millimetres per unit for the length unit names STEP files declare (lower-cased).
@@ -201,8 +200,7 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
     BRepBndLib.Add_s(shape, box, False)
     if box.IsVoid():
         return []
-    x0, y0, z0, x1, y1, z1 = box.Get()
-    diag = ((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2) ** 0.5
+    diag = box.SquareExtent() ** 0.5  # not box.Get(): OCP 8.0 cannot return its Limits struct
     too_big_for_model = diag > 0 and worst > TOL_REL_MODEL * diag
     too_big_for_file = declared is not None and worst > TOL_REL_DECLARED * declared and worst > 1e-5 * diag
     if not (too_big_for_model or too_big_for_file):

@@ -1,0 +1,44 @@
+"""The OCP names that differ between the OCP 7.9 and 8.0 lines, under their 7.9 names.
+
+OCP 8.0 (OpenCASCADE 8.0: build123d 0.13) no longer binds OCCT's typedef'd collection classes
+(``TopTools_IndexedMapOfShape``, ``TColStd_Array1OfReal``, ...); the same template instances are in
+``OCP.collections`` under their template names. OCP 7.9 (cadquery 2.8, build123d 0.12) has only the
+typedef names. OCP 8.0 also binds ``TopoDS`` (the down-casts) as a namespace whose functions lose the
+``_s`` of static methods: ``TopoDS.Edge`` where 7.9 has ``TopoDS.Edge_s``; :data:`TopoDS` here answers
+to the 7.9 spelling on both lines. Every other OCP class and method cadedge uses is the same on both.
+"""
+
+from __future__ import annotations
+
+try:  # OCP 8.0
+    from OCP.collections import Array1_double as TColStd_Array1OfReal
+    from OCP.collections import Array1_gp_Pnt as TColgp_Array1OfPnt
+    from OCP.collections import Array1_int as TColStd_Array1OfInteger
+    from OCP.collections import \
+        IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as \
+        TopTools_IndexedDataMapOfShapeListOfShape
+    from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape
+    from OCP.collections import List_TopoDS_Shape as TopTools_ListOfShape
+    from OCP.collections import Sequence_TCollection_AsciiString as TColStd_SequenceOfAsciiString
+except ImportError:  # OCP 7.9
+    from OCP.TColgp import TColgp_Array1OfPnt
+    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_SequenceOfAsciiString
+    from OCP.TopTools import (TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape,
+                              TopTools_ListOfShape)
+
+from OCP import TopoDS as _topods_module
+
+
+class _TopoDSNamespace:
+    """``TopoDS.Edge_s(shape)`` and the other down-casts on OCP 8.0, where they are ``TopoDS.Edge(shape)``."""
+
+    def __getattr__(self, name: str):
+        if name.endswith("_s"):
+            return getattr(_topods_module.TopoDS, name[:-2])
+        raise AttributeError(name)
+
+
+TopoDS = _topods_module.TopoDS if hasattr(_topods_module.TopoDS, "Edge_s") else _TopoDSNamespace()
+
+__all__ = ["TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
+           "TColgp_Array1OfPnt", "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
