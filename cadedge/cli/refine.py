@@ -60,6 +60,23 @@ def refine_options(args: argparse.Namespace, source: str) -> dict[str, float | N
     return opts
 
 
+def local_alds(args: argparse.Namespace, source: str) -> dict[tuple[str, int], float]:
+    """``--ald-edge ID=EPS`` and ``--ald-face ID=EPS`` as :func:`cadedge.refine_shape`'s ``ald_for``
+    (an id named twice keeps its finest EPS); InputError naming ``source`` for a malformed one."""
+    out: dict[tuple[str, int], float] = {}
+    for kind, flag, items in (("edge", "--ald-edge", args.ald_edge), ("face", "--ald-face", args.ald_face)):
+        for text in items:
+            ident, sep, eps = text.partition("=")
+            ident = ident.strip()
+            if not (sep and ident.isascii() and ident.isdigit() and int(ident) >= 1):
+                raise InputError(f"{source}: {flag} expects ID=EPS, ID a positive {kind} id (as listed by "
+                                 f"cadedge info), got {text!r}")
+            value = parse_number(f"{flag} {ident}", eps.strip(), source, low=0.0, high=1.0)
+            key = (kind, int(ident))
+            out[key] = min(out.get(key, value), value)
+    return out
+
+
 def check_output(path: str) -> str:
     """The exporter suffix of ``path``; InputError if unsupported or its folder is missing."""
     from ..exporters import suffix_of
@@ -122,6 +139,10 @@ def register(subparsers: Any) -> None:
     p.add_argument("input", metavar="INPUT", help="STEP file (.step/.stp)")
     add_refine_options(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="output file")
+    p.add_argument("--ald-edge", action="append", default=[], metavar="ID=EPS",
+                   help="own target for edge ID (ids as in cadedge info); repeatable; the finest target wins")
+    p.add_argument("--ald-face", action="append", default=[], metavar="ID=EPS",
+                   help="own target for every edge of face ID; repeatable; the finest target wins")
     p.add_argument("--plot", metavar="PNG", help="also draw the grids to this PNG")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     p.set_defaults(func=run)
@@ -133,6 +154,7 @@ def run(args: argparse.Namespace) -> int:
 
     source = os.path.basename(args.input) or args.input
     opts = refine_options(args, source)
+    local = local_alds(args, source)
     check_output(args.output)
     if args.plot:
         from ..plot import check_plot_path
@@ -141,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
-            grid = cadedge.refine_shape(args.input, **opts, progress=progress)
+            grid = cadedge.refine_shape(args.input, **opts, ald_for=local or None, progress=progress)
     finally:
         progress.close()
     for w in caught:  # pass on what is not ours (library deprecations etc.) untouched
