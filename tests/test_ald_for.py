@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -139,8 +140,9 @@ def test_build123d_edge_and_face_keys_finest_wins(bd_part):
     assert targets[hole_id - 1] == 1e-6 and 1e-5 in targets and 1e-4 in targets
     check_targets(grid, targets)
     # the same settings by TopoDS shape (one reversed: orientation does not matter) and by id
+    fillet_id = face_id(grid.shape, fillet_face.wrapped)
     same = cadedge.refine_shape(bd_part, ald=1e-3, ald_for={top.wrapped: 1e-4, hole.wrapped.Reversed(): 1e-6,
-                                                             ("face", face_id(grid.shape, fillet_face.wrapped)): 1e-5})
+                                                             ("face", fillet_id): 1e-5})
     by_id = cadedge.refine_shape(bd_part, ald=1e-3, ald_for={("edge", hole_id): 1e-6,
                                                               **{("face", f): v for f, v in faces.items()}})
     for a, b, c in zip(grid.edges, same.edges, by_id.edges):
@@ -254,6 +256,24 @@ def test_face_ids_on_a_shape_without_faces():
         cadedge.refine_shape(FIXTURES / "helix_wire.step", ald_for={("face", 1): 1e-4})
 
 
+def test_readme_local_targets_example_runs(tmp_path, monkeypatch, capsys):
+    """The README's "Local targets" block, run after the cadquery example it continues."""
+    pytest.importorskip("cadquery")
+    from test_readme_examples import README, examples
+
+    code = re.search(r"```python\n(# local targets\n.*?)```", README.read_text(encoding="utf-8"), re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    namespace = {"__name__": "__main__"}
+    exec(compile(examples()["cadquery"], "README.md:cadquery", "exec"), namespace)
+    exec(compile(code, "README.md:local targets", "exec"), namespace)
+    fine, plate = namespace["fine"], namespace["plate"]
+    fid = face_id(fine.shape, plate.faces(">Z").val().wrapped)
+    assert fine.options["ald_for"] == [{"kind": "edge", "id": 1, "ald": 1e-4},
+                                       {"kind": "face", "id": fid, "ald": 1e-5}]
+    check_targets(fine, expected_targets(Topology(fine.shape), 1e-3, {1: 1e-4}, {fid: 1e-5}))
+    assert str(fine.options["ald_for"]) in capsys.readouterr().out
+
+
 def test_cli_ald_edge_and_face(tmp_path, capsys):
     out = tmp_path / "b.json"
     argv = ["refine", str(BRACKET), "--ald", "1e-3", "--ald-edge", "9=1e-4", "--ald-face", "3=1e-6",
@@ -262,7 +282,8 @@ def test_cli_ald_edge_and_face(tmp_path, capsys):
     assert capsys.readouterr().err == ""
     doc = json.loads(out.read_text())
     validate(doc)
-    assert doc["options"]["ald_for"] == [{"kind": "edge", "id": 5, "ald": 1e-5}, {"kind": "edge", "id": 9, "ald": 1e-5},
+    assert doc["options"]["ald_for"] == [{"kind": "edge", "id": 5, "ald": 1e-5},
+                                         {"kind": "edge", "id": 9, "ald": 1e-5},
                                          {"kind": "face", "id": 3, "ald": 1e-6}]
     api = cadedge.refine_shape(BRACKET, ald=1e-3, ald_for={("edge", 5): 1e-5, ("edge", 9): 1e-5, ("face", 3): 1e-6})
     for e, a in zip(doc["edges"], api.edges):
