@@ -298,9 +298,9 @@ def test_cli_ald_edge_and_face(tmp_path, capsys):
     (["--ald-edge", "0=1e-4"], "--ald-edge expects ID=EPS"),
     (["--ald-edge=-2=1e-4"], "--ald-edge expects ID=EPS"),
     (["--ald-edge", "٣=1e-4"], "--ald-edge expects ID=EPS"),  # a non-ASCII digit
-    (["--ald-edge", "3=2"], "--ald-edge 3 must be greater than 0 and less than 1, got '2'"),
-    (["--ald-face", "3=abc"], "--ald-face 3 must be a number, got 'abc'"),
-    (["--ald-face", "3="], "--ald-face 3 must be a number, got ''"),
+    (["--ald-edge", "3=2"], "--ald-edge 3: ald must be positive and below 1, got '2'"),
+    (["--ald-face", "3=abc"], "--ald-face 3: ald must be a number, got 'abc'"),
+    (["--ald-face", "3="], "--ald-face 3: ald must be a number, got ''"),
     (["--ald-edge", "37=1e-4"], "local ald for edge 37: no such edge (the shape has edges 1 to 36)"),
     (["--ald-face", "15=1e-4"], "local ald for face 15: no such face (the shape has faces 1 to 14)"),
 ])

@@ -62,7 +62,10 @@ def refine_options(args: argparse.Namespace, source: str) -> dict[str, float | N
 
 def local_alds(args: argparse.Namespace, source: str) -> dict[tuple[str, int], float]:
     """``--ald-edge ID=EPS`` and ``--ald-face ID=EPS`` as :func:`cadedge.refine_shape`'s ``ald_for``
-    (an id named twice keeps its finest EPS); InputError naming ``source`` for a malformed one."""
+    (an id named twice keeps its finest EPS); InputError naming ``source`` for a malformed one. EPS is
+    checked by the library's own check of ``ald``, so the bounds are the API's."""
+    from ..options import refine_options as check_ald
+
     out: dict[tuple[str, int], float] = {}
     for kind, flag, items in (("edge", "--ald-edge", args.ald_edge), ("face", "--ald-face", args.ald_face)):
         for text in items:
@@ -71,7 +74,10 @@ def local_alds(args: argparse.Namespace, source: str) -> dict[tuple[str, int], f
             if not (sep and ident.isascii() and ident.isdigit() and int(ident) >= 1):
                 raise InputError(f"{source}: {flag} expects ID=EPS, ID a positive {kind} id (as listed by "
                                  f"cadedge info), got {text!r}")
-            value = parse_number(f"{flag} {ident}", eps.strip(), source, low=0.0, high=1.0)
+            try:
+                value = check_ald(eps)["ald"]
+            except InputError as exc:
+                raise InputError(f"{source}: {flag} {ident}: {exc}") from None
             key = (kind, int(ident))
             out[key] = min(out.get(key, value), value)
     return out
