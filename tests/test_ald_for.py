@@ -249,6 +249,12 @@ def test_shape_keys_not_in_the_shape(plate, bd_part):
         cadedge.refine_shape(bd_part, ald_for={bd_part.solids()[0]: 1e-4})
     with pytest.raises(InputError, match=r"<cadquery Workplane>: the selection holds no edges or faces"):
         cadedge.refine_shape(plate, ald_for={cq.Workplane("XY"): 1e-4})
+    with pytest.raises(InputError, match=r"<build123d Wire>: expected an edge or a face, got a wire"):
+        cadedge.refine_shape(bd_part, ald_for={bd_part.wires()[0]: 1e-4})
+    with pytest.raises(InputError, match=r"<builtins object>: expected an edge or a face"):
+        cadedge.refine_shape(bd_part, ald_for={object(): 1e-4})
+    with pytest.raises(InputError, match=r"ald_for key <cadquery Workplane>: ald must be positive and below 1"):
+        cadedge.refine_shape(plate, ald_for={plate.faces(">Z"): 2})
 
 
 def test_face_ids_on_a_shape_without_faces():

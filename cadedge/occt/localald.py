@@ -49,7 +49,9 @@ class LocalAld:
 
 
 def _label(obj: Any) -> str:
-    """A short name of a key object for messages, e.g. ``<build123d Edge>``."""
+    """A short name of a key for messages: ``('edge', 3)`` as written, a shape as ``<build123d Edge>``."""
+    if isinstance(obj, (tuple, str, numbers.Number)):
+        return repr(obj)
     if isinstance(obj, TopoDS_Shape):
         return f"<{type(obj).__name__}>"
     return f"<{type(obj).__module__.split('.')[0]} {type(obj).__name__}>"
@@ -98,7 +100,7 @@ def _settings(key: Any, eps: float) -> list[LocalAld]:
     shape = _wrapped(key)
     if shape is not None:
         return [_shape_setting(shape, eps, _label(key))]
-    raise InputError(f"ald_for key {key!r}: expected an edge or a face (build123d, cadquery or TopoDS) "
+    raise InputError(f"ald_for key {_label(key)}: expected an edge or a face (build123d, cadquery or TopoDS) "
                      "or an id ('edge', N) / ('face', N)")
 
 
@@ -114,8 +116,7 @@ def check_ald_for(ald_for: Mapping[Any, Any] | None) -> list[LocalAld]:
         try:
             eps = refine_options(value)["ald"]
         except InputError as exc:
-            label = f"{key!r}" if isinstance(key, (tuple, numbers.Integral)) else _label(key)
-            raise InputError(f"ald_for key {label}: {exc}") from None
+            raise InputError(f"ald_for key {_label(key)}: {exc}") from None
         out.extend(_settings(key, eps))
     return out
 
