@@ -22,6 +22,8 @@ def check_plot_path(path: str | os.PathLike) -> None:
     p = Path(path)
     if p.suffix.lower() != ".png":
         raise InputError(f"{os.fspath(path)}: unsupported plot suffix {p.suffix or '(none)'!r}; supported: .png")
+    if p.is_dir():
+        raise InputError(f"{os.fspath(path)}: is a folder; give a file name")
     if not (p.parent if str(p.parent) else Path(".")).is_dir():
         raise InputError(f"{os.fspath(path)}: folder {os.fspath(p.parent)!r} does not exist")
 

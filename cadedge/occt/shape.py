@@ -29,6 +29,9 @@ from .topology import Topology, curve_type_name
 from .vertexgrowth import grade_vertices
 
 Progress = Callable[[int, int], None]
+#: Most segments in the grids of one model (about 100 MB of points and parameters, far more as JSON):
+#: a target that needs more is refused with a clear error instead of exhausting memory.
+MAX_MODEL_SEGMENTS = 5_000_000
 
 
 def _point(vertex) -> np.ndarray:
@@ -87,7 +90,7 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
                  max_length: float | None = None, max_growth: float | None = None,
                  ald_for: Mapping[Any, float] | None = None,
-                 progress: Progress | None = None) -> ShapeGrid:
+                 progress: Progress | None = None, allow_partial: bool = False) -> ShapeGrid:
     """Refine every edge of ``source`` (STEP path, cadquery/build123d shape or ``TopoDS_Shape``).
 
     Edges and vertices are listed in ``TopExp::MapShapes`` order, degenerate edges included and
@@ -103,7 +106,7 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     opts = refine_options(ald, min_length, max_length, max_growth)  # before the (possibly slow) read
     local = check_ald_for(ald_for)
     t0 = time.perf_counter()
-    loaded = load_shape(source)
+    loaded = load_shape(source, allow_partial=allow_partial)
     try:
         topo = Topology(loaded.shape)
     except GeometryError as exc:
@@ -115,11 +118,16 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     vpoints = [_point(v) for v in topo.vertices]
     edges: list[ShapeEdgeGrid] = []
     total = len(topo.edges)
+    segments = 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CadedgeWarning)  # collected per edge in notes instead
         for i in range(total):
             edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
             edges.append(_refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes))
+            segments += len(edges[-1].params) - 1
+            if segments > MAX_MODEL_SEGMENTS:
+                raise InputError(f"{loaded.source}: the grids would exceed {MAX_MODEL_SEGMENTS:,} segments "
+                                 f"(reached after {i + 1} of {total} edges); use a larger ald")
             if progress is not None:
                 progress(i + 1, total)
     if opts["max_growth"] is not None:
