@@ -216,6 +216,7 @@ def test_json_records_the_settings_and_validates(tmp_path, plate):
     ({"edge 3": 1e-4}, "ald_for key 'edge 3': expected an edge or a face"),
     ({("edge", 1): 0}, "ald_for key ('edge', 1): ald must be positive and below 1, got 0"),
     ({("edge", 1): 1.0}, "ald_for key ('edge', 1): ald must be positive"),
+    ({("edge", 1): 1e-12}, "ald_for key ('edge', 1): ald 1e-12 is below 1e-9, the smallest target"),
     ({("edge", 1): -1e-3}, "ald must be positive"),
     ({("edge", 1): math.nan}, "ald must be positive"),
     ({("edge", 1): "fine"}, "ald_for key ('edge', 1): ald must be a number, got 'fine'"),
@@ -306,6 +307,7 @@ def test_cli_ald_edge_and_face(tmp_path, capsys):
     (["--ald-edge", "٣=1e-4"], "--ald-edge expects ID=EPS"),  # a non-ASCII digit
     (["--ald-edge", "3=2"], "--ald-edge 3: ald must be positive and below 1, got '2'"),
     (["--ald-face", "3=abc"], "--ald-face 3: ald must be a number, got 'abc'"),
+    (["--ald-edge", "3=1e-12"], "--ald-edge 3: ald '1e-12' is below 1e-9, the smallest target"),
     (["--ald-face", "3="], "--ald-face 3: ald must be a number, got ''"),
     (["--ald-edge", "37=1e-4"], "local ald for edge 37: no such edge (the shape has edges 1 to 36)"),
     (["--ald-face", "15=1e-4"], "local ald for face 15: no such face (the shape has faces 1 to 14)"),
