@@ -142,7 +142,9 @@ class Completeness:
 
     ``faces``/``solids``: (transferred, defined) where the file's entities say how many there are
     (``None`` when the format does not tell); ``roots``: (transferred, present); ``unresolved``:
-    references to entities the file does not hold (a cut or corrupted file).
+    references to entities the file does not hold (a cut or corrupted file). Any of these makes the
+    transfer partial: an unresolved reference may have lost no face yet still the file's length unit,
+    its context or part of a curve.
     """
 
     faces: tuple[int, int] | None
@@ -155,7 +157,7 @@ class Completeness:
     def partial(self) -> bool:
         """Something the file defines did not reach the shape."""
         pairs = [p for p in (self.faces, self.solids, self.roots) if p is not None]
-        return any(got < expected for got, expected in pairs)
+        return self.unresolved > 0 or self.truncated or any(got < expected for got, expected in pairs)
 
     def lost(self) -> str:
         """What was lost, e.g. "3 of 82 faces (2 of 12 solids) failed to load"."""
@@ -166,13 +168,17 @@ class Completeness:
             text = _of("faces", *faces) + (f" ({_of('solids', *solids)})" if solids else "")
         elif solids:
             text = _of("solids", *solids)
+        elif roots:
+            text = _of("shape roots", *roots)
         else:
-            text = _of("shape roots", *roots) if roots else "nothing"
-        text += " failed to load"
+            text = ""
+        if text:
+            text += " failed to load"
         if (faces or solids) and roots:
             text += f", {_of('shape roots', *roots)} failed to transfer"
         if self.unresolved:
-            text += f" ({self.unresolved} references to entities missing from the file)"
+            refs = f"{self.unresolved} reference{'s' * (self.unresolved != 1)} to entities missing from the file"
+            text = f"{text} ({refs})" if text else f"no face or solid measurably lost, but {refs}"
         if self.truncated:
             text += "; the file is cut short (its last entity is incomplete)"
         return text
@@ -197,6 +203,11 @@ DAMAGE_MARKS = ("Unresolved Reference", "Undefined Parsing", "Incorrect syntax")
 def cut_short(load: Counter[str]) -> bool:
     """Whether the parser met the end of the DATA section inside an entity (a file cut and re-closed)."""
     return any("unexpected ENDSEC" in msg for msg in load)
+
+
+def unresolved_references(load: Counter[str]) -> int:
+    """How many references the load check found pointing at entities the file does not define."""
+    return sum(n for msg, n in load.items() if msg.startswith("fail: Unresolved Reference"))
 
 
 def damaged(load: Counter[str]) -> bool:
