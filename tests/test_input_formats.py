@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -157,3 +158,17 @@ def test_bad_brep_files_say_which_problem(tmp_path, capfd):
         assert expected[name] in _error(tmp_path / name)
     out, err = capfd.readouterr()
     assert out == "" and err == ""  # OCCT never got to print its own complaints
+
+
+def test_an_iges_face_pointing_at_nothing_is_a_partial_transfer(tmp_path):
+    lines = write_iges(FIXTURES / "bracket.step", tmp_path / "good.igs").read_bytes().split(b"\n")
+    i = next(k for k, line in enumerate(lines) if line.startswith(b"510,"))  # the first face entity
+    data, sequence = lines[i][:64], lines[i][64:]
+    lines[i] = re.sub(rb"^510,\d+,", b"510,9999,", data.rstrip()).ljust(64) + sequence  # its surface: none
+    bad = tmp_path / "bad.igs"
+    bad.write_bytes(b"\n".join(lines))
+    msg = _error(bad)
+    assert "partial transfer refused" in msg and "1 entity skipped by the transfer" in msg
+    loaded = load_shape(bad, allow_partial=True)
+    assert loaded.warnings[0].startswith("partial transfer: ")
+    assert any("face D5 transfer failed" in w for w in loaded.warnings)

@@ -21,7 +21,7 @@ from OCP.Standard import Standard_Failure
 
 from ..errors import GeometryError, InputError
 from .loading import (Completeness, LoadedShape, Transferred, accept, check_counts, check_messages, damaged,
-                      sniff_path, transferred, unresolved_references)
+                      skipped_entities, sniff_path, transferred, unresolved_references)
 
 SUFFIXES = (".igs", ".iges")
 FACE_TYPES = (510, 144, 143)
@@ -97,10 +97,11 @@ def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferre
         except Standard_Failure as exc:
             raise GeometryError(f"{given}: OCCT failed to transfer the IGES file: {exc}") from exc
         warnings = check_messages(load, "IGES load")
-        warnings += check_messages(check_counts(reader.WS().TransferReader().LastCheckList()), "IGES transfer")
+        transfer = check_counts(reader.WS().TransferReader().LastCheckList())
+        warnings += check_messages(transfer, "IGES transfer")
     got_faces, got_solids = transferred(shape)
     done = Completeness(faces=(got_faces, faces), solids=(got_solids, solids), roots=(done_roots, roots),
-                        unresolved=unresolved_references(load))
+                        unresolved=unresolved_references(load), skipped=skipped_entities(transfer))
     cascade = Interface_Static.CVal_s("xstep.cascade.unit").strip().upper()
     return Transferred(shape=shape, done=done, units=_CASCADE_UNITS.get(cascade, cascade.lower() or "mm"),
                        warnings=warnings)

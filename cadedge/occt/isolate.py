@@ -67,7 +67,7 @@ def isolated(kind: str, path: Path, given: str, *, cut: bool = False) -> Transfe
         done = doc["done"]
         completeness = Completeness(faces=_pair(done["faces"]), solids=_pair(done["solids"]),
                                     roots=_pair(done["roots"]), unresolved=done["unresolved"],
-                                    truncated=done["truncated"])
+                                    truncated=done["truncated"], skipped=done["skipped"])
         return Transferred(shape=shape, done=completeness, units=doc["units"], warnings=doc["warnings"],
                            declared=doc["declared"])
 

@@ -142,9 +142,10 @@ class Completeness:
 
     ``faces``/``solids``: (transferred, defined) where the file's entities say how many there are
     (``None`` when the format does not tell); ``roots``: (transferred, present); ``unresolved``:
-    references to entities the file does not hold (a cut or corrupted file). Any of these makes the
-    transfer partial: an unresolved reference may have lost no face yet still the file's length unit,
-    its context or part of a curve.
+    references to entities the file does not hold (a cut or corrupted file); ``skipped``: entities the
+    transfer check says failed or were skipped. Any of these makes the transfer partial: an unresolved
+    reference may have lost no face yet still the file's length unit, its context or part of a curve,
+    and a skipped face may be hidden in the counts by an orphaned surface transferred in its place.
     """
 
     faces: tuple[int, int] | None
@@ -152,12 +153,14 @@ class Completeness:
     roots: tuple[int, int]
     unresolved: int = 0
     truncated: bool = False
+    skipped: int = 0
 
     @property
     def partial(self) -> bool:
         """Something the file defines did not reach the shape."""
         pairs = [p for p in (self.faces, self.solids, self.roots) if p is not None]
-        return self.unresolved > 0 or self.truncated or any(got < expected for got, expected in pairs)
+        return self.unresolved > 0 or self.truncated or self.skipped > 0 or any(
+            got < expected for got, expected in pairs)
 
     def lost(self) -> str:
         """What was lost, e.g. "3 of 82 faces (2 of 12 solids) failed to load"."""
@@ -176,9 +179,14 @@ class Completeness:
             text += " failed to load"
         if (faces or solids) and roots:
             text += f", {_of('shape roots', *roots)} failed to transfer"
+        notes = []
         if self.unresolved:
-            refs = f"{self.unresolved} reference{'s' * (self.unresolved != 1)} to entities missing from the file"
-            text = f"{text} ({refs})" if text else f"no face or solid measurably lost, but {refs}"
+            notes.append(f"{self.unresolved} reference{'s' * (self.unresolved != 1)} to entities missing from "
+                         "the file")
+        if self.skipped:
+            notes.append(f"{self.skipped} entit{'ies' if self.skipped != 1 else 'y'} skipped by the transfer")
+        if notes:
+            text = f"{text} ({', '.join(notes)})" if text else f"no face or solid measurably lost, but {' and '.join(notes)}"
         if self.truncated:
             text += "; the file is cut short (its last entity is incomplete)"
         return text
@@ -208,6 +216,12 @@ def cut_short(load: Counter[str]) -> bool:
 def unresolved_references(load: Counter[str]) -> int:
     """How many references the load check found pointing at entities the file does not define."""
     return sum(n for msg, n in load.items() if msg.startswith("fail: Unresolved Reference"))
+
+
+def skipped_entities(transfer: Counter[str]) -> int:
+    """How many transfer-check fails say an entity failed to transfer or was skipped."""
+    return sum(n for msg, n in transfer.items()
+               if msg.startswith("fail: ") and ("skipped" in msg.lower() or "transfer failed" in msg.lower()))
 
 
 def damaged(load: Counter[str]) -> bool:

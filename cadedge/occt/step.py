@@ -23,7 +23,8 @@ from OCP.TColStd import TColStd_SequenceOfAsciiString
 
 from ..errors import GeometryError, InputError
 from .loading import (MM_PER_UNIT, UNIT_NAMES, Completeness, LoadedShape, Transferred, accept, check_counts,
-                      check_messages, cut_short, damaged, sniff_path, unresolved_references, transferred)
+                      check_messages, cut_short, damaged, skipped_entities, sniff_path, transferred,
+                      unresolved_references)
 
 SUFFIXES = (".step", ".stp")
 _READ_STATUS = {"RetVoid": "nothing to read", "RetError": "cannot open or unknown format",
@@ -129,11 +130,12 @@ def transfer_step(path: Path, given: str, *, isolate: bool = True) -> Transferre
         except Standard_Failure as exc:
             raise GeometryError(f"{given}: OCCT failed to transfer the STEP file: {exc}") from exc
         warnings = check_messages(load, "STEP load")
-        warnings += check_messages(check_counts(reader.WS().TransferReader().LastCheckList()), "STEP transfer")
+        transfer = check_counts(reader.WS().TransferReader().LastCheckList())
+        warnings += check_messages(transfer, "STEP transfer")
     got_faces, got_solids = transferred(shape)
     done = Completeness(faces=(got_faces, faces + unresolved), solids=(got_solids, solids),
                         roots=(done_roots, roots), unresolved=max(unresolved, unresolved_references(load)),
-                        truncated=cut_short(load))
+                        truncated=cut_short(load), skipped=skipped_entities(transfer))
     units = UNIT_NAMES.get(reader.SystemLengthUnit(), f"{reader.SystemLengthUnit():g} mm")
     mm_per_unit = _file_unit_mm(reader)
     declared_mm = declared * mm_per_unit if declared is not None and mm_per_unit is not None else None
