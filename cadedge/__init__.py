@@ -7,6 +7,7 @@ shape is refined, so curve refinement works without it.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any, Callable
 
 from .curves import Curve, Evaluator, FunctionCurve, SampledCurve
@@ -21,14 +22,20 @@ __version__ = "0.1.0"
 
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
                  max_length: float | None = None, max_growth: float | None = None,
-                 progress: Callable[[int, int], None] | None = None) -> ShapeGrid:
+                 ald_for: Mapping[Any, float] | None = None,
+                 progress: Callable[[int, int], None] | None = None, allow_partial: bool = False) -> ShapeGrid:
     """Refine every edge of a STEP file, cadquery/build123d shape or ``TopoDS_Shape`` (see the contract).
 
-    ``progress(done, total)``, if given, is called after each edge (the CLI's progress bar).
+    ``ald_for`` gives edges or faces their own target: keys are build123d/cadquery edges or faces,
+    ``TopoDS`` shapes, or ids ``("edge", n)``/``("face", n)``; a face means its edges; the finest
+    target reaching an edge wins. ``progress(done, total)``, if given, is called after each edge (the
+    CLI's progress bar). ``source`` may also be an IGES (.igs/.iges) or OCCT BREP (.brep) path. A file
+    that OCCT transfers only in part raises :class:`InputError` unless ``allow_partial``, which refines
+    what did transfer and says what was lost in ``ShapeGrid.warnings``.
     """
     from .occt.shape import refine_shape as _refine_shape
     return _refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth,
-                         progress=progress)
+                         ald_for=ald_for, progress=progress, allow_partial=allow_partial)
 
 
 __all__ = ["refine_curve", "refine_shape", "EdgeGrid", "ShapeGrid", "ShapeEdgeGrid", "VertexGrid", "Curve",

@@ -25,6 +25,21 @@ class Curve(Protocol):
         ...
 
 
+def _is_complex(raw: Any) -> bool:
+    if isinstance(raw, (np.ndarray, np.generic)):
+        return bool(np.iscomplexobj(raw))
+    if isinstance(raw, (list, tuple)):
+        return any(_is_complex(x) for x in raw)
+    return isinstance(raw, complex)
+
+
+def _reject_complex(raw: Any, u: np.ndarray) -> None:
+    """CurveEvaluationError if a curve answered with complex numbers (their imaginary part would be lost)."""
+    if _is_complex(raw):
+        ui = float(u[0]) if len(u) else None
+        raise CurveEvaluationError(f"curve returned complex values at u={ui!r}; points must be real", ui)
+
+
 def _as_points(raw: Any, n: int) -> np.ndarray | None:
     """Interpret a callable's return value for ``n`` parameters as an (n, d) array, or ``None``."""
     try:
@@ -44,7 +59,9 @@ class FunctionCurve:
     Detection calls the function once with the first batch of two or more parameters. An answer of
     shape (n, d) or (d, n), d = 2 or 3, means vectorised (one scalar call settles the square case
     n == d); anything else, including an exception, means scalar, and the function is then called once
-    per parameter. Every point asked of the function is counted in ``calls``.
+    per parameter. ``calls`` counts the points the function gave (a vectorised call of k parameters
+    counts k) and one for a probe that gave none, so for a scalar function it is its number of calls.
+    Complex answers raise :class:`CurveEvaluationError` (the imaginary part would be lost).
     """
 
     def __init__(self, fn: Callable[..., Any], domain: tuple[float, float] | None = None):
@@ -61,10 +78,16 @@ class FunctionCurve:
         for i, ui in enumerate(u):
             self.calls += 1
             try:
-                p = np.asarray(self.fn(float(ui)), dtype=float).ravel()
+                raw = self.fn(float(ui))
             except Exception as exc:  # the black box failed: name the parameter
                 raise CurveEvaluationError(
                     f"curve raised {type(exc).__name__}: {exc} at u={float(ui)!r}", float(ui)) from exc
+            _reject_complex(raw, u[i:i + 1])
+            try:
+                p = np.asarray(raw, dtype=float).ravel()
+            except (TypeError, ValueError) as exc:
+                raise CurveEvaluationError(
+                    f"curve returned {raw!r}, not numbers, at u={float(ui)!r}", float(ui)) from exc
             if p.shape not in ((2,), (3,)):
                 raise CurveEvaluationError(
                     f"curve returned a point of shape {p.shape} at u={float(ui)!r}; "
@@ -75,10 +98,14 @@ class FunctionCurve:
 
     def _detect(self, u: np.ndarray) -> np.ndarray:
         n = len(u)
-        self.calls += n
         try:
-            arr = np.asarray(self.fn(u), dtype=float)
+            raw = self.fn(u)
         except Exception:
+            raw = None
+        _reject_complex(raw, u)
+        try:
+            arr = np.asarray(raw, dtype=float) if raw is not None else np.empty(0)
+        except (TypeError, ValueError):
             arr = np.empty(0)
         rows = arr.ndim == 2 and arr.shape[0] == n and arr.shape[1] in (2, 3)
         cols = arr.ndim == 2 and arr.shape[1] == n and arr.shape[0] in (2, 3)
@@ -87,8 +114,10 @@ class FunctionCurve:
             rows = bool(np.allclose(arr[0], first, equal_nan=True))
             cols = not rows
         if rows or cols:
+            self.calls += n
             self.layout = "rows" if rows else "cols"
             return arr if rows else arr.T
+        self.calls += 1  # the probe was one call of the function, which gave no points
         self.layout = "scalar"
         return self._scalar(u)
 
@@ -99,14 +128,20 @@ class FunctionCurve:
             return self._scalar(u)
         if self.layout is None:
             return self._detect(u)
-        self.calls += len(u)
         try:
-            arr = np.asarray(self.fn(u), dtype=float)
+            raw = self.fn(u)
+        except Exception:
+            raw = None
+        _reject_complex(raw, u)
+        try:
+            arr = np.asarray(raw, dtype=float) if raw is not None else None
+        except (TypeError, ValueError):
+            arr = None
+        if arr is not None and arr.ndim == 2:
             arr = arr if self.layout == "rows" else arr.T
             if arr.shape[0] == len(u):
+                self.calls += len(u)
                 return arr
-        except Exception:
-            pass
         return self._scalar(u)  # find and name the parameter that fails
 
     def __repr__(self) -> str:
@@ -173,7 +208,9 @@ class Evaluator:
     def __call__(self, u: np.ndarray) -> np.ndarray:
         u = np.asarray(u, dtype=float).ravel()
         self._asked += len(u)
-        pts = np.asarray(self.curve.evaluate(u), dtype=float)
+        raw = self.curve.evaluate(u)
+        _reject_complex(raw, u)
+        pts = np.asarray(raw, dtype=float)
         if pts.ndim != 2 or pts.shape[0] != len(u) or pts.shape[1] not in (2, 3):
             raise CurveEvaluationError(f"curve returned shape {pts.shape} for {len(u)} parameters")
         if not np.isfinite(pts).all():

@@ -55,8 +55,8 @@ def test_expand_files_folders_globs_dedupe(tmp_path):
 
 
 @pytest.mark.parametrize("item, reason", [("missing.step", "no such file or folder"),
-                                          ("empty", "folder holds no .step/.stp files"),
-                                          ("*.nothing", "pattern matches no .step/.stp files")])
+                                          ("empty", "folder holds no .step/.stp/.igs/.iges/.brep files"),
+                                          ("*.nothing", "pattern matches no .step/.stp/.igs/.iges/.brep files")])
 def test_expand_bad_inputs_name_the_item(tmp_path, item, reason):
     (tmp_path / "empty").mkdir()
     with pytest.raises(InputError, match=reason) as info:

@@ -31,7 +31,7 @@ def one_line(text: str) -> str:
 
 @pytest.mark.parametrize("args, words", [
     (["nope.step"], ["nope.step", "no such file or folder"]),
-    (["EMPTY"], ["EMPTY", "folder holds no .step/.stp files"]),
+    (["EMPTY"], ["EMPTY", "folder holds no .step/.stp/.igs/.iges/.brep files"]),
     (["*.nothing"], ["*.nothing", "pattern matches no"]),
     ([str(FIXTURES / "sphere.step"), "--ald", "0"], ["--ald", "greater than 0"]),
     ([str(FIXTURES / "sphere.step"), "--workers", "0"], ["workers", "at least 1"]),

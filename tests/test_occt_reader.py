@@ -128,7 +128,10 @@ def test_empty_step_and_empty_file(tmp_path):
 def test_wrong_suffix_and_wrong_object(tmp_path):
     other = tmp_path / "part.iges"
     shutil.copy(FIXTURES / "cylinder.step", other)
-    _one_line_error(other, "part.iges", "unsupported file type")
+    _one_line_error(other, "part.iges", "not an IGES file", "STEP")
+    other = tmp_path / "part.obj"
+    shutil.copy(FIXTURES / "cylinder.step", other)
+    _one_line_error(other, "part.obj", "unsupported file type", ".igs")
     _one_line_error(tmp_path, tmp_path.name, "not a file")
     _one_line_error(42, "int")
 

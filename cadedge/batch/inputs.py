@@ -1,6 +1,7 @@
-"""Batch inputs: expand files, folders and globs into STEP files, and give each a unique output name.
+"""Batch inputs: expand files, folders and globs into model files, and give each a unique output name.
 
-Folders are searched recursively for ``.step``/``.stp`` (any case); globs may use ``**``. Inputs are
+Folders are searched recursively for ``.step``/``.stp``/``.igs``/``.iges``/``.brep`` (any case); globs
+may use ``**``. Inputs are
 deduplicated by resolved path, keeping the first occurrence's order. Output names are the file's stem
 plus ``.json``; when two inputs share a stem (in this batch, or with a different input already in the
 index), the colliding ones get ``<stem>-<8 hex digits of sha1(resolved path)>.json``, so a name is
@@ -18,12 +19,14 @@ from typing import Iterable, Mapping
 
 from ..errors import InputError
 
-STEP_SUFFIXES = (".step", ".stp")
+#: The model files a folder or glob expands to (STEP, IGES, OCCT BREP).
+INPUT_SUFFIXES = (".step", ".stp", ".igs", ".iges", ".brep")
+_KINDS = "/".join(INPUT_SUFFIXES)
 _GLOB_CHARS = frozenset("*?[")
 
 
 def _is_step(path: Path) -> bool:
-    return path.suffix.lower() in STEP_SUFFIXES
+    return path.suffix.lower() in INPUT_SUFFIXES
 
 
 def _step_files_under(folder: Path) -> list[Path]:
@@ -35,7 +38,7 @@ def _expand_one(item: str) -> list[Path]:
     if path.is_dir():
         found = _step_files_under(path)
         if not found:
-            raise InputError(f"{item}: folder holds no .step/.stp files")
+            raise InputError(f"{item}: folder holds no {_KINDS} files")
         return found
     if path.is_file():
         return [path]
@@ -48,13 +51,13 @@ def _expand_one(item: str) -> list[Path]:
             elif m.is_file() and _is_step(m):
                 found.append(m)
         if not found:
-            raise InputError(f"{item}: pattern matches no .step/.stp files")
+            raise InputError(f"{item}: pattern matches no {_KINDS} files")
         return found
     raise InputError(f"{item}: no such file or folder")
 
 
 def expand_inputs(items: Iterable[str | os.PathLike]) -> list[Path]:
-    """Resolved STEP paths named by ``items`` (files, folders, globs), deduplicated, in order.
+    """Resolved model paths named by ``items`` (files, folders, globs), deduplicated, in order.
 
     Raises :class:`InputError` naming the first item that is missing or matches nothing, and when
     there are no items at all. A file named explicitly is taken whatever its suffix.

@@ -40,12 +40,14 @@ def _result(row: IndexRow) -> FileResult:
 def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *, ald: float = 1e-3,
               min_length: float | None = None, max_length: float | None = None,
               max_growth: float | None = None, workers: int | None = None, scheduler: str | None = None,
-              timeout: float = DEFAULT_TIMEOUT, retry_failed: bool = False,
+              timeout: float = DEFAULT_TIMEOUT, retry_failed: bool = False, allow_partial: bool = False,
               progress: Callable[[BatchProgress], None] | None = None,
               task: Task | None = None) -> BatchReport:
-    """Refine many STEP files on dask.distributed into ``outdir/<name>.json``, resumably.
+    """Refine many STEP, IGES or BREP files on dask.distributed into ``outdir/<name>.json``, resumably.
 
-    ``inputs``: files, folders (searched recursively for .step/.stp) or globs. Without ``scheduler``
+    ``inputs``: files, folders (searched recursively for .step/.stp/.igs/.iges/.brep) or globs. A file
+    that OCCT transfers only in part is recorded failed unless ``allow_partial`` (then it is refined
+    with a warning saying what was lost). Without ``scheduler``
     a LocalCluster of ``workers`` processes (default: one per core) is started and closed; with it,
     the scheduler at that address is used (its workers must import cadedge and see ``outdir``).
     Each outcome is recorded in ``outdir/index.sqlite`` as it arrives. An input already ok there
@@ -59,6 +61,8 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
     """
     options: dict[str, Any] = _check_options(ald, min_length, max_length, max_growth, workers, scheduler,
                                              timeout)
+    if allow_partial:  # only when given, so the options recorded by earlier runs stay the same
+        options["allow_partial"] = True
     t0 = time.perf_counter()
     paths = expand_inputs(inputs)
     out = Path(outdir)

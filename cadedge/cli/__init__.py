@@ -23,10 +23,28 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = argparse.ArgumentParser(prog="cadedge", description="Edge grids for CAD models by arc-length deficit.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    parser.add_argument("--version", action="version", version=f"cadedge {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name in SUBCOMMANDS:
         importlib.import_module(f"{__name__}.{name}").register(sub)
     return parser
+
+
+def _version() -> str:
+    from .. import __version__
+    return __version__
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was raised while handling, a KeyboardInterrupt (Ctrl-C inside compiled
+    numba code surfaces as a SystemError whose context is the KeyboardInterrupt)."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -44,6 +62,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"cadedge {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        print(f"cadedge {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except SystemError as exc:
+        if not _interrupted(exc):
+            raise
+        if args.debug:
+            traceback.print_exc()
         print(f"cadedge {args.command}: interrupted", file=sys.stderr)
         return 130
 

@@ -55,10 +55,10 @@ class BatchBar:
 
 def register(subparsers: Any) -> None:
     p = subparsers.add_parser("batch", help="edge grids of many STEP files on dask",
-                              description="Refine every STEP file named (files, folders searched recursively "
-                                          "for .step/.stp, globs) into OUTDIR/<name>.json, recording each "
+                              description="Refine every model file named (files, folders searched recursively "
+                                          "for .step/.stp/.igs/.iges/.brep, globs) into OUTDIR/<name>.json, recording each "
                                           "outcome in OUTDIR/index.sqlite; a rerun skips finished inputs.")
-    p.add_argument("inputs", nargs="+", metavar="INPUT", help="STEP file, folder or glob")
+    p.add_argument("inputs", nargs="+", metavar="INPUT", help="STEP, IGES or BREP file, folder or glob")
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="output folder (created if missing)")
     add_refine_options(p)
     where = p.add_mutually_exclusive_group()
@@ -80,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
     bar = BatchBar(out=sys.stdout, err=sys.stderr)
     try:
         report = run_batch(args.inputs, args.output, **opts, workers=args.workers, scheduler=args.scheduler,
-                           timeout=args.timeout, retry_failed=args.retry_failed, progress=bar)
+                           timeout=args.timeout, retry_failed=args.retry_failed, allow_partial=args.allow_partial,
+                           progress=bar)
     finally:
         bar.close()
     total = len(report.results) + len(report.skipped) + len(report.skipped_failed)

@@ -8,7 +8,6 @@ tolerance and OCCT's length. Ids are those of ``cadedge refine``'s output.
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
 from ._table import format_table
@@ -23,19 +22,23 @@ def _ids(ids: Any) -> str:
 
 
 def register(subparsers: Any) -> None:
-    p = subparsers.add_parser("info", help="list the edges of a STEP file",
+    p = subparsers.add_parser("info", help="list the edges of a STEP, IGES or BREP file",
                               description="List the edges of INPUT (ids as in cadedge refine's output) "
                                           "with their curve type, flags, faces, tolerance and length.")
-    p.add_argument("input", metavar="INPUT", help="STEP file (.step/.stp)")
+    p.add_argument("input", metavar="INPUT", help="STEP (.step/.stp), IGES (.igs/.iges) or OCCT BREP (.brep) file")
+    p.add_argument("--allow-partial", action="store_true",
+                   help="list what a partial transfer did load (with a warning saying what was lost) instead "
+                        "of refusing the file")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..occt.describe import describe_shape
 
-    d = describe_shape(args.input)
-    for message in d.warnings:
-        print(f"cadedge info: warning: {message}", file=sys.stderr)
+    from .refine import print_warnings
+
+    d = describe_shape(args.input, allow_partial=args.allow_partial)
+    print_warnings("info", d.warnings)
     types = ", ".join(f"{name} {n}" for name, n in sorted(d.curve_types.items(), key=lambda kv: (-kv[1], kv[0])))
     print(f"source: {d.source}")
     print(f"units: {d.units}")

@@ -8,12 +8,13 @@ and the check passed, 1 otherwise (one line on stderr per problem), 2 on bad inp
 from __future__ import annotations
 
 import argparse
-import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
-from .refine import parse_number, add_refine_options, refine_options
+from ..errors import CadedgeWarning, InputError
+from .refine import add_refine_options, check_writable, parse_number, print_warnings, refine_options
 
 
 def register(subparsers: Any) -> None:
@@ -26,7 +27,7 @@ def register(subparsers: Any) -> None:
                     "OUT: .msh .stl .vtk, or .geo for the spacing export (with a .brep beside it).",
         epilog=f"For meshing, --max-growth defaults to {MESH_MAX_GROWTH} (graded edge grids avoid slivers "
                "next to finely split edges). Exit 0 ok, 1 some face failed or the check failed, 2 bad input.")
-    p.add_argument("input", metavar="INPUT", help="STEP file (.step/.stp)")
+    p.add_argument("input", metavar="INPUT", help="STEP (.step/.stp), IGES (.igs/.iges) or OCCT BREP (.brep) file")
     add_refine_options(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="output mesh (.msh .stl .vtk) or .geo")
     p.add_argument("--mode", choices=MODES, default="nodes",
@@ -42,19 +43,29 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..mesh import MESH_MAX_GROWTH, mesh_shape
+    import cadedge
+    from ..mesh import MESH_MAX_GROWTH, MESH_SUFFIXES, mesh_shape
 
-    source = os.path.basename(args.input) or args.input
+    source = args.input
     opts = refine_options(args, source)
     if opts["max_growth"] is None:
         opts["max_growth"] = MESH_MAX_GROWTH
     growth = parse_number("--growth", args.growth, source, low=0.0)
     max_size = parse_number("--max-size", args.max_size, source, low=0.0)
-    out = Path(args.output)  # mesh_shape checks its suffix and folder before any work
+    out = Path(args.output)  # checked before any work: the grids are made here, outside mesh_shape
+    if out.suffix.lower() not in MESH_SUFFIXES + (".geo",):
+        raise InputError(f"{out}: unsupported mesh output suffix {out.suffix!r} (use {', '.join(MESH_SUFFIXES)} "
+                         "or .geo)")
+    check_writable(args.output)
     if args.plot:
         from ..plot import check_plot_path
         check_plot_path(args.plot)
-    result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size, **opts)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", CadedgeWarning)
+        grid = cadedge.refine_shape(args.input, **opts, allow_partial=args.allow_partial)
+    print_warnings("mesh", [*grid.warnings, *(str(w.message) for w in caught
+                                              if issubclass(w.category, CadedgeWarning))])
+    result = mesh_shape(grid, output=out, mode=args.mode, growth=growth, max_size=max_size, **opts)
     if args.plot:
         from ..plot import plot_mesh
         plot_mesh(result, args.plot)

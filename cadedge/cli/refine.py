@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from ..errors import CadedgeWarning, InputError
+from ..options import MIN_ALD, MIN_ALD_TEXT
 from ..shapegrid import ShapeGrid
 from ._table import format_table
 
@@ -27,10 +28,14 @@ MAX_WARNINGS = 20
 def add_refine_options(parser: argparse.ArgumentParser) -> None:
     """The refinement options shared by the subcommands that refine (values checked by :func:`refine_options`)."""
     parser.add_argument("--ald", default="1e-3", metavar="EPS",
-                        help="target arc-length deficit per edge, 0 < EPS < 1 (default 1e-3)")
+                        help=f"target arc-length deficit per edge, {MIN_ALD_TEXT} <= EPS < 1 (smaller targets are "
+                             "below what double precision resolves; default 1e-3)")
     parser.add_argument("--min-length", metavar="L", help="shortest segment allowed (model units)")
     parser.add_argument("--max-length", metavar="L", help="longest segment allowed (model units)")
     parser.add_argument("--max-growth", metavar="G", help="largest ratio of adjacent segment lengths, > 1")
+    parser.add_argument("--allow-partial", action="store_true",
+                        help="refine what a partial transfer did load (with a warning saying what was lost) "
+                             "instead of refusing the file")
 
 
 def parse_number(name: str, text: str | None, source: str, *, low: float, high: float = math.inf,
@@ -55,9 +60,35 @@ def refine_options(args: argparse.Namespace, source: str) -> dict[str, float | N
             "min_length": parse_number("--min-length", args.min_length, source, low=0.0),
             "max_length": parse_number("--max-length", args.max_length, source, low=0.0),
             "max_growth": parse_number("--max-growth", args.max_growth, source, low=1.0)}
+    if opts["ald"] < MIN_ALD:
+        raise InputError(f"{source}: --ald {args.ald} is below {MIN_ALD_TEXT}, the smallest target double "
+                         "precision can resolve")
     if opts["min_length"] is not None and opts["max_length"] is not None and opts["min_length"] > opts["max_length"]:
         raise InputError(f"{source}: --min-length {args.min_length} exceeds --max-length {args.max_length}")
     return opts
+
+
+def local_alds(args: argparse.Namespace, source: str) -> dict[tuple[str, int], float]:
+    """``--ald-edge ID=EPS`` and ``--ald-face ID=EPS`` as :func:`cadedge.refine_shape`'s ``ald_for``
+    (an id named twice keeps its finest EPS); InputError naming ``source`` for a malformed one. EPS is
+    checked by the library's own check of ``ald``, so the bounds are the API's."""
+    from ..options import refine_options as check_ald
+
+    out: dict[tuple[str, int], float] = {}
+    for kind, flag, items in (("edge", "--ald-edge", args.ald_edge), ("face", "--ald-face", args.ald_face)):
+        for text in items:
+            ident, sep, eps = text.partition("=")
+            ident = ident.strip()
+            if not (sep and ident.isascii() and ident.isdigit() and int(ident) >= 1):
+                raise InputError(f"{source}: {flag} expects ID=EPS, ID a positive {kind} id (as listed by "
+                                 f"cadedge info), got {text!r}")
+            try:
+                value = check_ald(eps)["ald"]
+            except InputError as exc:
+                raise InputError(f"{source}: {flag} {ident}: {exc}") from None
+            key = (kind, int(ident))
+            out[key] = min(out.get(key, value), value)
+    return out
 
 
 def check_output(path: str) -> str:
@@ -65,10 +96,28 @@ def check_output(path: str) -> str:
     from ..exporters import suffix_of
 
     suffix = suffix_of(path)
+    check_writable(path)
+    return suffix
+
+
+def check_writable(path: str) -> None:
+    """InputError, before any work, if ``path`` is an existing folder or its folder is missing."""
+    if Path(path).is_dir():
+        raise InputError(f"{path}: is a folder; give a file name")
     folder = Path(path).parent
     if str(folder) and not folder.is_dir():
         raise InputError(f"{path}: folder {os.fspath(folder)!r} does not exist")
-    return suffix
+
+
+def print_warnings(command: str, messages: list[str], *, stream: IO[str] | None = None) -> None:
+    """Each distinct message as ``cadedge COMMAND: warning: ...``, at most ``MAX_WARNINGS``, then a count."""
+    stream = sys.stderr if stream is None else stream
+    messages = list(dict.fromkeys(messages))
+    for message in messages[:MAX_WARNINGS]:
+        print(f"cadedge {command}: warning: {message}", file=stream)
+    if len(messages) > MAX_WARNINGS:
+        print(f"cadedge {command}: warning: ... and {len(messages) - MAX_WARNINGS} more warnings (the Python "
+              "API returns them all, e.g. ShapeGrid.warnings)", file=stream)
 
 
 class Progress:
@@ -119,9 +168,13 @@ def register(subparsers: Any) -> None:
                               description="Refine every edge of INPUT to the arc-length deficit EPS and write "
                                           "the grids; the format comes from OUT's suffix "
                                           "(.json .csv .vtp .vtu .vtk .msh .geo .obj .ply).")
-    p.add_argument("input", metavar="INPUT", help="STEP file (.step/.stp)")
+    p.add_argument("input", metavar="INPUT", help="STEP (.step/.stp), IGES (.igs/.iges) or OCCT BREP (.brep) file")
     add_refine_options(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="output file")
+    p.add_argument("--ald-edge", action="append", default=[], metavar="ID=EPS",
+                   help="own target for edge ID (ids as in cadedge info); repeatable; the finest target wins")
+    p.add_argument("--ald-face", action="append", default=[], metavar="ID=EPS",
+                   help="own target for every edge of face ID; repeatable; the finest target wins")
     p.add_argument("--plot", metavar="FILE", help="also draw the grids: .png (static) or .html (interactive "
                                                   "3-D page, works offline)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
@@ -132,8 +185,9 @@ def run(args: argparse.Namespace) -> int:
     import cadedge
     from ..exporters import write
 
-    source = os.path.basename(args.input) or args.input
+    source = args.input
     opts = refine_options(args, source)
+    local = local_alds(args, source)
     check_output(args.output)
     if args.plot:
         from ..plot import check_plot_path
@@ -142,19 +196,15 @@ def run(args: argparse.Namespace) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
-            grid = cadedge.refine_shape(args.input, **opts, progress=progress)
+            grid = cadedge.refine_shape(args.input, **opts, ald_for=local or None, progress=progress,
+                                        allow_partial=args.allow_partial)
     finally:
         progress.close()
     for w in caught:  # pass on what is not ours (library deprecations etc.) untouched
         if not issubclass(w.category, CadedgeWarning):
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     ours = [str(w.message) for w in caught if issubclass(w.category, CadedgeWarning)]
-    messages = list(dict.fromkeys([*grid.warnings, *ours]))
-    for message in messages[:MAX_WARNINGS]:
-        print(f"cadedge refine: warning: {message}", file=sys.stderr)
-    if len(messages) > MAX_WARNINGS:
-        print(f"cadedge refine: warning: ... and {len(messages) - MAX_WARNINGS} more warnings (all in the "
-              "ShapeGrid.warnings of the Python API)", file=sys.stderr)
+    print_warnings("refine", [*grid.warnings, *ours])
     write(grid, args.output)
     if args.plot:
         from ..plot import plot_grid

@@ -60,6 +60,10 @@ def _edge(e: ShapeEdgeGrid) -> dict[str, Any]:
 def to_document(grid: ShapeGrid) -> dict[str, Any]:
     """The ``cadedge.edgegrid/1`` document of ``grid`` as plain Python data (numpy converted)."""
     options = {key: _number(grid.options.get(key), f"option {key}") for key in OPTION_KEYS}
+    if grid.options.get("ald_for"):  # local targets (refine_shape's ald_for), only when given
+        options["ald_for"] = [{"kind": str(r["kind"]), "id": int(r["id"]),
+                               "ald": _number(r["ald"], f"option ald_for {r['kind']} {r['id']}")}
+                              for r in grid.options["ald_for"]]
     summary = grid.summary()
     return {"schema": SCHEMA, "source": str(grid.source), "units": str(grid.units), "options": options,
             "vertices": [_vertex(v) for v in grid.vertices], "edges": [_edge(e) for e in grid.edges],
@@ -103,6 +107,8 @@ def validate(document: dict[str, Any]) -> None:
     edge_ids = [e["id"] for e in document["edges"]]
     if edge_ids != list(range(1, len(edge_ids) + 1)):
         raise InputError(f"not a valid {SCHEMA} document: edge ids are not 1..{len(edge_ids)} in order")
+    if any(r["kind"] == "edge" and r["id"] > len(edge_ids) for r in document["options"].get("ald_for", [])):
+        raise InputError(f"not a valid {SCHEMA} document: options.ald_for names an unknown edge")
     for e in document["edges"]:
         if len(e["params"]) != len(e["points"]):
             raise InputError(f"not a valid {SCHEMA} document: edge {e['id']} has {len(e['params'])} params "

@@ -18,7 +18,8 @@ from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
 
 from ..errors import GeometryError
-from .reader import _count, load_shape
+from .loading import count as _count
+from .reader import load_shape
 from .topology import Topology
 
 
@@ -70,9 +71,10 @@ def edge_length(topology: Topology, i: int) -> float:
         raise GeometryError(f"edge {i + 1}: OCCT cannot measure its length: {exc}") from exc
 
 
-def describe_shape(source: Any) -> ShapeDescription:
-    """Load ``source`` (anything :func:`cadedge.occt.reader.load_shape` accepts) and describe its edges."""
-    loaded = load_shape(source)
+def describe_shape(source: Any, *, allow_partial: bool = False) -> ShapeDescription:
+    """Load ``source`` (anything :func:`cadedge.occt.reader.load_shape` accepts, with ``allow_partial``)
+    and describe its edges."""
+    loaded = load_shape(source, allow_partial=allow_partial)
     topo = Topology(loaded.shape)
     edges = [EdgeDescription(id=i + 1, curve=topo.curve_type(i), degenerate=topo.is_degenerate(i),
                              closed=topo.is_closed(i), seam=topo.is_seam(i), vertices=topo.edge_vertices[i],

@@ -11,22 +11,27 @@ from __future__ import annotations
 
 import time
 import warnings
+from collections.abc import Mapping
 from typing import Any, Callable
 
 import numpy as np
 from OCP.BRep import BRep_Tool
 
-from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError
+from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError, InputError
 from ..grid import polyline_length
 from ..options import refine_options
 from ..refine import refine_curve
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
 from .edgecurve import EdgeCurve
+from .localald import check_ald_for, edge_targets
 from .reader import load_shape
 from .topology import Topology, curve_type_name
 from .vertexgrowth import grade_vertices
 
 Progress = Callable[[int, int], None]
+#: Most segments in the grids of one model (about 100 MB of points and parameters, far more as JSON):
+#: a target that needs more is refused with a clear error instead of exhausting memory.
+MAX_MODEL_SEGMENTS = 5_000_000
 
 
 def _point(vertex) -> np.ndarray:
@@ -84,28 +89,45 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
 
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
                  max_length: float | None = None, max_growth: float | None = None,
-                 progress: Progress | None = None) -> ShapeGrid:
+                 ald_for: Mapping[Any, float] | None = None,
+                 progress: Progress | None = None, allow_partial: bool = False) -> ShapeGrid:
     """Refine every edge of ``source`` (STEP path, cadquery/build123d shape or ``TopoDS_Shape``).
 
     Edges and vertices are listed in ``TopExp::MapShapes`` order, degenerate edges included and
     flagged. ``progress(done, total)`` is called after each edge. Per-edge notes from the refiner go
     to ``ShapeGrid.warnings`` (prefixed with the edge id) instead of the warnings module.
+
+    ``ald_for`` maps edges or faces to their own target (see :mod:`cadedge.occt.localald`): keys are
+    build123d/cadquery edges or faces (or a cadquery Workplane selection of them), ``TopoDS_Edge``/
+    ``TopoDS_Face`` shapes matched with ``IsSame``, or ids ``("edge", n)``/``("face", n)``. A face means
+    its edges; each edge gets the finest of ``ald`` and every setting reaching it. The settings are
+    recorded by id in ``options["ald_for"]``.
     """
     opts = refine_options(ald, min_length, max_length, max_growth)  # before the (possibly slow) read
+    local = check_ald_for(ald_for)
     t0 = time.perf_counter()
-    loaded = load_shape(source)
+    loaded = load_shape(source, allow_partial=allow_partial)
     try:
         topo = Topology(loaded.shape)
     except GeometryError as exc:
         raise GeometryError(f"{loaded.source}: {exc}") from exc
+    try:
+        targets, local_records, notes = edge_targets(local, topo, opts["ald"])
+    except InputError as exc:
+        raise InputError(f"{loaded.source}: {exc}") from exc
     vpoints = [_point(v) for v in topo.vertices]
-    notes: list[str] = []
     edges: list[ShapeEdgeGrid] = []
     total = len(topo.edges)
+    segments = 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CadedgeWarning)  # collected per edge in notes instead
         for i in range(total):
-            edges.append(_refine_edge(topo, i, vpoints, loaded.source, opts, notes))
+            edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
+            edges.append(_refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes))
+            segments += len(edges[-1].params) - 1
+            if segments > MAX_MODEL_SEGMENTS:
+                raise InputError(f"{loaded.source}: the grids would exceed {MAX_MODEL_SEGMENTS:,} segments "
+                                 f"(reached after {i + 1} of {total} edges); use a larger ald")
             if progress is not None:
                 progress(i + 1, total)
     if opts["max_growth"] is not None:
@@ -118,6 +140,6 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
                            tolerance=float(BRep_Tool.Tolerance_s(topo.vertices[k])))
                 for k, p in enumerate(vpoints)]
     return ShapeGrid(source=loaded.source, units=loaded.units,
-                     options=dict(opts),
+                     options={**opts, "ald_for": local_records} if local_records else dict(opts),
                      vertices=vertices, edges=edges, faces=len(topo.faces),
                      seconds=time.perf_counter() - t0, warnings=loaded.warnings + notes, shape=loaded.shape)

@@ -30,6 +30,8 @@ def check_plot_path(path: str | os.PathLike) -> str:
     if suffix not in SUFFIXES:
         raise InputError(f"{os.fspath(path)}: unsupported plot suffix {p.suffix or '(none)'!r}; "
                          f"supported: {' '.join(SUFFIXES)}")
+    if p.is_dir():
+        raise InputError(f"{os.fspath(path)}: is a folder; give a file name")
     if not (p.parent if str(p.parent) else Path(".")).is_dir():
         raise InputError(f"{os.fspath(path)}: folder {os.fspath(p.parent)!r} does not exist")
     return "png" if suffix == ".png" else "html"

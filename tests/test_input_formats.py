@@ -1,0 +1,174 @@
+"""IGES and OCCT BREP inputs, written by OCCT at test time from the STEP fixtures: the same edges in
+the same MapShapes order as the STEP, units converted, read by every command, and bad files refused
+with one line saying which problem it is."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("OCP")
+
+from OCP.Bnd import Bnd_Box  # noqa: E402
+from OCP.BRepBndLib import BRepBndLib  # noqa: E402
+from OCP.BRepTools import BRepTools  # noqa: E402
+from OCP.IGESControl import IGESControl_Controller, IGESControl_Writer  # noqa: E402
+from OCP.Interface import Interface_Static  # noqa: E402
+
+import cadedge  # noqa: E402
+from cadedge.cli import main  # noqa: E402
+from cadedge.errors import InputError  # noqa: E402
+from cadedge.occt.reader import load_shape, quiet_occt  # noqa: E402
+from conftest import FIXTURE_FILES, FIXTURES  # noqa: E402
+
+
+@contextmanager
+def _brep_mode():
+    """IGES written as B-rep entities (shared edges), as CAD systems exchange solids."""
+    IGESControl_Controller.Init_s()
+    before = Interface_Static.IVal_s("write.iges.brep.mode")
+    Interface_Static.SetIVal_s("write.iges.brep.mode", 1)
+    try:
+        yield
+    finally:
+        Interface_Static.SetIVal_s("write.iges.brep.mode", before)
+
+
+def write_iges(step: Path, dest: Path, unit: str = "MM") -> Path:
+    shape = load_shape(step).shape
+    with quiet_occt(), _brep_mode():
+        writer = IGESControl_Writer(unit, 1)
+        writer.AddShape(shape)
+        writer.ComputeModel()
+        assert writer.Write(str(dest))
+    return dest
+
+
+def write_brep(step: Path, dest: Path) -> Path:
+    assert BRepTools.Write_s(load_shape(step).shape, str(dest))
+    return dest
+
+
+def _signature(grid: cadedge.ShapeGrid) -> list[tuple]:
+    return [(e.id, e.curve, e.vertices, tuple(e.faces), e.degenerate) for e in grid.edges]
+
+
+@pytest.mark.parametrize("step", FIXTURE_FILES, ids=lambda p: p.stem)
+@pytest.mark.parametrize("fmt", ["igs", "brep"])
+def test_same_edges_in_the_same_order_as_the_step(tmp_path, step, fmt):
+    other = (write_iges if fmt == "igs" else write_brep)(step, tmp_path / f"{step.stem}.{fmt}")
+    a = cadedge.refine_shape(step, ald=1e-3)
+    b = cadedge.refine_shape(other, ald=1e-3)
+    assert b.source == other.name and b.units == "mm"
+    assert _signature(b) == _signature(a)
+    assert np.allclose([v.point for v in b.vertices], [v.point for v in a.vertices], rtol=0, atol=1e-6)
+    for ea, eb in zip(a.edges, b.edges):
+        assert np.allclose(eb.points[[0, -1]], ea.points[[0, -1]], rtol=0, atol=1e-6)
+        assert eb.length == pytest.approx(ea.length, rel=1e-6, abs=1e-9)
+        assert eb.ald_estimate <= 1e-3
+
+
+def _diag(shape) -> float:
+    box = Bnd_Box()
+    BRepBndLib.Add_s(shape, box, False)
+    x0, y0, z0, x1, y1, z1 = box.Get()
+    return math.dist((x0, y0, z0), (x1, y1, z1))
+
+
+def test_iges_in_inches_is_read_in_millimetres(tmp_path):
+    step = FIXTURES / "bracket.step"
+    inches = write_iges(step, tmp_path / "bracket_in.igs", unit="IN")
+    assert b"4HINCH" in inches.read_bytes()  # the global section declares inches
+    loaded = load_shape(inches)
+    assert loaded.units == "mm"
+    assert _diag(loaded.shape) == pytest.approx(_diag(load_shape(step).shape), rel=1e-6)
+
+
+def test_every_command_reads_iges_and_brep(tmp_path, capsys):
+    step = FIXTURES / "spline_prism.step"
+    files = [write_iges(step, tmp_path / "prism.IGES"), write_brep(step, tmp_path / "prism.brep")]
+    for path in files:
+        out = tmp_path / f"{path.suffix[1:]}.json"
+        assert main(["refine", str(path), "--ald", "1e-3", "-o", str(out), "--quiet"]) == 0
+        doc = json.loads(out.read_text())
+        assert doc["source"] == path.name and doc["summary"]["edges"] == 12
+        assert main(["info", str(path)]) == 0
+        assert "faces 6, edges 12, vertices 8" in capsys.readouterr().out
+    pytest.importorskip("gmsh")
+    mesh = tmp_path / "prism.msh"
+    assert main(["mesh", str(files[0]), "--ald", "1e-2", "-o", str(mesh), "--quiet"]) == 0
+    assert mesh.is_file()
+
+
+def test_batch_finds_iges_and_brep_in_folders(tmp_path):
+    pytest.importorskip("distributed")
+    from cadedge.batch import expand_inputs, run_batch
+
+    src = tmp_path / "in"
+    src.mkdir()
+    write_iges(FIXTURES / "cylinder.step", src / "a.igs")
+    write_brep(FIXTURES / "sphere.step", src / "b.brep")
+    (src / "notes.txt").write_text("not a model")
+    assert [p.name for p in expand_inputs([src])] == ["a.igs", "b.brep"]
+    report = run_batch([src], tmp_path / "out", ald=1e-2, workers=1)
+    assert report.all_ok and sorted(Path(r.output).name for r in report.ok) == ["a.json", "b.json"]
+
+
+def _error(path: Path) -> str:
+    with pytest.raises(InputError) as info:
+        load_shape(path)
+    msg = str(info.value)
+    assert "\n" not in msg and msg.startswith(f"{path}: ")
+    return msg
+
+
+def test_bad_iges_files_say_which_problem(tmp_path):
+    good = write_iges(FIXTURES / "bracket.step", tmp_path / "good.igs").read_bytes()
+    lines = good.splitlines(keepends=True)
+    cases = {
+        "cut.igs": b"".join(lines[: len(lines) // 2]),
+        "padded.igs": b"".join(lines[: len(lines) // 2] + lines[-1:]),  # cut, terminate line put back
+        "step.igs": (FIXTURES / "cylinder.step").read_bytes(),
+        "text.iges": b"hello\n",
+        "zero.igs": b"",
+    }
+    expected = {"cut.igs": "truncated IGES file", "padded.igs": "truncated or corrupt IGES file",
+                "step.igs": "not an IGES file (it holds STEP text", "text.iges": "not an IGES file",
+                "zero.igs": "empty file"}
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+        assert expected[name] in _error(tmp_path / name)
+
+
+def test_bad_brep_files_say_which_problem(tmp_path, capfd):
+    good = write_brep(FIXTURES / "bracket.step", tmp_path / "good.brep").read_bytes()
+    capfd.readouterr()
+    cases = {"cut.brep": good[: int(len(good) * 0.8)], "head.brep": good[:200], "text.brep": b"hello\n",
+             "zero.brep": b""}
+    expected = {"cut.brep": "truncated BREP file", "head.brep": "truncated or corrupt BREP file",
+                "text.brep": "not an OCCT BREP file", "zero.brep": "empty file"}
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+        assert expected[name] in _error(tmp_path / name)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""  # OCCT never got to print its own complaints
+
+
+def test_an_iges_face_pointing_at_nothing_is_a_partial_transfer(tmp_path):
+    lines = write_iges(FIXTURES / "bracket.step", tmp_path / "good.igs").read_bytes().split(b"\n")
+    i = next(k for k, line in enumerate(lines) if line.startswith(b"510,"))  # the first face entity
+    data, sequence = lines[i][:64], lines[i][64:]
+    lines[i] = re.sub(rb"^510,\d+,", b"510,9999,", data.rstrip()).ljust(64) + sequence  # its surface: none
+    bad = tmp_path / "bad.igs"
+    bad.write_bytes(b"\n".join(lines))
+    msg = _error(bad)
+    assert "partial transfer refused" in msg and "1 entity skipped by the transfer" in msg
+    loaded = load_shape(bad, allow_partial=True)
+    assert loaded.warnings[0].startswith("partial transfer: ")
+    assert any("face D5 transfer failed" in w for w in loaded.warnings)
