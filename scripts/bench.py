@@ -17,7 +17,7 @@ and every ``eps``, in one process on the same loaded shape (STEP reading exclude
   ``Mesh.MinimumCurvePoints = Mesh.MinimumCirclePoints = 2``; ``N`` bisected as the smallest that
   makes every curve meet ``eps`` against ``gmsh.model.occ.getMass`` (its length). *gmsh s* is one
   ``generate(1)`` at the tuned ``N``.
-- **DP**: the per-edge sampled optimum (``cadedge.optimum.sampled_optimum``), the fewest segments
+- **DP**: the per-edge sampled optimum (``cadedge.yardsticks.optimum.sampled_optimum``), the fewest segments
   reaching ``(1 - eps) L`` with ``L`` OCCT's length; lines count 1 without sampling.
 
 The achieved ALD of an edge is ``1 - polyline length / L``, ``L = GCPnts_AbscissaPoint::Length`` with
@@ -49,7 +49,7 @@ from cadedge.occt.edgecurve import EdgeCurve
 from cadedge.occt.reader import load_shape
 from cadedge.occt.shape import refine_shape
 from cadedge.occt.topology import Topology
-from cadedge.optimum import sampled_optimum
+from cadedge.yardsticks.optimum import sampled_optimum
 
 ROOT = Path(__file__).resolve().parents[1]
 CORPUS = ROOT.parent / "shared" / "corpus"

@@ -9,8 +9,9 @@ For every model (the corpus and ``fixtures/``), side by side in one run, each in
 - **info**: ``cadedge info FILE``;
 - **refine**: ``cadedge refine FILE --ald 1e-3 -o OUT.json``.
 
-The three commands of a model run in turn, ``--repeats`` times, and the median wall time of each is
-kept, so a load on the machine falls on all three alike. The CPU time of each (user + system, from
+After one untimed warm-up of each (the file in the page cache, bytecode written as an installed
+package has it), the three commands of a model run in turn, ``--repeats`` times, and the median wall
+time of each is kept, so a load on the machine falls on all three alike. The CPU time of each (user + system, from
 ``getrusage``) is reported beside it: it hardly changes with the machine's load. Targets: *info/read* <= 1.15 and
 *refine/read* <= 1.3. ``scripts/bench.py --startup`` runs this and adds the table to its output.
 """
@@ -62,10 +63,17 @@ def _cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
+def _env() -> dict[str, str]:
+    """This environment, but with bytecode caching on, as an installed package has it."""
+    env = dict(os.environ)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
 def timed(cmd: list[str]) -> tuple[float, float]:
-    """(wall, CPU) seconds of one run of ``cmd``; CPU time hardly depends on the machine's load."""
+    """(wall, CPU) seconds of one run of ``cmd``; CPU time depends less on the machine's load."""
     c0, t0 = _cpu(), time.perf_counter()
-    done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=_env())
     seconds, cpu = time.perf_counter() - t0, _cpu() - c0
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} exited {done.returncode}: {done.stderr.strip()[-300:]}")
@@ -81,6 +89,8 @@ def measure(path: Path, repeats: int) -> dict:
                     "refine": cad + ["refine", str(path), "--ald", "1e-3", "-o", out]}
         walls: dict[str, list[float]] = {k: [] for k in commands}
         cpus: dict[str, list[float]] = {k: [] for k in commands}
+        for cmd in commands.values():
+            timed(cmd)  # untimed warm-up: the file in the page cache, bytecode written
         for _ in range(repeats):
             for kind, cmd in commands.items():
                 w, c = timed(cmd)

@@ -21,15 +21,17 @@ def test_import_cadedge_loads_no_numpy():
 
 def test_info_loads_neither_numpy_nor_the_refiner():
     pytest.importorskip("OCP")
-    mods = _modules_after(f"from cadedge.cli import main\nassert main(['info', {str(FIXTURES / 'sphere.step')!r}]) == 0")
+    path = str(FIXTURES / "sphere.step")
+    mods = _modules_after(f"from cadedge.cli import main\nassert main(['info', {path!r}]) == 0")
     assert not {"numpy", "cadedge.refine", "cadedge.mesh", "cadedge.batch", "gmsh", "dask"} & mods
 
 
 def test_refine_loads_no_mesher_batch_or_plotting(tmp_path):
     pytest.importorskip("OCP")
     out = tmp_path / "s.json"
+    path = str(FIXTURES / "sphere.step")
     mods = _modules_after(f"from cadedge.cli import main\n"
-                          f"assert main(['refine', {str(FIXTURES / 'sphere.step')!r}, '--ald', '1e-3', '-o', {str(out)!r}]) == 0")
+                          f"assert main(['refine', {path!r}, '--ald', '1e-3', '-o', {str(out)!r}]) == 0")
     assert not {"cadedge.mesh", "cadedge.batch", "gmsh", "dask", "matplotlib", "scipy"} & mods
     assert out.exists()
 
