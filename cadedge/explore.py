@@ -18,7 +18,7 @@ from functools import cached_property
 import numpy as np
 
 from . import kernels
-from .grid import polyline_length, row_norms
+from .grid import polyline_length, row_norms, unique_sorted
 
 #: Root triples for a curve that gives no hint of its own: features narrower than about
 #: 1/(2 * ROOTS) of the parameter domain can hide between the first samples.
@@ -68,7 +68,7 @@ def root_params(curve, a: float, b: float) -> np.ndarray:
     """Parameters that start the exploration: the curve's own hint, or a uniform grid."""
     hint = getattr(curve, "initial_params", None)
     if hint is not None:
-        u = np.unique(np.concatenate([[a], np.clip(np.asarray(hint(a, b), dtype=float).ravel(), a, b), [b]]))
+        u = unique_sorted(np.concatenate([[a], np.clip(np.asarray(hint(a, b), dtype=float).ravel(), a, b), [b]]))
         if len(u) >= 2:
             return u
     return np.linspace(a, b, ROOTS + 1)
@@ -126,4 +126,4 @@ def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -
     dense = polyline_length(p)
     kinks = np.concatenate(corners) if corners else np.zeros(0)
     return Exploration(params=u, points=p, length_estimate=dense + remainder, remainder=remainder,
-                       corners=np.unique(kinks) if len(kinks) else kinks, notes=notes)
+                       corners=unique_sorted(kinks) if len(kinks) else kinks, notes=notes)

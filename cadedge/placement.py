@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from . import kernels
-from .grid import polyline_length
+from .grid import polyline_length, unique_sorted
 
 
 def chord_length(points: np.ndarray, nodes: np.ndarray) -> float:
@@ -41,7 +41,7 @@ def fewest_nodes(points: np.ndarray, cum: np.ndarray, budget: float, *, min_leng
     points = np.ascontiguousarray(points, dtype=float)
     n = len(points)
     forced = np.zeros(0, dtype=np.int64) if forced is None else np.asarray(forced, dtype=np.int64)
-    stops = np.unique(np.append(forced, n - 1)) if len(forced) else np.array([n - 1], dtype=np.int64)
+    stops = unique_sorted(np.append(forced, n - 1)) if len(forced) else np.array([n - 1], dtype=np.int64)
     fixed = np.zeros(n, dtype=np.bool_)
     fixed[forced] = True
     return kernels.fewest(points, cum, float(budget), 0.0 if min_length is None else float(min_length),
@@ -72,7 +72,7 @@ def equidistribute(params: np.ndarray, cum: np.ndarray, measure: np.ndarray, cou
     if corners is None or not len(corners):
         cut, alloc = np.array([0, last]), np.array([max(count, 1) if measure[last] > measure[0] else 1])
     else:
-        cut = np.unique(np.concatenate([[0], corners, [last]])).astype(np.int64)
+        cut = unique_sorted(np.concatenate([[0], corners, [last]])).astype(np.int64)
         share = np.diff(measure[cut])
         total = share.sum()
         pieces = len(share)
