@@ -18,7 +18,7 @@ import numpy as np
 
 from .explore import explore
 from .grid import polyline_length, row_norms, unique_sorted
-from .growth import worst_growth
+from .splitting import worst_growth
 from .placement import chord_length, deficit_measure, equidistribute, fewest_nodes
 
 #: Share of the target deficit that the dense exploration may leave unresolved.
@@ -148,7 +148,7 @@ def _sharp_nodes(points: np.ndarray, ald: float) -> np.ndarray:
 
 def _grade(ev, ex, corner_idx, params, points, growth, ald, total, limit):
     """Graded re-placement keeping corners and sharp nodes, then bounded splitting for what is left."""
-    from .growth import limit_growth
+    from .splitting import limit_growth
 
     keep = _sharp_nodes(points, ald)
     if len(keep):  # make the sharp nodes samples (if they are not) and pin them like corners

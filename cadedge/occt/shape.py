@@ -49,7 +49,7 @@ def _anchor(points: np.ndarray, first: np.ndarray, last: np.ndarray, estimate: f
 
 
 def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, opts: dict[str, Any],
-                 notes: list[str]) -> ShapeEdgeGrid:
+                 notes: list[str], curves: dict[int, EdgeCurve]) -> ShapeEdgeGrid:
     eid = i + 1
     edge = topo.edges[i]
     v1, v2 = topo.edge_vertices[i]
@@ -66,7 +66,7 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
         return ShapeEdgeGrid(params=np.array([first, last], dtype=float), points=np.array([p1, p1]),
                              ald_estimate=0.0, evaluations=0, curve=kind, **common)
     try:
-        curve = EdgeCurve(edge, eid)
+        curve = curves[eid] = EdgeCurve(edge, eid)
         grid = refine_curve(curve, curve.domain, **opts)
     except CurveEvaluationError as exc:
         raise GeometryError(f"{src}: edge {eid}: {exc}") from exc
@@ -101,16 +101,18 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     vpoints = [_point(v) for v in topo.vertices]
     notes: list[str] = []
     edges: list[ShapeEdgeGrid] = []
+    curves: dict[int, EdgeCurve] = {}  # one adaptor per edge, kept for grading and later splitting
     total = len(topo.edges)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CadedgeWarning)  # collected per edge in notes instead
         for i in range(total):
-            edges.append(_refine_edge(topo, i, vpoints, loaded.source, opts, notes))
+            edges.append(_refine_edge(topo, i, vpoints, loaded.source, opts, notes, curves))
             if progress is not None:
                 progress(i + 1, total)
     if opts["max_growth"] is not None:
         try:
-            notes += grade_vertices(edges, topo, opts["max_growth"])
+            edges, graded = grade_vertices(edges, curves, opts["max_growth"])
+            notes += graded
         except GeometryError as exc:
             raise GeometryError(f"{loaded.source}: grading edge ends at vertices: {exc}") from exc
     spacing = vertex_spacings(edges)
@@ -120,4 +122,5 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     return ShapeGrid(source=loaded.source, units=loaded.units,
                      options=dict(opts),
                      vertices=vertices, edges=edges, faces=len(topo.faces),
-                     seconds=time.perf_counter() - t0, warnings=loaded.warnings + notes, shape=loaded.shape)
+                     seconds=time.perf_counter() - t0, warnings=loaded.warnings + notes, shape=loaded.shape,
+                     curves=curves)
