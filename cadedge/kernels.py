@@ -10,7 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels
+try:
+    from . import _kernels
+except ImportError as exc:  # a source tree used without installing it
+    raise ImportError("cadedge's compiled kernels (cadedge/_kernels.c) are not built: install the package "
+                      "(pip install -e .), which compiles them") from exc
 
 
 def _f64(a: np.ndarray) -> np.ndarray:
