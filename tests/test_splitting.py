@@ -60,3 +60,20 @@ def test_vertex_grading_keeps_parameters_increasing_on_a_loose_edge(corpus_dir):
     grid = refine_shape(corpus_dir / "live-clones__gmsh__917_fusee.stp", ald=1e-3, max_growth=1.5)
     assert all(np.all(np.diff(e.params) > 0) for e in grid.edges if not e.degenerate)
     assert any(w.startswith("edge 351: max_growth") for w in grid.warnings)
+
+
+def test_fit_to_sizes_reuses_the_grid_curves_or_builds_them_once(fixtures_dir):
+    pytest.importorskip("OCP")
+    import dataclasses
+
+    from cadedge import refine_shape
+    from cadedge.mesh.proximity import fit_to_sizes
+
+    grid = refine_shape(fixtures_dir / "cylinder.step", ald=1e-2)
+    field = lambda g: (lambda xyz: np.full(len(xyz), 0.5))  # noqa: E731
+    kept = fit_to_sizes(grid, field)
+    built = fit_to_sizes(dataclasses.replace(grid, curves=None), field)
+    assert sum(e.segments for e in kept.edges) > grid.segments
+    for a, b, e in zip(kept.edges, built.edges, grid.edges):
+        assert np.array_equal(a.params, b.params) and np.array_equal(a.points, b.points)
+        assert np.all(np.diff(a.params) > 0) and len(e.params) <= len(a.params)
