@@ -2,22 +2,44 @@
 
 Public API (reference: docs/api.md): :func:`refine_curve`, :func:`refine_shape`, :class:`EdgeGrid`,
 :class:`ShapeGrid`, the curve adapters and the error hierarchy. OpenCASCADE is imported only when a
-shape is refined, so curve refinement works without it.
+shape is refined, so curve refinement works without it. The public names are imported on first use
+(PEP 562), so ``import cadedge`` (and the CLI's start-up) costs only what a command uses.
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Mapping
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
-from .curves import Curve, Evaluator, FunctionCurve, SampledCurve
 from .errors import (CadedgeError, CadedgeWarning, CurveEvaluationError, GeometryError, InputError,
                      MeshError)
-from .grid import EdgeGrid
-from .refine import refine_curve
-from .shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid
+
+if TYPE_CHECKING:
+    from .curves import Curve, Evaluator, FunctionCurve, SampledCurve
+    from .grid import EdgeGrid
+    from .refine import refine_curve
+    from .shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid
 
 __version__ = "0.1.0"
+
+#: Public name -> the module that defines it, imported when the name is first used.
+_LAZY = {"Curve": "curves", "Evaluator": "curves", "FunctionCurve": "curves", "SampledCurve": "curves",
+         "EdgeGrid": "grid", "refine_curve": "refine", "ShapeEdgeGrid": "shapegrid", "ShapeGrid": "shapegrid",
+         "VertexGrid": "shapegrid"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,

@@ -12,6 +12,13 @@ def row_norms(v: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("ij,ij->i", v, v))
 
 
+def unique_sorted(values: np.ndarray) -> np.ndarray:
+    """The distinct values, sorted: ``np.unique`` for 1-D arrays, without the ``numpy.ma`` import that
+    numpy 2's ``unique`` triggers (about 0.1 s of every refine's start-up)."""
+    v = np.sort(np.asarray(values).ravel())
+    return v[np.concatenate([[True], v[1:] != v[:-1]])] if len(v) else v
+
+
 def polyline_length(points: np.ndarray) -> float:
     """Length of the polyline through ``points`` (n, d)."""
     return float(np.sum(row_norms(np.diff(points, axis=0))))

@@ -73,7 +73,7 @@ def refine_curve(curve: Any, domain: tuple[float, float] | None = None, *, ald: 
             ev, a, b, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth,
             search_tol=search_tol)
     if max_growth is not None and paper:  # target mode grades its own grid
-        from .growth import limit_growth
+        from .splitting import limit_growth
         params, points, growth_notes = limit_growth(ev, params, points, float(max_growth), min_length=min_length)
         notes = list(notes) + growth_notes
     for note in notes:

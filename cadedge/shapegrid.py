@@ -70,8 +70,9 @@ def vertex_spacings(edges: list[ShapeEdgeGrid]) -> dict[int, float]:
 class ShapeGrid:
     """Edge grids of every edge of a shape, with vertices, adjacency, units and options.
 
-    ``shape`` keeps the OCCT ``TopoDS_Shape`` the grids were made from (for the mesher); it is not
-    exported. ``write(path)`` picks the format from the suffix (see :mod:`cadedge.exporters`).
+    ``shape`` keeps the OCCT ``TopoDS_Shape`` the grids were made from (for the mesher) and ``curves``
+    the edges' curves by edge id (evaluators with ``evaluate(u)``, built once by ``refine_shape``, for
+    splitting the grids later); neither is exported. ``write(path)`` picks the format from the suffix (see :mod:`cadedge.exporters`).
     """
 
     source: str
@@ -83,6 +84,7 @@ class ShapeGrid:
     seconds: float = 0.0
     warnings: list[str] = field(default_factory=list)
     shape: Any = field(default=None, repr=False, compare=False)
+    curves: Any = field(default=None, repr=False, compare=False)
 
     @property
     def segments(self) -> int:

@@ -17,8 +17,8 @@ import math
 import numpy as np
 
 from .explore import explore
-from .grid import polyline_length, row_norms
-from .growth import worst_growth
+from .grid import polyline_length, row_norms, unique_sorted
+from .splitting import worst_growth
 from .placement import chord_length, deficit_measure, equidistribute, fewest_nodes
 
 #: Share of the target deficit that the dense exploration may leave unresolved.
@@ -148,12 +148,12 @@ def _sharp_nodes(points: np.ndarray, ald: float) -> np.ndarray:
 
 def _grade(ev, ex, corner_idx, params, points, growth, ald, total, limit):
     """Graded re-placement keeping corners and sharp nodes, then bounded splitting for what is left."""
-    from .growth import limit_growth
+    from .splitting import limit_growth
 
     keep = _sharp_nodes(points, ald)
     if len(keep):  # make the sharp nodes samples (if they are not) and pin them like corners
         ex = ex.with_samples(params[keep], points[keep])
-        corner_idx = np.unique(np.concatenate([np.searchsorted(ex.params, ex.corners),
+        corner_idx = unique_sorted(np.concatenate([np.searchsorted(ex.params, ex.corners),
                                                np.searchsorted(ex.params, params[keep])])).astype(int)
     for _ in range(GRADING_PASSES):  # each pass smooths the sizes of the one before
         graded = _graded(ev, ex, corner_idx, params, points, growth, total, limit)

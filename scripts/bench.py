@@ -1,7 +1,7 @@
 """Shape benchmark: cadedge target mode against OCCT, gmsh and the per-edge sampled DP optimum.
 
     python scripts/bench.py [--eps 1e-2 1e-3 1e-4] [--quick] [--file PATH ...] [--no-gmsh] [--no-dp]
-                            [--json OUT.json] [--from-json OUT.json] [--write]
+                            [--json OUT.json] [--from-json OUT.json] [--write] [--startup [REPEATS]]
 
 For every model (the STEP corpus, found as ``scripts/corpus_path.py`` says, and ``fixtures/``; ``--quick`` a small subset)
 and every ``eps``, in one process on the same loaded shape (STEP reading excluded everywhere):
@@ -17,7 +17,7 @@ and every ``eps``, in one process on the same loaded shape (STEP reading exclude
   ``Mesh.MinimumCurvePoints = Mesh.MinimumCirclePoints = 2``; ``N`` bisected as the smallest that
   makes every curve meet ``eps`` against ``gmsh.model.occ.getMass`` (its length). *gmsh s* is one
   ``generate(1)`` at the tuned ``N``.
-- **DP**: the per-edge sampled optimum (``cadedge.optimum.sampled_optimum``), the fewest segments
+- **DP**: the per-edge sampled optimum (``cadedge.yardsticks.optimum.sampled_optimum``), the fewest segments
   reaching ``(1 - eps) L`` with ``L`` OCCT's length; lines count 1 without sampling.
 
 The achieved ALD of an edge is ``1 - polyline length / L``, ``L = GCPnts_AbscissaPoint::Length`` with
@@ -26,7 +26,9 @@ Degenerate edges are left out everywhere. A row passes when cadedge's worst edge
 segments are at most OCCT's and at most 1.10x the DP optimum, and its time is at most 3x one OCCT
 pass. *time/tuning* puts cadedge's time against OCCT's whole tuning instead (what it costs OCCT to
 reach the same per-model guarantee); it is reported, not judged.
-``--write`` puts the table and figures into ``docs/performance.md`` / ``docs/figures/``.
+``--startup`` first measures, per model, fresh-process ``cadedge info`` and ``cadedge refine --ald 1e-3``
+against a Python that only imports OCP and reads the file (``scripts/startup.py``; targets 1.15x and 1.3x).
+``--write`` puts the tables and figures into ``docs/performance.md`` / ``docs/figures/``.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
 import warnings
@@ -51,13 +54,14 @@ from cadedge.occt.edgecurve import EdgeCurve
 from cadedge.occt.reader import load_shape
 from cadedge.occt.shape import refine_shape
 from cadedge.occt.topology import Topology
-from cadedge.optimum import sampled_optimum
+from cadedge.yardsticks.optimum import sampled_optimum
 
 ROOT = Path(__file__).resolve().parents[1]
 FIXTURES = ROOT / "fixtures"
 DOC = ROOT / "docs" / "performance.md"
 FIGURES = ROOT / "docs" / "figures"
 BEGIN, END = "<!-- bench:begin -->", "<!-- bench:end -->"
+STARTUP_BEGIN, STARTUP_END = "<!-- startup:begin -->", "<!-- startup:end -->"
 QUICK = ("live-clones__gmsh__cube_filet.stp", "LLNL__axom_data__sliced_cylinder.step", "cylinder.step",
          "helix_wire.step")
 DP_LIMIT, TIME_LIMIT = 1.10, 3.0
@@ -364,11 +368,21 @@ def plot(rows: list[dict], prefix: Path) -> list[Path]:
     return [main, scaling]
 
 
-def write_doc(table: str) -> None:
+def write_doc(table: str, begin: str = BEGIN, end: str = END) -> None:
     text = DOC.read_text()
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    atomic_write_bytes(DOC, (head + BEGIN + "\n" + table + "\n" + END + tail).encode())
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    atomic_write_bytes(DOC, (head + begin + "\n" + table + "\n" + end + tail).encode())
+
+
+def startup_module():
+    """scripts/startup.py (fresh-process start-up of ``cadedge info`` / ``refine`` against a plain read)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("cadedge_startup", Path(__file__).with_name("startup.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -381,14 +395,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", type=Path, help="also write the raw rows as JSON")
     ap.add_argument("--from-json", type=Path, help="tabulate (and --write) rows saved by --json instead of running")
     ap.add_argument("--write", action="store_true", help="update docs/performance.md and docs/figures/performance*.png")
+    ap.add_argument("--startup", type=int, metavar="REPEATS", nargs="?", const=3,
+                    help="also the fresh-process start-up table (scripts/startup.py), each command run REPEATS "
+                         "times (default 3)")
     args = ap.parse_args(argv)
+    paths = args.file or files(args.quick)
+    startup_table = None
+    if args.startup:  # first, while nothing else of this run is resident
+        st = startup_module()
+        startup_table = st.table(st.run(paths, args.startup))
+        print()
     print(HEADER)
     print(RULE)
     if args.from_json:
         rows = json.loads(args.from_json.read_text())
         print("\n".join(format_row(r) for r in rows))
     else:
-        rows = bench(args.file or files(args.quick), args.eps, use_gmsh=not args.no_gmsh, use_dp=not args.no_dp)
+        rows = bench(paths, args.eps, use_gmsh=not args.no_gmsh, use_dp=not args.no_dp)
     tot = totals(rows)
     print("\n".join(tot))
     table = "\n".join([HEADER, RULE] + [format_row(r) for r in rows] + tot)
@@ -398,6 +421,8 @@ def main(argv: list[str] | None = None) -> int:
         FIGURES.mkdir(parents=True, exist_ok=True)
         plot(rows, FIGURES / "performance")
         write_doc(table)
+        if startup_table is not None:
+            write_doc(startup_table, STARTUP_BEGIN, STARTUP_END)
     return 0 if all(verdict(r)[0] for r in rows) else 1
 
 

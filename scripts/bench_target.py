@@ -2,10 +2,10 @@
 
     python scripts/bench_target.py [--eps 1e-2 1e-3 1e-4] [--curve NAME ...] [--write]
 
-For every curve of ``cadedge.analytic.paper_curves() + cadedge.analytic.family()`` and every ``eps``:
+For every curve of ``analytic.paper_curves() + analytic.family()`` (``cadedge.yardsticks``) and every ``eps``:
 ``cadedge.refine_curve(c, c.domain, ald=eps)``; the achieved ALD ``1 - length / L_ref`` (``L_ref`` the
-known length, else ``cadedge.reference.reference_length``); the sampled DP optimum at the achieved length
-(``cadedge.optimum.sampled_optimum``: fewest segments through dense samples, the grid's own vertices
+known length, else ``cadedge.yardsticks.reference.reference_length``); the sampled DP optimum at the achieved length
+(``cadedge.yardsticks.optimum.sampled_optimum``: fewest segments through dense samples, the grid's own vertices
 included, reaching the grid's own length, so the optimum is never worse than the grid) and at
 ``(1 - eps) L_ref``; the ratio segments / optimum at the achieved length; evaluations; seconds of
 refinement. A row passes when ALD <= eps and the ratio <= 1.15.
@@ -20,10 +20,11 @@ import time
 import warnings
 from pathlib import Path
 
-from cadedge import analytic, refine_curve
+from cadedge import refine_curve
 from cadedge.atomic import atomic_write_bytes
-from cadedge.optimum import sampled_optimum
-from cadedge.reference import reference_length
+from cadedge.yardsticks import analytic
+from cadedge.yardsticks.optimum import sampled_optimum
+from cadedge.yardsticks.reference import reference_length
 
 RATIO_LIMIT = 1.15
 DOC = Path(__file__).resolve().parents[1] / "docs" / "target.md"

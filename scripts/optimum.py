@@ -2,10 +2,10 @@
 
     python scripts/optimum.py CURVE --ald EPS [--n SAMPLES]
 
-CURVE is one of ``cadedge.analytic`` (lissajous, tricuspid, cochleoid, circle, oscillatory, astroid,
+CURVE is one of ``cadedge.yardsticks.analytic`` (lissajous, tricuspid, cochleoid, circle, oscillatory, astroid,
 helix, uneven, narrow_bump, spiral). Prints the fewest segments whose best polyline through dense
 samples reaches ``(1 - EPS) * L_ref`` (``L_ref`` the known length or
-``cadedge.reference.reference_length``), with the seconds taken. Exit status 2 on a bad argument.
+``cadedge.yardsticks.reference.reference_length``), with the seconds taken. Exit status 2 on a bad argument.
 """
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ import argparse
 import sys
 import time
 
-from cadedge import analytic
+from cadedge.yardsticks import analytic
 from cadedge.errors import CadedgeError
-from cadedge.optimum import sampled_optimum
-from cadedge.reference import reference_length
+from cadedge.yardsticks.optimum import sampled_optimum
+from cadedge.yardsticks.reference import reference_length
 
 CURVES = {c.name.rstrip("0123456789"): c for c in analytic.paper_curves() + analytic.family()}
 

@@ -21,8 +21,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from cadedge import refine_curve  # noqa: E402
-from cadedge.analytic import paper_curves  # noqa: E402
-from cadedge.reference import reference_length  # noqa: E402
+from cadedge.yardsticks.analytic import paper_curves  # noqa: E402
+from cadedge.yardsticks.reference import reference_length  # noqa: E402
 
 DELTAS = (0.1, 0.01, 0.001)
 PAPER_TRUE = {"lissajous": 13.0653, "tricuspid": 16.0, "cochleoid": 2.94}

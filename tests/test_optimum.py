@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from cadedge import analytic
+from cadedge.yardsticks import analytic
 from cadedge.errors import InputError
-from cadedge.optimum import dense_samples, max_length_polyline, min_segments, sampled_optimum
-from cadedge.reference import polyline_length, reference_length
+from cadedge.yardsticks.optimum import dense_samples, max_length_polyline, min_segments, sampled_optimum
+from cadedge.yardsticks.reference import polyline_length, reference_length
 
 
 def brute_force(points: np.ndarray, k: int) -> float:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from cadedge import CadedgeWarning, FunctionCurve, refine_curve
-from cadedge.analytic import circle, lissajous, paper_curves, point
+from cadedge.yardsticks.analytic import circle, lissajous, paper_curves, point
 from cadedge.curves import Evaluator
 from cadedge.paper import MAX_SEGMENTS, refine_paper
 from cadedge.search import DEFAULT_SEARCH_TOL, best_split, golden_search, search_evaluations

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import cadedge
-from cadedge import analytic
-from cadedge.reference import reference_length
+from cadedge.yardsticks import analytic
+from cadedge.yardsticks.reference import reference_length
 
 CURVES = {c.name: c for c in analytic.paper_curves() + analytic.family()}
 REFERENCE = {}

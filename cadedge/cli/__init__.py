@@ -18,14 +18,18 @@ from ..errors import CadedgeError
 SUBCOMMANDS = ("refine", "info", "mesh", "batch")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; given ``argv`` that names a subcommand, only that subcommand's module is imported
+    (each imports what it needs, so ``cadedge info`` never loads numpy, gmsh or dask)."""
     import importlib
 
     parser = argparse.ArgumentParser(prog="cadedge", description="Edge grids for CAD models by arc-length deficit.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     parser.add_argument("--version", action="version", version=f"cadedge {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in SUBCOMMANDS:
+    words = [a for a in (argv or ()) if not a.startswith("-")]
+    names = words[:1] if words and words[0] in SUBCOMMANDS else SUBCOMMANDS
+    for name in names:
         importlib.import_module(f"{__name__}.{name}").register(sub)
     return parser
 
@@ -49,7 +53,8 @@ def _interrupted(exc: BaseException) -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit code (0 ok, 1 some inputs failed, 2 bad input or usage)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help

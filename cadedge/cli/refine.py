@@ -14,12 +14,14 @@ import sys
 import warnings
 from collections import defaultdict
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from ..errors import CadedgeWarning, InputError
 from ..options import MIN_ALD, MIN_ALD_TEXT
-from ..shapegrid import ShapeGrid
 from ._table import format_table
+
+if TYPE_CHECKING:
+    from ..shapegrid import ShapeGrid
 
 PROGRESS_MIN_EDGES = 50
 MAX_WARNINGS = 20

@@ -4,8 +4,9 @@ An edge grid meets its ALD with very few segments on straight edges; but a face 
 24 mm segment 7 mm from a hole meshed at 0.5 mm can only be filled with slivers next to that
 segment, whatever the interior sizes. Before the grids are imposed, every segment longer than
 ``ratio`` (3) times the size field at its midpoint (graded from all edges' spacings, so a nearby edge
-counts even when it is not adjacent) is split into equal parameter steps on its OCCT curve. Edge
-ends are never moved, so shared vertices stay bit-identical, and splitting only lowers the ALD.
+counts even when it is not adjacent) is split into equal parameter steps on its OCCT curve
+(:mod:`cadedge.splitting`; the curves ``refine_shape`` built, kept on the grid). Edge ends are never
+moved, so shared vertices stay bit-identical, and splitting only lowers the ALD.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Callable
 import numpy as np
 
 from ..shapegrid import ShapeGrid, vertex_spacings
+from ..splitting import insert_points, split_evenly
 
 #: A segment is split when it is longer than this many times the size field at its midpoint.
 RATIO = 3.0
@@ -30,10 +32,7 @@ PASSES = 3
 def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np.ndarray], np.ndarray]], *,
                  ratio: float = RATIO, passes: int = PASSES) -> ShapeGrid:
     """A copy of ``grid`` whose segments are at most ``ratio`` times the size field (``make_field(grid)``)."""
-    from ..occt.edgecurve import EdgeCurve
-    from ..occt.topology import Topology
-
-    topo = None
+    curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
     edges = list(grid.edges)
     for _ in range(passes):
         field = make_field(dataclasses.replace(grid, edges=edges))
@@ -46,16 +45,29 @@ def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np
             pieces = np.where(seg > ratio * size, np.ceil(seg / np.maximum(size, 1e-300)), 1).astype(int)
             if not np.any(pieces > 1) or e.tolerance > TOLERANCE_SHARE * np.min(seg / pieces):
                 continue  # nothing to split, or a loose edge: new points would stray from its faces
-            topo = topo or Topology(grid.shape)
-            new_u = np.concatenate([e.params[k] + (e.params[k + 1] - e.params[k]) * np.arange(1, n) / n
-                                    for k, n in enumerate(pieces) if n > 1])
-            new_p = EdgeCurve(topo.edges[e.id - 1], e.id).evaluate(new_u)
-            at = np.repeat(np.arange(1, len(e.params)), pieces - 1)
-            edges[i] = dataclasses.replace(e, params=np.insert(e.params, at, new_u),
-                                           points=np.insert(e.points, at, new_p, axis=0))
+            new_u = split_evenly(e.params, pieces)
+            params, points = insert_points(e.params, e.points, new_u, curves[e.id].evaluate(new_u))
+            edges[i] = dataclasses.replace(e, params=params, points=points)
             changed = True
         if not changed:
             break
     spacing = vertex_spacings(edges)
     vertices = [dataclasses.replace(v, spacing=spacing.get(v.id, v.spacing)) for v in grid.vertices]
     return dataclasses.replace(grid, edges=edges, vertices=vertices)
+
+
+class _LazyCurves(dict):
+    """Edge curves of a grid that did not keep those refine_shape built: each built once, on first use."""
+
+    def __init__(self, grid: ShapeGrid):
+        super().__init__()
+        self._grid = grid
+        self._topo = None
+
+    def __missing__(self, edge_id: int):
+        from ..occt.edgecurve import EdgeCurve
+        from ..occt.topology import Topology
+
+        self._topo = self._topo or Topology(self._grid.shape)
+        curve = self[edge_id] = EdgeCurve(self._topo.edges[edge_id - 1], edge_id)
+        return curve

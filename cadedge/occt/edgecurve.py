@@ -19,6 +19,7 @@ from OCP.Standard import Standard_Failure
 from OCP.TopoDS import TopoDS_Edge
 
 from ..errors import GeometryError
+from ..grid import unique_sorted
 from .fasteval import fast_evaluator
 from .topology import forward
 
@@ -100,7 +101,7 @@ class EdgeCurve:
         if bs.IsPeriodic():
             per = float(bs.Period())
             shifts = np.arange(math.floor((a - k[-1]) / per), math.ceil((b - k[0]) / per) + 1) * per
-            k = np.unique((k[None, :] + shifts[:, None]).ravel())  # the period's ends coincide
+            k = unique_sorted((k[None, :] + shifts[:, None]).ravel())  # the period's ends coincide
         tol = 1e-9 * (b - a)  # a knot a hair inside an end would only make a sliver of a span
         return np.concatenate([[a], k[(k > a + tol) & (k < b - tol)], [b]])
 

@@ -4,8 +4,8 @@ Lines, circles, ellipses, B-splines (rational or not, periodic or not) and Bezie
 evaluated from their definition in one vectorised call instead of one ``BRepAdaptor_Curve.Value``
 per point. The geometry is taken from the adaptor (``Line()``, ``Circle()``, ``BSpline()``, ...),
 which applies the edge's location; B-splines and Bezier curves are evaluated by de Boor's algorithm
-on homogeneous poles, compiled with numba (an edge is evaluated a few times only, so scipy's
-``BSpline`` cost more to build than to call). Every evaluator is cross-checked on construction
+on homogeneous poles, in compiled C (:mod:`cadedge.kernels`; an edge is evaluated a few times
+only, so scipy's ``BSpline`` cost more to build than to call). Every evaluator is cross-checked on construction
 against ``BRepAdaptor_Curve.Value`` at ``CHECK_POINTS`` parameters of the edge's range; if any point
 differs by more than ``RTOL`` of the curve's size, :func:`fast_evaluator` returns ``None`` and the
 caller keeps OCCT's per-point loop.
@@ -22,7 +22,7 @@ from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circ
                          GeomAbs_Line)
 from OCP.Standard import Standard_Failure
 
-from ..compiled import jit
+from ..kernels import de_boor
 
 #: Parameters of the edge's range at which the numpy evaluation must agree with OCCT.
 CHECK_POINTS = 9
@@ -47,31 +47,6 @@ def _conic(pos, rx: float, ry: float) -> Points:
     return lambda u: loc + (rx * np.cos(u))[:, None] * x + (ry * np.sin(u))[:, None] * y
 
 
-@jit
-def _de_boor(knots, coef, degree, u):
-    """Points of the spline (knots, coef (n, d), degree) at ``u``; outside the knots the end pieces
-    are extended."""
-    n, dim = coef.shape
-    out = np.empty((len(u), dim))
-    d = np.empty((degree + 1, dim))
-    for m in range(len(u)):
-        x = u[m]
-        span = min(max(np.searchsorted(knots, x, side="right") - 1, degree), n - 1)
-        for j in range(degree + 1):
-            for c in range(dim):
-                d[j, c] = coef[j + span - degree, c]
-        for r in range(1, degree + 1):
-            for j in range(degree, r - 1, -1):
-                lo = knots[j + span - degree]
-                width = knots[j + 1 + span - r] - lo
-                alpha = (x - lo) / width if width > 0 else 0.0
-                for c in range(dim):
-                    d[j, c] = (1.0 - alpha) * d[j - 1, c] + alpha * d[j, c]
-        for c in range(dim):
-            out[m, c] = d[degree, c]
-    return out
-
-
 def _spline(knots: np.ndarray, poles: np.ndarray, weights: np.ndarray | None, degree: int,
             period: float | None) -> Points:
     """de Boor on homogeneous poles; ``period`` wraps parameters into the first period."""
@@ -82,7 +57,7 @@ def _spline(knots: np.ndarray, poles: np.ndarray, weights: np.ndarray | None, de
     def evaluate(u: np.ndarray) -> np.ndarray:
         if period is not None:
             u = start + np.mod(u - start, period)
-        h = _de_boor(knots, coef, degree, np.ascontiguousarray(u, dtype=float))
+        h = de_boor(knots, coef, degree, u)
         return h if weights is None else h[:, :3] / h[:, 3:]
 
     return evaluate

@@ -54,7 +54,7 @@ def _anchor(points: np.ndarray, first: np.ndarray, last: np.ndarray, estimate: f
 
 
 def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, opts: dict[str, Any],
-                 notes: list[str]) -> ShapeEdgeGrid:
+                 notes: list[str], curves: dict[int, EdgeCurve]) -> ShapeEdgeGrid:
     eid = i + 1
     edge = topo.edges[i]
     v1, v2 = topo.edge_vertices[i]
@@ -71,7 +71,7 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
         return ShapeEdgeGrid(params=np.array([first, last], dtype=float), points=np.array([p1, p1]),
                              ald_estimate=0.0, evaluations=0, curve=kind, **common)
     try:
-        curve = EdgeCurve(edge, eid)
+        curve = curves[eid] = EdgeCurve(edge, eid)
         grid = refine_curve(curve, curve.domain, **opts)
     except CurveEvaluationError as exc:
         raise GeometryError(f"{src}: edge {eid}: {exc}") from exc
@@ -117,13 +117,14 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
         raise InputError(f"{loaded.source}: {exc}") from exc
     vpoints = [_point(v) for v in topo.vertices]
     edges: list[ShapeEdgeGrid] = []
+    curves: dict[int, EdgeCurve] = {}  # one adaptor per edge, kept for grading and later splitting
     total = len(topo.edges)
     segments = 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CadedgeWarning)  # collected per edge in notes instead
         for i in range(total):
             edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
-            edges.append(_refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes))
+            edges.append(_refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes, curves))
             segments += len(edges[-1].params) - 1
             if segments > MAX_MODEL_SEGMENTS:
                 raise InputError(f"{loaded.source}: the grids would exceed {MAX_MODEL_SEGMENTS:,} segments "
@@ -132,7 +133,8 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
                 progress(i + 1, total)
     if opts["max_growth"] is not None:
         try:
-            notes += grade_vertices(edges, topo, opts["max_growth"])
+            edges, graded = grade_vertices(edges, curves, opts["max_growth"])
+            notes += graded
         except GeometryError as exc:
             raise GeometryError(f"{loaded.source}: grading edge ends at vertices: {exc}") from exc
     spacing = vertex_spacings(edges)
@@ -142,4 +144,5 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     return ShapeGrid(source=loaded.source, units=loaded.units,
                      options={**opts, "ald_for": local_records} if local_records else dict(opts),
                      vertices=vertices, edges=edges, faces=len(topo.faces),
-                     seconds=time.perf_counter() - t0, warnings=loaded.warnings + notes, shape=loaded.shape)
+                     seconds=time.perf_counter() - t0, warnings=loaded.warnings + notes, shape=loaded.shape,
+                     curves=curves)

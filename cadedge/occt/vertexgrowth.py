@@ -13,19 +13,22 @@ terminates; for ``g >= sqrt(2)`` halves never fall below that floor, below ``sqr
 may stay unmet and a note names the edges.
 
 New points lie on the curve (placed by arc length along a small dense sampling of the split
-segment); vertex points stay bit-identical. Splitting only lengthens the polyline, so the deficit
-only falls.
+segment, :func:`cadedge.splitting.point_at_arc`); vertex points stay bit-identical. Splitting only
+lengthens the polyline, so the deficit only falls. Grids are replaced, never edited in place.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections import defaultdict
+from typing import Mapping
 
 import numpy as np
 
+from ..grid import row_norms
 from ..shapegrid import ShapeEdgeGrid
+from ..splitting import insert_points, point_at_arc
 from .edgecurve import EdgeCurve
-from .topology import Topology
 
 #: Samples along a segment to place a new point by arc length.
 DENSE = 17
@@ -34,19 +37,6 @@ SLACK = 1e-6
 #: Upper bound on splits per edge and on global rounds (safety bounds; not reached in practice).
 MAX_SPLITS = 5000
 MAX_ROUNDS = 50
-
-
-def _split(e: ShapeEdgeGrid, curve: EdgeCurve, j: int, dist: float, from_start: bool) -> None:
-    """Insert a point into segment ``j`` at arc distance ``dist`` from its start (or its end)."""
-    u0, u1 = e.params[j], e.params[j + 1]
-    us = np.linspace(u0, u1, DENSE) if from_start else np.linspace(u1, u0, DENSE)
-    dense = curve.evaluate(us)
-    dense[0] = e.points[j] if from_start else e.points[j + 1]
-    cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(dense, axis=0), axis=1))])
-    u = float(np.interp(dist, cum, us))
-    e.params = np.insert(e.params, j + 1, u)
-    e.points = np.insert(e.points, j + 1, curve.evaluate(np.array([u]))[0], axis=0)
-    e.evaluations += DENSE + 1
 
 
 def _allowed(seg: np.ndarray, g: float, caps: tuple[float | None, float | None]) -> tuple[np.ndarray, np.ndarray]:
@@ -58,24 +48,38 @@ def _allowed(seg: np.ndarray, g: float, caps: tuple[float | None, float | None])
 
 
 def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | None, float | None],
-              floor: float) -> tuple[int, bool]:
-    """Split segments of ``e`` until caps and growth hold; returns (points inserted, all limits met).
+              floor: float) -> tuple[ShapeEdgeGrid, int, bool]:
+    """``e`` split until caps and growth hold: (the new grid, points inserted, all limits met).
 
     No piece shorter than ``floor`` is made, which bounds the work; for ``g < sqrt(2)`` that can
     leave a limit unmet.
     """
-    seg = e.segment_lengths
+    params, points, evaluations = e.params, e.points, e.evaluations
+    seg = row_norms(np.diff(points, axis=0))
+    count = 0
     for count in range(MAX_SPLITS):
         allowed, short_at_start = _allowed(seg, g, caps)
         halves = seg < 2.0 * allowed
         bad = (seg > allowed * (1 + SLACK)) & ~(halves & (0.5 * seg < floor * (1 - SLACK)))
         if not bad.any():
-            return count, not np.any(seg > allowed * (1 + SLACK))
+            break
         j = int(np.argmax(bad))
         dist = 0.5 * seg[j] if halves[j] else allowed[j]
-        _split(e, curve, j, dist, bool(short_at_start[j]))
-        seg = e.segment_lengths
-    return MAX_SPLITS, False
+        fwd = bool(short_at_start[j])
+        u, p, n = point_at_arc(curve.evaluate, params[j], params[j + 1], points[j] if fwd else points[j + 1], dist,
+                               from_start=fwd, dense=DENSE)
+        evaluations += n
+        longer = insert_points(params, points, np.array([u]), p[None, :])
+        if len(longer[0]) == len(params):
+            break  # the point fell on a node: this segment cannot be split further
+        params, points = longer
+        seg = row_norms(np.diff(points, axis=0))
+    else:
+        count = MAX_SPLITS
+    met = count < MAX_SPLITS and not np.any(seg > _allowed(seg, g, caps)[0] * (1 + SLACK))
+    if count == 0:
+        return e, 0, met
+    return dataclasses.replace(e, params=params, points=points, evaluations=evaluations), count, met
 
 
 def _caps(edges: list[ShapeEdgeGrid], g: float) -> dict[int, float]:
@@ -89,19 +93,21 @@ def _caps(edges: list[ShapeEdgeGrid], g: float) -> dict[int, float]:
     return {vid: g * min(s) for vid, s in ends.items() if len(s) > 1}
 
 
-def grade_vertices(edges: list[ShapeEdgeGrid], topo: Topology, g: float) -> list[str]:
-    """Grade every edge against its vertex caps and ``g``; edges are updated in place.
+def grade_vertices(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve],
+                   g: float) -> tuple[list[ShapeEdgeGrid], list[str]]:
+    """Grade every edge against its vertex caps and ``g``: (new edge list, notes).
 
-    Returns notes for edges where the limits could not be met within the split budget.
+    ``curves`` maps edge ids to their curves (those refine_shape built). The notes name edges where the
+    limits could not be met within the split budget.
     """
+    edges = list(edges)
     totals = {k: e.length / (1.0 - e.ald_estimate) for k, e in enumerate(edges)
               if not e.degenerate and e.ald_estimate < 1.0 and e.length > 0.0}
-    curves: dict[int, EdgeCurve] = {}
     notes: list[str] = []
     met: dict[int, bool] = {}
     live = [e for e in edges if not e.degenerate and e.segments]
     if not live:
-        return []
+        return edges, []
     lowest = min(float(e.segment_lengths.min()) for e in live) / g
     for _ in range(MAX_ROUNDS):
         caps = _caps(edges, g)
@@ -109,10 +115,9 @@ def grade_vertices(edges: list[ShapeEdgeGrid], topo: Topology, g: float) -> list
         for k, e in enumerate(edges):
             if e.degenerate or e.segments == 0:
                 continue
-            curve = curves.setdefault(k, EdgeCurve(topo.edges[k], k + 1))
             ends = (caps.get(e.vertices[0]), caps.get(e.vertices[1]))
             floor = max(lowest, min([float(e.segment_lengths.min())] + [c / g for c in ends if c is not None]) / g)
-            inserted, met[k] = _fix_edge(e, curve, g, ends, floor)
+            edges[k], inserted, met[k] = _fix_edge(e, curves[e.id], g, ends, floor)
             changed = changed or inserted > 0
         if not changed:
             break
@@ -121,5 +126,5 @@ def grade_vertices(edges: list[ShapeEdgeGrid], topo: Topology, g: float) -> list
     notes += [f"edge {k + 1}: max_growth {g:g} not met everywhere (below sqrt(2) splitting needs "
               "pieces shorter than the edge's shortest segment)" for k, ok in sorted(met.items()) if not ok]
     for k, total in totals.items():
-        edges[k].ald_estimate = max(1.0 - edges[k].length / total, 0.0)
-    return notes
+        edges[k] = dataclasses.replace(edges[k], ald_estimate=max(1.0 - edges[k].length / total, 0.0))
+    return edges, notes

@@ -1,17 +1,33 @@
-"""Growth-ratio control (paper section 7): split segments until neighbours differ by at most a ratio.
+"""Graded splitting: every way cadedge adds points to a finished grid, in one place.
 
-Only splitting, so the deficit can only fall. First a graded size field along the polyline
-(h(s) = min over segments of their length plus (g - 1) times the distance, by two sweeps) says how many
-pieces each segment needs and where, so sizes grow geometrically away from small segments; then any
-pair still out of bounds is fixed by splitting the longer segment where it halves its chord
-(bisection on |P(u) - A| - |P(u) - B|, vectorised over all segments split in one pass).
+A grid here is a pair (params, points). Nothing in this module edits one in place: each function
+returns new arrays, and points are only ever added (so a polyline only lengthens and its deficit only
+falls). The pieces:
+
+- :func:`insert_points` merges new samples into a grid (sorted by parameter; a repeated parameter
+  keeps the old point);
+- :func:`points_at_distances` places points on the curve at given distances from a segment end
+  (vectorised bisection), :func:`point_at_arc` at a given arc distance along a segment (a small dense
+  sampling);
+- :func:`split_evenly` cuts segments into equal parameter steps;
+- :func:`limit_growth` (paper section 7) splits until neighbouring segments differ by at most a ratio:
+  first along a graded size field (h(s) = min over segments of their length plus (g - 1) times the
+  distance, by two sweeps), so sizes grow geometrically away from small segments; then any pair still
+  out of bounds is fixed by splitting the longer segment.
+
+Callers: refine_curve and target mode (``max_growth`` within an edge), :mod:`cadedge.occt.vertexgrowth`
+(``max_growth`` across vertices) and :mod:`cadedge.mesh.proximity` (segments longer than the mesh size).
 """
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from .grid import row_norms
+
+Evaluate = Callable[[np.ndarray], np.ndarray]
 
 GRADED_PASSES = 12
 MAX_PASSES = 400
@@ -27,8 +43,40 @@ def worst_growth(p: np.ndarray) -> float:
         return float(np.max(np.maximum(seg[1:], seg[:-1]) / np.minimum(seg[1:], seg[:-1])))
 
 
-def _points_at_distances(ev, ua, ub, ref, dist, *, from_start=True):
-    """Parameters in (ua, ub) whose points lie ``dist`` from ``ref`` (vectorised bisection).
+def insert_points(params: np.ndarray, points: np.ndarray, new_params: np.ndarray,
+                  new_points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A new grid: ``params``/``points`` with the new samples merged in by parameter (where a parameter
+    repeats, the old sample stays)."""
+    u = np.concatenate([params, new_params])
+    order = np.argsort(u, kind="stable")
+    u, p = u[order], np.concatenate([points, new_points])[order]
+    keep = np.concatenate([[True], np.diff(u) > 0])
+    return u[keep], p[keep]
+
+
+def split_evenly(params: np.ndarray, pieces: np.ndarray) -> np.ndarray:
+    """Parameters cutting segment ``k`` of ``params`` into ``pieces[k]`` equal parameter steps (the
+    interior cuts only, in order)."""
+    return np.concatenate([params[k] + (params[k + 1] - params[k]) * np.arange(1, n) / n
+                           for k, n in enumerate(pieces) if n > 1] or [np.zeros(0)])
+
+
+def point_at_arc(evaluate: Evaluate, u0: float, u1: float, start: np.ndarray, dist: float, *,
+                 from_start: bool = True, dense: int = 17) -> tuple[float, np.ndarray, int]:
+    """(parameter, point, evaluations) at arc distance ``dist`` from one end of the segment [u0, u1]
+    (from ``u0`` if ``from_start``, else from ``u1``), measured along ``dense`` samples; ``start`` is
+    the grid's point at that end (it may lie a tolerance off the curve, at a B-rep vertex)."""
+    us = np.linspace(u0, u1, dense) if from_start else np.linspace(u1, u0, dense)
+    samples = evaluate(us)
+    samples[0] = start
+    cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(samples, axis=0), axis=1))])
+    u = float(np.interp(dist, cum, us))
+    return u, evaluate(np.array([u]))[0], dense + 1
+
+
+def points_at_distances(ev: Evaluate, ua: np.ndarray, ub: np.ndarray, ref: np.ndarray, dist: np.ndarray, *,
+                        from_start: np.ndarray | bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Parameters in (ua, ub) whose points lie ``dist`` from ``ref``, with the points (vectorised bisection).
 
     ``ref`` is the point at ``ua`` (``from_start``) or at ``ub``; ``from_start`` may be an array.
     """
@@ -76,22 +124,19 @@ def _graded_split(ev, u: np.ndarray, p: np.ndarray, g: float, min_length: float 
         ub.append(np.full(len(frac), u[k + 1]))
         pa.append(np.repeat(p[k:k + 1], len(frac), axis=0))
         dist.append(frac * seg[k])
-    add, pu = _points_at_distances(ev, np.concatenate(ua), np.concatenate(ub), np.concatenate(pa),
-                                   np.concatenate(dist))
-    allu = np.concatenate([u, add])
-    order = np.argsort(allu, kind="stable")
-    allu, allp = allu[order], np.concatenate([p, pu])[order]
-    keep = np.concatenate([[True], np.diff(allu) > 0])
-    return allu[keep], allp[keep]
+    add, pu = points_at_distances(ev, np.concatenate(ua), np.concatenate(ub), np.concatenate(pa),
+                                  np.concatenate(dist))
+    return insert_points(u, p, add, pu)
 
 
-def limit_growth(ev, params: np.ndarray, points: np.ndarray, max_growth: float, *,
+def limit_growth(ev: Evaluate, params: np.ndarray, points: np.ndarray, max_growth: float, *,
                  min_length: float | None = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Split segments until neighbours have a length ratio of at most ``max_growth``.
 
-    Returns (params, points, notes). A piece is never cut shorter than 1/max_growth of the segment
-    beside it nor than half the shortest input segment, so the work is bounded; a note says when some ratio could not be brought within the bound that way
-    (min_length, or a bound below about 1.33 right next to an abrupt change of size).
+    Returns (params, points, notes), a new grid. A piece is never cut shorter than 1/max_growth of the
+    segment beside it nor than half the shortest input segment, so the work is bounded; a note says
+    when some ratio could not be brought within the bound that way (min_length, or a bound below about
+    1.33 right next to an abrupt change of size).
     """
     u, p = np.asarray(params, dtype=float), np.asarray(points, dtype=float)
     g = max_growth
@@ -131,12 +176,11 @@ def limit_growth(ev, params: np.ndarray, points: np.ndarray, max_growth: float, 
         x, long_is_left, big = x[first], long_is_left[first], big[first]
         # the piece sits at the short neighbour's side of the long segment
         ref = np.where(long_is_left[:, None], p[k + 1], p[k])
-        um, pm = _points_at_distances(ev, u[k], u[k + 1], ref, x, from_start=~long_is_left)
+        um, pm = points_at_distances(ev, u[k], u[k + 1], ref, x, from_start=~long_is_left)
         fits = np.minimum(row_norms(pm - p[k]), row_norms(p[k + 1] - pm)) >= floor
         if not fits.any():
             break
-        u = np.insert(u, k[fits] + 1, um[fits])
-        p = np.insert(p, k[fits] + 1, pm[fits], axis=0)
+        u, p = insert_points(u, p, um[fits], pm[fits])
     worst = worst_growth(p)
     notes = [] if worst <= g * (1 + 1e-9) else [
         f"max_growth {g:g} not met everywhere: worst ratio of adjacent segments is {worst:.3g}"]

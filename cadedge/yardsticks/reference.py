@@ -8,15 +8,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .curves import Evaluator, as_curve
-from .grid import polyline_length
-from .refine import resolve_domain
+from ..curves import Evaluator, as_curve
+from ..grid import polyline_length
+from ..refine import resolve_domain
 
 
 def reference_length(curve, domain: tuple[float, float] | None = None, n: int = 2 ** 20) -> float:
     """Length of ``curve`` on ``domain`` from ``n + 1`` uniform samples, Richardson-extrapolated.
 
-    >>> from cadedge.analytic import circle
+    >>> from cadedge.yardsticks.analytic import circle
     >>> abs(reference_length(circle()) - 2 * np.pi) < 1e-10
     True
     """

@@ -49,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from .curves import Evaluator, as_curve
-from .errors import InputError
+from ..curves import Evaluator, as_curve
+from ..errors import InputError
 
 RTOL = 1e-12  # relative slack on length comparisons: a polyline reaching L* exactly is not lost to rounding
 DENSE_LIMIT = 4_000_000  # largest cached chord band (entries) for the dense layer
@@ -323,7 +323,7 @@ def dense_samples(curve: Any, domain: tuple[float, float] | None = None, n: int 
     points) is then thinned to about ``n`` samples at equal quantiles of the same measure, ends kept.
     Parameters in ``include`` (e.g. a grid's own vertices) are added after thinning.
     """
-    from .refine import resolve_domain
+    from ..refine import resolve_domain
     c = as_curve(curve, domain)
     a, b = resolve_domain(c, domain)
     n = int(n)

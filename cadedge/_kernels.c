@@ -1,0 +1,627 @@
+/* cadedge's inner loops in C: exploration levels, node placement and de Boor evaluation.
+ *
+ * A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
+ * dominates. They are compiled once, when the package is installed, and load in a millisecond (a
+ * JIT compiler cost seconds of import, cache loading and first-run compilation per process). The
+ * module uses only the Python C API and the buffer protocol: no numpy headers, no OpenCASCADE, so it
+ * builds against any numpy and OCP. Callers (cadedge/kernels.py) pass C-contiguous float64 / int64 /
+ * bool arrays and preallocated outputs; every function checks the formats it is given.
+ *
+ * The arithmetic follows the former numba kernels operation by operation (compiled without FMA
+ * contraction), so the grids are unchanged.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---------------------------------------------------------------- buffers */
+
+enum { F64 = 'd', I64 = 'q', BOOL = '?' };
+
+/* Get a C-contiguous buffer of the given element kind; 0 on success, -1 with an exception set. */
+static int get(PyObject *obj, int kind, int writable, Py_buffer *view, const char *name)
+{
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) < 0)
+        return -1;
+    const char *f = view->format ? view->format : "B";
+    if (*f == '=' || *f == '<' || *f == '@')
+        f++;
+    int ok;
+    switch (kind) {
+    case F64: ok = (*f == 'd' && view->itemsize == 8); break;
+    case I64: ok = ((*f == 'q' || *f == 'l') && view->itemsize == 8); break;
+    default: ok = (*f == '?' && view->itemsize == 1); break;
+    }
+    if (!ok) {
+        PyErr_Format(PyExc_TypeError, "%s: expected a contiguous %s array", name,
+                     kind == F64 ? "float64" : kind == I64 ? "int64" : "bool");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+#define MAXBUF 20
+typedef struct {
+    Py_buffer v[MAXBUF];
+    int n;
+} Buffers;
+
+static void release(Buffers *b)
+{
+    for (int i = 0; i < b->n; i++)
+        PyBuffer_Release(&b->v[i]);
+    b->n = 0;
+}
+
+/* The next argument as a buffer; returns its data or NULL (exception set). */
+static void *arg(Buffers *b, PyObject *args, Py_ssize_t i, int kind, int writable, Py_ssize_t *count)
+{
+    if (i >= PyTuple_GET_SIZE(args)) {
+        PyErr_SetString(PyExc_TypeError, "too few arguments");
+        return NULL;
+    }
+    char name[32];
+    snprintf(name, sizeof name, "argument %d", (int)i + 1);
+    if (get(PyTuple_GET_ITEM(args, i), kind, writable, &b->v[b->n], name) < 0)
+        return NULL;
+    Py_buffer *v = &b->v[b->n++];
+    if (count)
+        *count = v->len / v->itemsize;
+    return v->buf;
+}
+
+static int num(PyObject *args, Py_ssize_t i, double *out)
+{
+    if (i >= PyTuple_GET_SIZE(args)) {
+        PyErr_SetString(PyExc_TypeError, "too few arguments");
+        return -1;
+    }
+    *out = PyFloat_AsDouble(PyTuple_GET_ITEM(args, i));
+    return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
+}
+
+/* ---------------------------------------------------------------- geometry */
+
+static inline double distance(const double *p, Py_ssize_t i, const double *q, Py_ssize_t j)
+{
+    double dx = q[3 * j] - p[3 * i];
+    double dy = q[3 * j + 1] - p[3 * i + 1];
+    double dz = q[3 * j + 2] - p[3 * i + 2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+static inline double dmax(double a, double b) { return b > a ? b : a; }
+
+/* Gain of the triple pa[i], pm[j], pb[k]; *two gets the two half chords. */
+static inline double gain(const double *pa, Py_ssize_t i, const double *pm, Py_ssize_t j, const double *pb,
+                          Py_ssize_t k, double *two)
+{
+    double t = distance(pa, i, pm, j) + distance(pm, j, pb, k);
+    *two = t;
+    return dmax(t - distance(pa, i, pb, k), 0.0);
+}
+
+/* ---------------------------------------------------------------- exploration */
+
+/* classify(ua, um, ub, pa, pm, pb, ratio, corners_out, split_out, gains_out,
+ *          tol, scale, min_width, noise, straight, asymptotic) -> (remainder, n_corners, n_split, scale)
+ * One level: which live triples are finished (their Richardson remainder summed), which are corners,
+ * which split (indices and gains). scale < 0 sets it from this level's half chords. */
+static PyObject *classify(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n, nc;
+    double tol, scale, min_width, noise, straight_share, asymptotic;
+    PyObject *result = NULL;
+    const double *ua = arg(&b, args, 0, F64, 0, &n);
+    const double *um = ua ? arg(&b, args, 1, F64, 0, NULL) : NULL;
+    const double *ub = um ? arg(&b, args, 2, F64, 0, NULL) : NULL;
+    const double *pa = ub ? arg(&b, args, 3, F64, 0, NULL) : NULL;
+    const double *pm = pa ? arg(&b, args, 4, F64, 0, NULL) : NULL;
+    const double *pb = pm ? arg(&b, args, 5, F64, 0, NULL) : NULL;
+    const double *ratio = pb ? arg(&b, args, 6, F64, 0, NULL) : NULL;
+    double *corners = ratio ? arg(&b, args, 7, F64, 1, &nc) : NULL;
+    int64_t *split = corners ? arg(&b, args, 8, I64, 1, NULL) : NULL;
+    double *gains = split ? arg(&b, args, 9, F64, 1, NULL) : NULL;
+    if (!gains || num(args, 10, &tol) || num(args, 11, &scale) || num(args, 12, &min_width) ||
+        num(args, 13, &noise) || num(args, 14, &straight_share) || num(args, 15, &asymptotic))
+        goto done;
+    double *g = malloc(2 * (n > 0 ? n : 1) * sizeof(double));
+    if (!g) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    double *two = g + n;
+    for (Py_ssize_t i = 0; i < n; i++)
+        g[i] = gain(pa, i, pm, i, pb, i, &two[i]);
+    if (scale < 0.0) {
+        double s = 0.0;
+        for (Py_ssize_t i = 0; i < n; i++)
+            s += two[i];
+        scale = dmax(s, 0.0);
+    }
+    double remainder = 0.0;
+    Py_ssize_t n_corners = 0, n_split = 0;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        int straight = g[i] <= dmax(straight_share * dmax(two[i], scale * 1e-3), noise);
+        int resolved = g[i] / 3.0 <= tol * two[i] && ratio[i] <= asymptotic;
+        int tiny = (ub[i] - ua[i]) <= min_width;
+        if (straight)
+            continue;
+        if (resolved || tiny) {
+            remainder += g[i] / 3.0;
+            if (tiny && !resolved)
+                corners[n_corners++] = um[i];
+        } else {
+            gains[n_split] = g[i];
+            split[n_split++] = i;
+        }
+    }
+    free(g);
+    result = Py_BuildValue("dnnd", remainder, n_corners, n_split, scale);
+done:
+    release(&b);
+    return result;
+}
+
+/* children(ua, um, ub, pa, pm, pb, split, gains, q, pq, c_ua, c_um, c_ub, c_pa, c_pm, c_pb, c_ratio)
+ * The live triples of the next level: (a, q1, m) and (m, q3, b) of each split (a, m, b), all left
+ * halves first, each with (G_left + G_right) / G_parent. */
+static PyObject *children(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n;
+    const double *ua = arg(&b, args, 0, F64, 0, NULL);
+    const double *um = ua ? arg(&b, args, 1, F64, 0, NULL) : NULL;
+    const double *ub = um ? arg(&b, args, 2, F64, 0, NULL) : NULL;
+    const double *pa = ub ? arg(&b, args, 3, F64, 0, NULL) : NULL;
+    const double *pm = pa ? arg(&b, args, 4, F64, 0, NULL) : NULL;
+    const double *pb = pm ? arg(&b, args, 5, F64, 0, NULL) : NULL;
+    const int64_t *split = pb ? arg(&b, args, 6, I64, 0, &n) : NULL;
+    const double *gains = split ? arg(&b, args, 7, F64, 0, NULL) : NULL;
+    const double *q = gains ? arg(&b, args, 8, F64, 0, NULL) : NULL;
+    const double *pq = q ? arg(&b, args, 9, F64, 0, NULL) : NULL;
+    double *c_ua = pq ? arg(&b, args, 10, F64, 1, NULL) : NULL;
+    double *c_um = c_ua ? arg(&b, args, 11, F64, 1, NULL) : NULL;
+    double *c_ub = c_um ? arg(&b, args, 12, F64, 1, NULL) : NULL;
+    double *c_pa = c_ub ? arg(&b, args, 13, F64, 1, NULL) : NULL;
+    double *c_pm = c_pa ? arg(&b, args, 14, F64, 1, NULL) : NULL;
+    double *c_pb = c_pm ? arg(&b, args, 15, F64, 1, NULL) : NULL;
+    double *c_ratio = c_pb ? arg(&b, args, 16, F64, 1, NULL) : NULL;
+    if (!c_ratio) {
+        release(&b);
+        return NULL;
+    }
+    double unused;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        Py_ssize_t i = split[k];
+        double gl = gain(pa, i, pq, 2 * k, pm, i, &unused);
+        double gr = gain(pm, i, pq, 2 * k + 1, pb, i, &unused);
+        double r = gains[k] > 0 ? (gl + gr) / gains[k] : INFINITY;
+        Py_ssize_t left = k, right = n + k;
+        c_ua[left] = ua[i], c_um[left] = q[2 * k], c_ub[left] = um[i];
+        c_ua[right] = um[i], c_um[right] = q[2 * k + 1], c_ub[right] = ub[i];
+        for (int d = 0; d < 3; d++) {
+            c_pa[3 * left + d] = pa[3 * i + d], c_pm[3 * left + d] = pq[3 * (2 * k) + d];
+            c_pb[3 * left + d] = pm[3 * i + d];
+            c_pa[3 * right + d] = pm[3 * i + d], c_pm[3 * right + d] = pq[3 * (2 * k + 1) + d];
+            c_pb[3 * right + d] = pb[3 * i + d];
+        }
+        c_ratio[left] = c_ratio[right] = r;
+    }
+    release(&b);
+    Py_RETURN_NONE;
+}
+
+/* ---------------------------------------------------------------- placement */
+
+static double chords(const double *p, const int64_t *nodes, Py_ssize_t count)
+{
+    double s = 0.0;
+    for (Py_ssize_t k = 0; k + 1 < count; k++)
+        s += distance(p, nodes[k], p, nodes[k + 1]);
+    return s;
+}
+
+/* Greedy farthest-reach nodes into out; returns their count. Each chord misses at most cap of the
+ * samples' length, is at most max_length long and, where the curve allows, at least min_length;
+ * stops (sorted, ending with the last sample) are always nodes. */
+static Py_ssize_t cover(const double *p, Py_ssize_t n, const double *cum, double cap, double min_length,
+                        double max_length, const int64_t *stops, int64_t *out)
+{
+    Py_ssize_t last = n - 1, count = 1, i = 0, s = 0;
+    out[0] = 0;
+    while (i < last) {
+        while (stops[s] <= i)
+            s++;
+        Py_ssize_t stop = stops[s], reach = stop;
+        for (Py_ssize_t j = i + 1; j <= stop; j++) {
+            double chord = distance(p, i, p, j);
+            if ((cum[j] - cum[i]) - chord > cap || chord > max_length) {
+                reach = j - 1;
+                break;
+            }
+        }
+        if (reach < i + 1)
+            reach = i + 1;
+        if (min_length > 0.0 && reach < stop && distance(p, i, p, reach) < min_length) {
+            Py_ssize_t far = stop;
+            for (Py_ssize_t j = reach + 1; j <= stop; j++) {
+                if (distance(p, i, p, j) >= min_length) {
+                    far = j;
+                    break;
+                }
+            }
+            reach = far;
+        }
+        out[count++] = reach;
+        i = reach;
+    }
+    if (min_length > 0.0 && count > 2 && distance(p, out[count - 2], p, out[count - 1]) < min_length) {
+        out[count - 2] = out[count - 1];
+        count--;
+    }
+    return count;
+}
+
+/* Move interior nodes (not on fixed samples) to the sample between their neighbours that maximises
+ * the two chords; odd positions then even ones, until nothing moves or sweeps runs out. */
+static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps, const uint8_t *fixed)
+{
+    for (int sweep = 0; sweep < sweeps; sweep++) {
+        int moved = 0;
+        for (int parity = 1; parity >= 0; parity--) {
+            for (Py_ssize_t k = 1; k < count - 1; k++) {
+                if (k % 2 != parity || fixed[nodes[k]])
+                    continue;
+                int64_t lo = nodes[k - 1], hi = nodes[k + 1];
+                double best = -1.0;
+                int64_t at = -1;
+                for (int64_t c = lo + 1; c < hi; c++) {
+                    double two = distance(p, lo, p, c) + distance(p, c, p, hi);
+                    if (two > best)
+                        best = two, at = c;
+                }
+                if (at < 0)
+                    continue;
+                double current = distance(p, lo, p, nodes[k]) + distance(p, nodes[k], p, hi);
+                if (best > current * (1.0 + 1e-15)) {
+                    nodes[k] = at;
+                    moved = 1;
+                }
+            }
+        }
+        if (!moved)
+            break;
+    }
+}
+
+typedef struct {
+    const double *p, *cum;
+    Py_ssize_t n;
+    double min_length, max_length;
+    const int64_t *stops;
+    const uint8_t *fixed;
+    int64_t *buf;
+} Cover;
+
+/* Greedy cover under cap, polished, into nodes: returns the count; *miss gets the deficit. */
+static Py_ssize_t plan(const Cover *c, double cap, int64_t *nodes, double *miss)
+{
+    Py_ssize_t count = cover(c->p, c->n, c->cum, cap, c->min_length, c->max_length, c->stops, c->buf);
+    memcpy(nodes, c->buf, count * sizeof(int64_t));
+    if (count > 2)
+        polish(c->p, nodes, count, 4, c->fixed);
+    *miss = c->cum[c->n - 1] - chords(c->p, nodes, count);
+    return count;
+}
+
+/* fewest(points, cum, stops, fixed, out, budget, min_length, max_length) -> count
+ * The fewest node indices (greedy + bisection on the cap, polished) whose chords miss at most budget
+ * of the samples' length; written to out. */
+static PyObject *fewest(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n;
+    double budget, min_length, max_length;
+    PyObject *result = NULL;
+    const double *p = arg(&b, args, 0, F64, 0, NULL);
+    const double *cum = p ? arg(&b, args, 1, F64, 0, &n) : NULL;
+    const int64_t *stops = cum ? arg(&b, args, 2, I64, 0, NULL) : NULL;
+    const uint8_t *fixed = stops ? arg(&b, args, 3, BOOL, 0, NULL) : NULL;
+    int64_t *out = fixed ? arg(&b, args, 4, I64, 1, NULL) : NULL;
+    if (!out || num(args, 5, &budget) || num(args, 6, &min_length) || num(args, 7, &max_length))
+        goto done;
+    if (n < 1) {
+        PyErr_SetString(PyExc_ValueError, "fewest: no samples");
+        goto done;
+    }
+    int64_t *work = malloc(3 * n * sizeof(int64_t));
+    if (!work) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    int64_t *buf = work, *tmp = work + n, *best = out;
+    Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf};
+    double total = cum[n - 1], miss;
+    Py_ssize_t best_count = plan(&c, dmax(budget, 0.0), best, &miss);
+    if (miss > budget) { /* the per-segment cap equal to the whole budget is too loose: bisect it down */
+        double lo = 0.0, hi = dmax(budget, 0.0);
+        int found = 0;
+        for (int it = 0; it < 60; it++) {
+            double mid = 0.5 * (lo + hi);
+            Py_ssize_t cnt = plan(&c, mid, tmp, &miss);
+            if (miss <= budget) {
+                memcpy(best, tmp, cnt * sizeof(int64_t));
+                best_count = cnt, found = 1, lo = mid;
+            } else {
+                hi = mid;
+            }
+            if (hi - lo <= 1e-3 * hi)
+                break;
+        }
+        if (!found)
+            best_count = plan(&c, 0.0, best, &miss);
+    }
+    /* The polished grid may leave room for fewer nodes: bisect for a cap that drops one, polish, check. */
+    int64_t *fewer = work + 2 * n;
+    while (best_count > 2) {
+        Py_ssize_t count = best_count, fewer_count = 0;
+        double lo = 0.0, hi = total;
+        int found = 0;
+        for (int it = 0; it < 40; it++) {
+            double mid = 0.5 * (lo + hi);
+            Py_ssize_t cnt = cover(p, n, cum, mid, min_length, max_length, stops, buf);
+            if (cnt < count) {
+                memcpy(fewer, buf, cnt * sizeof(int64_t));
+                fewer_count = cnt, found = 1, hi = mid;
+            } else {
+                lo = mid;
+            }
+            if (hi - lo <= 1e-4 * hi)
+                break;
+        }
+        if (!found)
+            break;
+        if (fewer_count > 2)
+            polish(p, fewer, fewer_count, 8, fixed);
+        if (total - chords(p, fewer, fewer_count) > budget)
+            break;
+        memcpy(best, fewer, fewer_count * sizeof(int64_t));
+        best_count = fewer_count;
+    }
+    free(work);
+    result = PyLong_FromSsize_t(best_count);
+done:
+    release(&b);
+    return result;
+}
+
+/* deficit_measure(points, cum, corners, out): cumulative measure M such that a chord spanning dM
+ * misses about dM**3 (see cadedge.placement.deficit_measure). */
+static PyObject *deficit_measure(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n, nc;
+    const double *p = arg(&b, args, 0, F64, 0, NULL);
+    const double *cum = p ? arg(&b, args, 1, F64, 0, &n) : NULL;
+    const int64_t *corners = cum ? arg(&b, args, 2, I64, 0, &nc) : NULL;
+    double *measure = corners ? arg(&b, args, 3, F64, 1, NULL) : NULL;
+    if (!measure) {
+        release(&b);
+        return NULL;
+    }
+    double *rho = calloc(n > 0 ? n : 1, sizeof(double));
+    if (!rho) {
+        release(&b);
+        return PyErr_NoMemory();
+    }
+    for (Py_ssize_t i = 1; i < n - 1; i++) {
+        double h1 = cum[i] - cum[i - 1], h2 = cum[i + 1] - cum[i];
+        double denom = 3.0 * h1 * h2 * (h1 + h2);
+        if (denom > 0)
+            rho[i] = cbrt(dmax(h1 + h2 - distance(p, i - 1, p, i + 1), 0.0) / denom);
+    }
+    if (n >= 3)
+        rho[0] = rho[1], rho[n - 1] = rho[n - 2];
+    for (Py_ssize_t k = 0; k < nc; k++)
+        rho[corners[k]] = 0.0;
+    if (n > 0)
+        measure[0] = 0.0;
+    for (Py_ssize_t i = 0; i + 1 < n; i++)
+        measure[i + 1] = measure[i] + 0.5 * (rho[i] + rho[i + 1]) * (cum[i + 1] - cum[i]);
+    free(rho);
+    release(&b);
+    Py_RETURN_NONE;
+}
+
+/* np.interp(x, xp, fp) for increasing x and non-decreasing xp, by one forward sweep. */
+static void interp(const double *x, Py_ssize_t nx, const double *xp, const double *fp, Py_ssize_t np_,
+                   double *out)
+{
+    Py_ssize_t last = np_ - 1, j = 0;
+    for (Py_ssize_t k = 0; k < nx; k++) {
+        double v = x[k];
+        if (v >= xp[last]) {
+            out[k] = fp[last];
+            continue;
+        }
+        if (v < xp[0]) {
+            out[k] = fp[0];
+            continue;
+        }
+        while (xp[j + 1] <= v)
+            j++;
+        out[k] = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (v - xp[j]) + fp[j];
+    }
+}
+
+/* interp_sorted(x, xp, fp, out) */
+static PyObject *interp_sorted(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t nx, nxp, nfp, nout;
+    const double *x = arg(&b, args, 0, F64, 0, &nx);
+    const double *xp = x ? arg(&b, args, 1, F64, 0, &nxp) : NULL;
+    const double *fp = xp ? arg(&b, args, 2, F64, 0, &nfp) : NULL;
+    double *out = fp ? arg(&b, args, 3, F64, 1, &nout) : NULL;
+    if (!out) {
+        release(&b);
+        return NULL;
+    }
+    if (nxp < 1 || nfp != nxp || nout != nx) {
+        release(&b);
+        PyErr_SetString(PyExc_ValueError, "interp_sorted: mismatched lengths");
+        return NULL;
+    }
+    interp(x, nx, xp, fp, nxp, out);
+    release(&b);
+    Py_RETURN_NONE;
+}
+
+/* place(params, cum, measure, cut, alloc, out) -> count
+ * Parameters at equal steps of measure within each piece between cut samples (alloc segments each),
+ * interpolated in arc length then in parameter; strictly increasing. out holds 1 + sum(max(alloc, 1)). */
+static PyObject *place(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t pieces, size;
+    PyObject *result = NULL;
+    const double *params = arg(&b, args, 0, F64, 0, NULL);
+    const double *cum = params ? arg(&b, args, 1, F64, 0, NULL) : NULL;
+    const double *measure = cum ? arg(&b, args, 2, F64, 0, NULL) : NULL;
+    const int64_t *cut = measure ? arg(&b, args, 3, I64, 0, NULL) : NULL;
+    const int64_t *alloc = cut ? arg(&b, args, 4, I64, 0, &pieces) : NULL;
+    double *out = alloc ? arg(&b, args, 5, F64, 1, &size) : NULL;
+    if (!out)
+        goto done;
+    int64_t most = 1;
+    for (Py_ssize_t piece = 0; piece < pieces; piece++)
+        if (alloc[piece] > most)
+            most = alloc[piece];
+    double *s = malloc(2 * most * sizeof(double));
+    if (!s) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    double *t = s + most;
+    Py_ssize_t w = 1;
+    out[0] = params[0];
+    for (Py_ssize_t piece = 0; piece < pieces; piece++) {
+        int64_t i0 = cut[piece], i1 = cut[piece + 1], k = alloc[piece];
+        if (k > 1) {
+            int by_measure = measure[i1] > measure[i0];
+            for (int64_t j = 1; j < k; j++)
+                s[j - 1] = by_measure ? measure[i0] + (measure[i1] - measure[i0]) * (double)j / (double)k
+                                      : cum[i0] + (cum[i1] - cum[i0]) * (double)j / (double)k;
+            const double *x = s;
+            if (by_measure) {
+                interp(s, k - 1, measure + i0, cum + i0, i1 - i0 + 1, t);
+                x = t;
+            }
+            interp(x, k - 1, cum + i0, params + i0, i1 - i0 + 1, s == x ? t : s);
+            const double *u = s == x ? t : s;
+            for (int64_t j = 0; j < k - 1; j++) {
+                if (u[j] > out[w - 1] && w < size)
+                    out[w++] = u[j];
+            }
+        }
+        if (params[i1] > out[w - 1] && w < size)
+            out[w++] = params[i1];
+    }
+    free(s);
+    result = PyLong_FromSsize_t(w);
+done:
+    release(&b);
+    return result;
+}
+
+/* ---------------------------------------------------------------- splines */
+
+/* de_boor(knots, coef, u, out, degree): points of the spline (knots, coef (n, dim), degree) at u into
+ * out (len(u), dim); outside the knots the end pieces are extended. */
+static PyObject *de_boor(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t nk, ncoef, nu, nout;
+    PyObject *result = NULL;
+    const double *knots = arg(&b, args, 0, F64, 0, &nk);
+    const double *coef = knots ? arg(&b, args, 1, F64, 0, &ncoef) : NULL;
+    const double *u = coef ? arg(&b, args, 2, F64, 0, &nu) : NULL;
+    double *out = u ? arg(&b, args, 3, F64, 1, &nout) : NULL;
+    if (!out)
+        goto done;
+    long degree = PyTuple_GET_SIZE(args) > 4 ? PyLong_AsLong(PyTuple_GET_ITEM(args, 4)) : -1;
+    if (degree == -1 && PyErr_Occurred())
+        goto done;
+    Py_ssize_t dim = b.v[1].ndim == 2 ? b.v[1].shape[1] : 0;
+    Py_ssize_t n = dim ? ncoef / dim : 0;
+    if (degree < 0 || dim < 1 || n < degree + 1 || nk != n + degree + 1 || nout != nu * dim) {
+        PyErr_SetString(PyExc_ValueError, "de_boor: inconsistent knots, coefficients or output");
+        goto done;
+    }
+    double *d = malloc((degree + 1) * dim * sizeof(double));
+    if (!d) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    for (Py_ssize_t m = 0; m < nu; m++) {
+        double x = u[m];
+        Py_ssize_t lo = 0, hi = nk; /* first knot > x (numpy's searchsorted, side="right") */
+        while (lo < hi) {
+            Py_ssize_t mid = (lo + hi) / 2;
+            if (knots[mid] <= x)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        Py_ssize_t span = lo - 1;
+        if (span < degree)
+            span = degree;
+        if (span > n - 1)
+            span = n - 1;
+        for (long j = 0; j <= degree; j++)
+            for (Py_ssize_t c = 0; c < dim; c++)
+                d[j * dim + c] = coef[(j + span - degree) * dim + c];
+        for (long r = 1; r <= degree; r++) {
+            for (long j = degree; j >= r; j--) {
+                double k0 = knots[j + span - degree];
+                double width = knots[j + 1 + span - r] - k0;
+                double alpha = width > 0 ? (x - k0) / width : 0.0;
+                for (Py_ssize_t c = 0; c < dim; c++)
+                    d[j * dim + c] = (1.0 - alpha) * d[(j - 1) * dim + c] + alpha * d[j * dim + c];
+            }
+        }
+        for (Py_ssize_t c = 0; c < dim; c++)
+            out[m * dim + c] = d[degree * dim + c];
+    }
+    free(d);
+    Py_INCREF(Py_None);
+    result = Py_None;
+done:
+    release(&b);
+    return result;
+}
+
+/* ---------------------------------------------------------------- module */
+
+static PyMethodDef methods[] = {
+    {"classify", classify, METH_VARARGS, "One exploration level: finished, corner and split triples."},
+    {"children", children, METH_VARARGS, "The next exploration level's live triples."},
+    {"fewest", fewest, METH_VARARGS, "The fewest node indices for a deficit budget (greedy cover + polish)."},
+    {"deficit_measure", deficit_measure, METH_VARARGS, "Cumulative deficit measure along samples."},
+    {"interp_sorted", interp_sorted, METH_VARARGS, "np.interp for sorted x, by one forward sweep."},
+    {"place", place, METH_VARARGS, "Parameters at equal steps of a measure, piece by piece."},
+    {"de_boor", de_boor, METH_VARARGS, "Spline points by de Boor's algorithm."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels",
+                                    "cadedge's compiled inner loops (see cadedge/kernels.py).", -1, methods};
+
+PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }

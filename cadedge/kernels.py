@@ -1,0 +1,89 @@
+"""numpy-facing wrappers of the refiner's compiled inner loops (``cadedge/_kernels.c``).
+
+A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
+dominated. They are plain C compiled when the package is installed, so a new process loads them in
+about a millisecond and never compiles anything. Each wrapper allocates the outputs and passes
+C-contiguous arrays of the right type; the C side checks them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:
+    from . import _kernels
+except ImportError as exc:  # a source tree used without installing it
+    raise ImportError("cadedge's compiled kernels (cadedge/_kernels.c) are not built: install the package "
+                      "(pip install -e .), which compiles them") from exc
+
+
+def _f64(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def classify(ua: np.ndarray, um: np.ndarray, ub: np.ndarray, pa: np.ndarray, pm: np.ndarray, pb: np.ndarray,
+             ratio: np.ndarray, tol: float, scale: float, min_width: float, noise: float, straight: float,
+             asymptotic: float) -> tuple[float, np.ndarray, np.ndarray, np.ndarray, float]:
+    """One exploration level over the live triples (a, m, b): (remainder of the finished ones, params
+    of new corners, indices to split, their gains, scale). ``scale`` < 0 asks for it to be set from
+    this (first) level's half chords. See :func:`cadedge.explore.explore` for the rules."""
+    n = len(ua)
+    corners, split, gains = np.empty(n), np.empty(n, dtype=np.int64), np.empty(n)
+    rem, n_corners, n_split, scale = _kernels.classify(
+        _f64(ua), _f64(um), _f64(ub), _f64(pa), _f64(pm), _f64(pb), _f64(ratio), corners, split, gains,
+        tol, scale, min_width, noise, straight, asymptotic)
+    return rem, corners[:n_corners], split[:n_split], gains[:n_split], scale
+
+
+def children(ua: np.ndarray, um: np.ndarray, ub: np.ndarray, pa: np.ndarray, pm: np.ndarray, pb: np.ndarray,
+             split: np.ndarray, gains: np.ndarray, q: np.ndarray, pq: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The live triples of the next level: (a, q1, m) and (m, q3, b) of each split (a, m, b), all left
+    halves first, each with (G_left + G_right) / G_parent: (ua, um, ub, pa, pm, pb, ratio)."""
+    n = 2 * len(split)
+    out = (np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n))
+    _kernels.children(_f64(ua), _f64(um), _f64(ub), _f64(pa), _f64(pm), _f64(pb),
+                      np.ascontiguousarray(split, dtype=np.int64), _f64(gains), _f64(q), _f64(pq), *out)
+    return out
+
+
+def fewest(points: np.ndarray, cum: np.ndarray, budget: float, min_length: float, max_length: float,
+           stops: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """Greedy cover + bisection on the cap + polish (see :func:`cadedge.placement.fewest_nodes`)."""
+    out = np.empty(len(points), dtype=np.int64)
+    count = _kernels.fewest(_f64(points), _f64(cum), np.ascontiguousarray(stops, dtype=np.int64),
+                            np.ascontiguousarray(fixed, dtype=np.bool_), out, budget, min_length, max_length)
+    return out[:count]
+
+
+def deficit_measure(points: np.ndarray, cum: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """See :func:`cadedge.placement.deficit_measure`."""
+    out = np.empty(len(cum))
+    _kernels.deficit_measure(_f64(points), _f64(cum), np.ascontiguousarray(corners, dtype=np.int64), out)
+    return out
+
+
+def interp_sorted(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """``np.interp(x, xp, fp)`` for increasing ``x`` and non-decreasing ``xp`` (the same values)."""
+    out = np.empty(len(x))
+    _kernels.interp_sorted(_f64(x), _f64(xp), _f64(fp), out)
+    return out
+
+
+def place(params: np.ndarray, cum: np.ndarray, measure: np.ndarray, cut: np.ndarray,
+          alloc: np.ndarray) -> np.ndarray:
+    """Parameters at equal steps of ``measure`` within each piece between ``cut`` samples (``alloc``
+    segments each), interpolated in arc length then in parameter; strictly increasing."""
+    alloc = np.ascontiguousarray(alloc, dtype=np.int64)
+    out = np.empty(1 + int(np.maximum(alloc, 1).sum()))
+    count = _kernels.place(_f64(params), _f64(cum), _f64(measure), np.ascontiguousarray(cut, dtype=np.int64),
+                           alloc, out)
+    return out[:count]
+
+
+def de_boor(knots: np.ndarray, coef: np.ndarray, degree: int, u: np.ndarray) -> np.ndarray:
+    """Points of the spline (knots, coef (n, d), degree) at ``u``; outside the knots the end pieces are
+    extended."""
+    coef = _f64(coef)
+    out = np.empty((len(u), coef.shape[1]))
+    _kernels.de_boor(_f64(knots), coef, _f64(u), out, int(degree))
+    return out
