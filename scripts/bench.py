@@ -228,7 +228,7 @@ class Gmsh:
 
 def bench(paths: list[Path], eps_list: list[float], *, use_gmsh: bool, use_dp: bool) -> list[dict]:
     rows = []
-    # Load what a first call loads once per process (the compiled kernels, from numba's disk cache), as
+    # Load what a first call loads once per process (the compiled kernels, numpy's lazy modules), as
     # OCCT's libraries are loaded before its first pass too: a sphere is refined untimed.
     refine_shape(Model(FIXTURES / "sphere.step").loaded.shape, ald=1e-2)
     for path in paths:

@@ -39,18 +39,6 @@ def _version() -> str:
     return __version__
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """Whether ``exc`` is, or was raised while handling, a KeyboardInterrupt (Ctrl-C inside compiled
-    numba code surfaces as a SystemError whose context is the KeyboardInterrupt)."""
-    seen: set[int] = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return True
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return False
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit code (0 ok, 1 some inputs failed, 2 bad input or usage)."""
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -67,13 +55,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"cadedge {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"cadedge {args.command}: interrupted", file=sys.stderr)
-        return 130
-    except SystemError as exc:
-        if not _interrupted(exc):
-            raise
-        if args.debug:
-            traceback.print_exc()
         print(f"cadedge {args.command}: interrupted", file=sys.stderr)
         return 130
 
