@@ -106,7 +106,7 @@ def _shuffled_order(grid: cadedge.ShapeGrid) -> cadedge.ShapeGrid:
 def test_mapping_falls_back_on_geometry_for_reordered_reversed_edges(grids):
     result = mesh_shape(_shuffled_order(grids["cylinder"]))
     _assert_watertight(result)
-    assert any("by geometry" in n for n in result.notes)
+    assert any("by geometry" in n for n in result.details)
 
 
 def test_gmsh_failure_is_reported_by_face_and_the_rest_is_meshed(grids):
