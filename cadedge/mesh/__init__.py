@@ -108,7 +108,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                mode: str = "nodes", min_length: float | None = None, max_length: float | None = None,
                max_growth: float | None = MESH_MAX_GROWTH, growth: float = DEFAULT_GROWTH,
                max_size: float | None = None, timeout: float | None = None,
-               face_timeout: float | None = None, hooks: dict[str, list[str]] | None = None) -> MeshResult:
+               face_timeout: float | None = None, hooks: dict[str, list[str]] | None = None,
+               job_options: dict[str, Any] | None = None) -> MeshResult:
     """Mesh every face of ``source`` (STEP path, cadquery/build123d/OCP shape, or a ``ShapeGrid``).
 
     ``ald``, ``min_length``, ``max_length``, ``max_growth`` go to :func:`cadedge.refine_shape` (ignored for
@@ -117,7 +118,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     at ``max_size`` (default: ``max_length``, else the largest edge spacing). ``mode`` is ``"nodes"`` or
     ``"sizes"`` (see the module doc). gmsh's work is bounded by ``timeout`` seconds (default
     :data:`~cadedge.mesh.isolate.DEFAULT_TIMEOUT`), one face attempt by ``face_timeout`` (default a fifth
-    of it); ``hooks`` are run inside the gmsh job (see :mod:`cadedge.mesh.worker`). Raises
+    of it); ``hooks`` are run inside the gmsh job with ``job_options`` (picklable) as ``job.options`` (see
+    :mod:`cadedge.mesh.worker`). Raises
     :class:`InputError` on bad arguments or input; faces gmsh fails on, crashes and timeouts are returned
     in ``failures`` / ``error``, never raised.
     """
@@ -152,11 +154,13 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
         grid = fit_to_sizes(grid, make_field)
     field_ = make_field(grid)
-    return _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks)
+    return _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
+                     job_options=job_options)
 
 
 def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, *,
-              timeout: float | None, face_timeout: float | None, hooks: dict[str, list[str]] | None) -> MeshResult:
+              timeout: float | None, face_timeout: float | None, hooks: dict[str, list[str]] | None,
+              job_options: dict[str, Any] | None) -> MeshResult:
     """Mesh in a child process (:func:`~cadedge.mesh.isolate.run_isolated`), then check in this one."""
     import dataclasses
 
@@ -167,7 +171,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .worker import MeshJob
 
     job = MeshJob(source=grid.source, brep=shape_to_brep(grid.shape), grid=dataclasses.replace(grid, shape=None),
-                  field=field_, mode=mode, hooks=dict(hooks or {}))
+                  field=field_, mode=mode, hooks=dict(hooks or {}), options=dict(job_options or {}))
     res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout)
     faces = list(res.faces)
     if res.error is not None:
