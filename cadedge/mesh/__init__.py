@@ -72,6 +72,8 @@ class MeshResult:
     error: str | None = None
     #: what the child's ``after_mesh`` hooks returned (see :mod:`cadedge.mesh.worker`)
     extras: dict[str, Any] = field(default_factory=dict)
+    #: per face: surface type, triangles, area deficit, min angle (:class:`~cadedge.mesh.report.MeshReport`)
+    report: Any = None
 
     @property
     def ok(self) -> bool:
@@ -91,7 +93,8 @@ class MeshResult:
         """The printed report: the check summary and the problems."""
         head = f"{self.source}: {len(self.grid.edges)} edges, {self.grid.segments} segments, mode {self.mode}, " \
                f"{self.seconds:.2f} s"
-        return [head] + (self.check.lines() if self.check else []) + self.problems()
+        return [head] + (self.check.lines() if self.check else []) + (self.report.lines() if self.report else []) \
+            + self.problems()
 
 
 def _grid_of(source: Any, ald: float, min_length: float | None, max_length: float | None,
@@ -109,7 +112,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                max_growth: float | None = MESH_MAX_GROWTH, growth: float = DEFAULT_GROWTH,
                max_size: float | None = None, timeout: float | None = None,
                face_timeout: float | None = None, hooks: dict[str, list[str]] | None = None,
-               job_options: dict[str, Any] | None = None) -> MeshResult:
+               job_options: dict[str, Any] | None = None, surface_ald: float | None = None) -> MeshResult:
     """Mesh every face of ``source`` (STEP path, cadquery/build123d/OCP shape, or a ``ShapeGrid``).
 
     ``ald``, ``min_length``, ``max_length``, ``max_growth`` go to :func:`cadedge.refine_shape` (ignored for
@@ -119,7 +122,9 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     ``"sizes"`` (see the module doc). gmsh's work is bounded by ``timeout`` seconds (default
     :data:`~cadedge.mesh.isolate.DEFAULT_TIMEOUT`), one face attempt by ``face_timeout`` (default a fifth
     of it); ``hooks`` are run inside the gmsh job with ``job_options`` (picklable) as ``job.options`` (see
-    :mod:`cadedge.mesh.worker`). Raises
+    :mod:`cadedge.mesh.worker`). Every face's area deficit ``1 - mesh area / B-rep area`` is aimed at
+    ``|deficit| <= surface_ald`` (default ``ald``; see :mod:`cadedge.mesh.fidelity`) and measured in
+    ``result.report``. Raises
     :class:`InputError` on bad arguments or input; faces gmsh fails on, crashes and timeouts are returned
     in ``failures`` / ``error``, never raised.
     """
@@ -151,11 +156,29 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
+    from .fidelity import HOOKS, prepare
+
+    if surface_ald is not None and not surface_ald > 0:
+        raise InputError(f"surface_ald must be a positive number, got {surface_ald!r}")
+    if surface_ald is None:  # one knob: the edges' ALD (a ready grid's own) is the faces' area target too
+        surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
+    grid, fidelity = prepare(grid, surface_ald)  # faces' area target: boundary fit, curvature sizes
+    hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
+    job_options = {**(job_options or {}), "fidelity": fidelity}
+    notes = []
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
-        grid = fit_to_sizes(grid, make_field)
+        try:
+            grid = fit_to_sizes(grid, make_field)
+        except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
+            notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
     field_ = make_field(grid)
-    return _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
-                     job_options=job_options)
+    result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
+                       job_options=job_options)
+    result.notes[:0] = notes
+    from .report import report_of
+
+    result.report = report_of(result, fidelity)
+    return result
 
 
 def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, *,

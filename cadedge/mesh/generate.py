@@ -12,6 +12,7 @@ curves). Faces that fail every strategy are reported with gmsh's own messages.
 from __future__ import annotations
 
 import re
+import time
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -189,14 +190,20 @@ def split_curves(curves: list[int]) -> list[int]:
 
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                skip: dict[int, dict[int, str]] | None = None,
-               started: Callable[[int, int], None] = lambda face, strategy: None) -> dict[int, FaceOutcome]:
+               started: Callable[[int, int], None] = lambda face, strategy: None,
+               finished: Callable[[int, int, str | None], None] = lambda face, strategy, reason: None,
+               deadline: float | None = None, known_ok: dict[int, int] | None = None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`STRATEGIES`; returns each surface's outcome.
 
-    ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it hung or crashed gmsh in an
-    earlier run) with the reason to record. ``started(face, k)`` is called before each attempt, so a
-    watchdog outside the process knows which attempt was running when gmsh hung or crashed.
+    ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
+    in an earlier run) with the reason to record. ``started(face, k)`` is called before each attempt and
+    ``finished(face, k, reason or None)`` after it, so a watchdog outside the process knows which attempt
+    was running when gmsh hung or crashed, and what an earlier run achieved. After ``deadline``
+    (``time.time()``) no attempt starts, except ``known_ok[face]``, the strategy that meshed that face in
+    an earlier run.
     """
     skip = skip or {}
+    known_ok = known_ok or {}
     gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
     gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
@@ -211,6 +218,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 if k in skip.get(rec.face, {}):
                     rec.attempts.append((strategy.name, skip[rec.face][k]))
                     continue
+                if deadline is not None and time.time() > deadline and known_ok.get(rec.face) != k:
+                    rec.attempts.append((strategy.name, "not tried: out of time (timeout)"))
+                    break
                 if strategy.split:
                     curves = [c for c in surface_curve_uses(s) if c not in split_done]  # split once
                     started(rec.face, k)
@@ -223,6 +233,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 else:
                     started(rec.face, k)
                 reason = _attempt(s, strategy)
+                finished(rec.face, k, reason)
                 if reason is None:
                     rec.strategy = strategy.name
                     break

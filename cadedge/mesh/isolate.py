@@ -10,6 +10,12 @@ caller) writes a progress line before each step and each face attempt. The watch
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
 - the whole job passes ``timeout``: the job fails with "no result within ... s".
 
+A new child replays what the progress file says the killed one achieved: each face starts at the
+strategy that meshed it, and attempts that failed are not tried again. After :data:`SOFT_SHARE` of the
+timeout the child starts no new attempts (the faces left fail with "out of time"), and an attempt still
+running at :data:`KILL_SHARE` of it is killed, so a replay has the rest of the time to deliver what was
+meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing.
+
 The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
 hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
 ``KeyboardInterrupt`` the child is killed before the interrupt goes on.
@@ -36,6 +42,10 @@ from .worker import JobResult, MeshJob, empty_result
 DEFAULT_TIMEOUT = 300.0
 #: One face attempt may take at most this share of the job's timeout before it counts as hung.
 FACE_SHARE = 0.2
+#: Share of the timeout after which the child starts no new face attempts.
+SOFT_SHARE = 0.7
+#: Share of the timeout at which a running face attempt is killed (the replay gets the rest).
+KILL_SHARE = 0.85
 #: Restarts after hung or crashed face attempts, at most.
 MAX_RESTARTS = 12
 _POLL = 0.05
@@ -44,7 +54,7 @@ _POLL = 0.05
 @dataclass
 class _Run:
     result: JobResult | None
-    status: str  # "ok", "hung", "crashed", "timeout"
+    status: str  # "ok", "hung", "late" (past KILL_SHARE), "crashed", "timeout"
     last: str  # the last progress line
     detail: str
 
@@ -76,7 +86,28 @@ def _last_line(path: str) -> str:
         return ""
 
 
-def _run_child(job: MeshJob, tmp: str, deadline: float, face_timeout: float) -> _Run:
+def _progress(path: str) -> list[str]:
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            return f.read().splitlines()
+    except OSError:
+        return []
+
+
+def _learn(lines: list[str], skip: dict[int, dict[int, str]], known_ok: dict[int, int]) -> None:
+    """What a killed child achieved, from its progress lines: strategies that meshed or failed each face."""
+    for line in lines:
+        words = line.split(" ", 4)
+        if words[0] != "result" or len(words) < 4:
+            continue
+        face, k = int(words[1]), int(words[2])
+        if words[3] == "ok":
+            known_ok[face] = k
+        else:
+            skip.setdefault(face, {})[k] = words[4] if len(words) > 4 else "failed"
+
+
+def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_timeout: float) -> _Run:
     job_path, result_path, progress_path = (os.path.join(tmp, n) for n in ("job.pkl", "result.pkl", "progress"))
     for p in (result_path, progress_path):
         if os.path.exists(p):
@@ -104,6 +135,8 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, face_timeout: float) -> 
                     return _Run(None, "timeout", last, "")
                 if line.startswith("face ") and now - since > face_timeout:
                     return _Run(None, "hung", last, f"hung: no result within {face_timeout:g} s")
+                if line.startswith("face ") and now > kill_at:
+                    return _Run(None, "late", last, "not finished: out of time (timeout)")
         finally:
             if proc.poll() is None:
                 proc.kill()
@@ -127,13 +160,16 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     face_timeout = face_timeout or FACE_SHARE * timeout
     t0 = time.monotonic()
     deadline = t0 + timeout
+    kill_at = t0 + KILL_SHARE * timeout
+    job.deadline = time.time() + SOFT_SHARE * timeout
     events: list[str] = []
     skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
+    known_ok: dict[int, int] = dict(job.known_ok)
     with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
         job.output = os.path.join(tmp, "mesh" + output.suffix.lower()) if output is not None else None
         for _ in range(MAX_RESTARTS + 1):
-            job.skip = skip
-            run = _run_child(job, tmp, deadline, face_timeout)
+            job.skip, job.known_ok = skip, known_ok
+            run = _run_child(job, tmp, deadline, kill_at, face_timeout)
             if run.status == "ok":
                 result = run.result
                 result.notes = events + result.notes
@@ -149,6 +185,7 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             if words[:1] != ["face"] or len(words) != 3:
                 where = f" while gmsh was at step '{run.last}'" if run.last else ""
                 return _failed(f"{run.detail}{where}", events)
+            _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
             face, k = int(words[1]), int(words[2])
             barred = skip.setdefault(face, {})
             barred[k] = run.detail

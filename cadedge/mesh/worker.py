@@ -54,6 +54,8 @@ class MeshJob:
     mode: str
     output: str | None = None  # where the child writes the mesh (gmsh picks the format from the suffix)
     skip: dict[int, dict[int, str]] = field(default_factory=dict)  # face -> {strategy index: reason}
+    known_ok: dict[int, int] = field(default_factory=dict)  # face -> strategy that meshed it in an earlier run
+    deadline: float | None = None  # time.time() after which only known_ok attempts start
     hooks: dict[str, list[str]] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)  # free-form settings for hooks
 
@@ -181,7 +183,11 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
             ctx.face, ctx.strategy = face, k
             _hooks(ctx, "before_face")
 
-        ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started)
+        def finished(face: int, k: int, reason: str | None) -> None:
+            say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
+
+        ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
+                                  deadline=job.deadline, known_ok=job.known_ok)
         _hooks(ctx, "after_generate")
         say("read")
         raw = ctx.raw = read_mesh(ctx.surfaces)
