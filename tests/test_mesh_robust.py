@@ -101,25 +101,33 @@ def test_an_edge_gmsh_cannot_match_leaves_its_faces_meshed(cylinder):
         assert any(f"edges {eid} match no gmsh curve" in n for n in result.notes)
 
 
-def test_split_boundary_segments_strategy_keeps_neighbours_conforming(cylinder):
-    """Strategies 1-5 barred on a face: it is meshed after its boundary segments are split, its neighbours
-    again on the split curves, and every grid node is still a mesh node."""
+@pytest.mark.parametrize("fallback", ["split", "own_curves"])
+def test_fallback_strategies_keep_neighbours_conforming(cylinder, fallback):
+    """Every earlier strategy barred on a face: it is meshed after its boundary segments are split, or on
+    gmsh's own curve mesh; its neighbours are meshed again on the changed curves and stay conforming, and
+    every grid node of the edges still imposed is a mesh node."""
     from cadedge.mesh.gmsh_model import shape_to_brep
     from cadedge.mesh.sizes import SizeField
     from cadedge.mesh.worker import MeshJob, run_job
 
-    skip = {FAULT_FACE: {k: "barred by the test" for k, s in enumerate(STRATEGIES) if not s.split}}
+    first = next(k for k, s in enumerate(STRATEGIES) if getattr(s, fallback))
+    skip = {FAULT_FACE: {k: "barred by the test" for k in range(first)}}
     job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
                   field=SizeField(cylinder), mode="nodes", skip=skip)
     res = run_job(job)
     face = next(o for o in res.faces if o.face == FAULT_FACE)
-    assert face.ok and "split" in face.strategy
+    assert face.ok and face.strategy == STRATEGIES[first].name
+    assert all(o.ok for o in res.faces)
     multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
-    pts = np.vstack([e.points for e in cylinder.edges if not e.degenerate])
+    imposed = set(res.imposed_edges)
+    pts = np.vstack([e.points for e in cylinder.edges if e.id in imposed])
     check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces, grid_points=pts,
                             edge_multiplicity=multiplicity)
     assert check.ok and check.missing_grid_nodes == 0 and all(s.watertight for s in check.shells)
-    assert sum(e.segments for e in cylinder.edges) < len(res.edge_pairs)  # split: more curve segments
+    if fallback == "split":
+        assert sum(e.segments for e in cylinder.edges) < len(res.edge_pairs)  # more curve segments
+    else:
+        assert res.own_mesh_edges and not imposed.intersection(res.own_mesh_edges)
 
 
 def test_check_names_faces_with_small_angles():

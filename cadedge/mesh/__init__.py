@@ -216,6 +216,9 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     notes = list(res.notes)
     if res.unmatched_edges:
         notes.append(f"edges {_ids(res.unmatched_edges)} match no gmsh curve: gmsh meshed those curves itself")
+    if res.own_mesh_edges:
+        notes.append(f"edges {_ids(res.own_mesh_edges)}: a face failed on their grids; gmsh's own curve mesh "
+                     "replaced them")
     return MeshResult(source=grid.source, mode=mode, grid=grid, nodes=res.nodes, triangles=res.triangles,
                       triangle_faces=res.triangle_faces, failures=failures, check=check,
                       output=out if res.written else None, seconds=time.perf_counter() - t0, notes=notes,

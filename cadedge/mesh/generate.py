@@ -6,7 +6,8 @@ triangles whose edges on its boundary curves are exactly the curve segments, eac
 curve bounds the face (seams twice), and whose other edges are shared by two triangles. A face that
 fails is cleared and retried through :data:`STRATEGIES`: other 2-D algorithms, finer and coarser local
 sizes, then its boundary segments split in two (faces sharing those curves are meshed again on the split
-curves). Faces that fail every strategy are reported with gmsh's own messages.
+curves), then its curves meshed by gmsh itself instead of imposed (likewise for the faces sharing them).
+Faces that fail every strategy are reported with gmsh's own messages.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ class Strategy:
     algorithm: int
     size_factor: float = 1.0
     split: bool = False
+    own_curves: bool = False  # drop the imposed curve meshes of the face: gmsh meshes its curves itself
 
 
 #: Tried in this order until a face meshes. 6 = Frontal-Delaunay, 1 = MeshAdapt, 5 = Delaunay.
@@ -42,6 +44,8 @@ STRATEGIES = (
     Strategy("MeshAdapt, coarser sizes", 1, 2.0),
     Strategy("split boundary segments, Frontal-Delaunay", 6, 1.0, True),
     Strategy("split boundary segments, MeshAdapt", 1, 1.0, True),
+    Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
+    Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
 )
 
 
@@ -188,11 +192,31 @@ def split_curves(curves: list[int]) -> list[int]:
     return sorted(touched)
 
 
+def remesh_curves(curves: list[int]) -> list[int]:
+    """Replace the 1-D mesh of ``curves`` by gmsh's own (sized by the current size field); the faces using
+    them are cleared first and returned, to be meshed again."""
+    touched: set[int] = set()
+    for c in curves:
+        touched.update(int(s) for s in gmsh.model.getAdjacencies(1, c)[0])
+    gmsh.model.mesh.clear([(2, s) for s in sorted(touched)])
+    gmsh.model.mesh.clear([(1, c) for c in curves])
+    visible = [(1, c) for c in curves]
+    gmsh.model.setVisibility(visible, 1)
+    try:
+        gmsh.model.mesh.generate(1)
+    except Exception:  # gmsh's bare Exception: the faces' own checks will tell
+        pass
+    finally:
+        gmsh.model.setVisibility(visible, 0)
+    return sorted(touched)
+
+
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                skip: dict[int, dict[int, str]] | None = None,
                started: Callable[[int, int], None] = lambda face, strategy: None,
                finished: Callable[[int, int, str | None], None] = lambda face, strategy, reason: None,
-               deadline: float | None = None, known_ok: dict[int, int] | None = None) -> dict[int, FaceOutcome]:
+               deadline: float | None = None, known_ok: dict[int, int] | None = None,
+               own_curves: set[int] | None = None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`STRATEGIES`; returns each surface's outcome.
 
     ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
@@ -200,10 +224,11 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     ``finished(face, k, reason or None)`` after it, so a watchdog outside the process knows which attempt
     was running when gmsh hung or crashed, and what an earlier run achieved. After ``deadline``
     (``time.time()``) no attempt starts, except ``known_ok[face]``, the strategy that meshed that face in
-    an earlier run.
+    an earlier run. ``own_curves`` collects the curves whose imposed mesh was replaced by gmsh's own.
     """
     skip = skip or {}
     known_ok = known_ok or {}
+    own_curves = set() if own_curves is None else own_curves
     gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
     gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
@@ -221,17 +246,21 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 if deadline is not None and time.time() > deadline and known_ok.get(rec.face) != k:
                     rec.attempts.append((strategy.name, "not tried: out of time (timeout)"))
                     break
+                started(rec.face, k)
+                touched: list[int] = []
                 if strategy.split:
                     curves = [c for c in surface_curve_uses(s) if c not in split_done]  # split once
-                    started(rec.face, k)
                     split_done.update(curves)
-                    for n in split_curves(curves):  # their boundary changed: mesh them again
-                        if n == s or (n in out and not out[n].ok):
-                            continue  # this face, or a failed or not yet tried one: its own turn comes
-                        out[n] = FaceOutcome(face=face_of.get(n, n), surface=n)
-                        queue.append(n)
-                else:
-                    started(rec.face, k)
+                    touched = split_curves(curves)
+                elif strategy.own_curves:
+                    curves = [c for c in surface_curve_uses(s) if c not in own_curves]
+                    own_curves.update(curves)
+                    touched = remesh_curves(curves)
+                for n in touched:  # their boundary changed: mesh them again
+                    if n == s or (n in out and not out[n].ok):
+                        continue  # this face, or a failed or not yet tried one: its own turn comes
+                    out[n] = FaceOutcome(face=face_of.get(n, n), surface=n)
+                    queue.append(n)
                 reason = _attempt(s, strategy)
                 finished(rec.face, k, reason)
                 if reason is None:

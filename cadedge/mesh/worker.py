@@ -92,6 +92,7 @@ class JobResult:
     edge_uses: np.ndarray
     imposed_edges: list[int] = field(default_factory=list)
     unmatched_edges: list[int] = field(default_factory=list)
+    own_mesh_edges: list[int] = field(default_factory=list)  # imposed grids a fallback replaced by gmsh's mesh
     notes: list[str] = field(default_factory=list)
     details: list[str] = field(default_factory=list)  # for --verbose: how each entity was matched
     extras: dict[str, Any] = field(default_factory=dict)
@@ -186,8 +187,12 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
 
+        own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
-                                  deadline=job.deadline, known_ok=job.known_ok)
+                                  deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves)
+        edge_of = {m.tag: eid for eid, m in emap.edges.items()}
+        own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
+        imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
         say("read")
         raw = ctx.raw = read_mesh(ctx.surfaces)
@@ -203,7 +208,8 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
     tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
     return JobResult(nodes=raw.nodes, triangles=raw.triangles, triangle_faces=tri_faces,
                      faces=sorted(ctx.outcomes.values(), key=lambda o: o.face), edge_pairs=pairs, edge_uses=uses,
-                     imposed_edges=imposed_edges, unmatched_edges=unmatched, notes=notes, details=list(emap.notes),
+                     imposed_edges=imposed_edges, unmatched_edges=unmatched, own_mesh_edges=own_edges, notes=notes,
+                     details=list(emap.notes),
                      extras=extras,
                      written=written)
 
