@@ -234,7 +234,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
     out = {s: FaceOutcome(face=face_of.get(s, s), surface=s) for s in surfaces}
     split_done: set[int] = set()
-    queue = list(surfaces)
+    # faces with attempts barred (they hung, crashed or failed in an earlier run) go last: the others are
+    # meshed before the time runs out
+    queue = sorted(surfaces, key=lambda s: face_of.get(s, s) in skip and face_of.get(s, s) not in known_ok)
     try:
         while queue:
             s = queue.pop(0)
