@@ -85,7 +85,8 @@ def bspline_cage() -> object:
     """An open cage of 4 B-spline faces (a lofted tube through spline rectangles, no caps)."""
     def rect(z: float, s: float) -> cq.Wire:
         c = [cq.Vector(-s, -s, z), cq.Vector(s, -s, z), cq.Vector(s, s, z), cq.Vector(-s, s, z)]
-        mids = [cq.Vector(0, -1.3 * s, z), cq.Vector(1.3 * s, 0, z), cq.Vector(0, 1.3 * s, z), cq.Vector(-1.3 * s, 0, z)]
+        mids = [cq.Vector(0, -1.3 * s, z), cq.Vector(1.3 * s, 0, z), cq.Vector(0, 1.3 * s, z),
+                cq.Vector(-1.3 * s, 0, z)]
         return cq.Wire.assembleEdges([cq.Edge.makeSpline([c[i], mids[i], c[(i + 1) % 4]]) for i in range(4)])
 
     loft = cq.Solid.makeLoft([rect(0, 2.0), rect(3, 1.0), rect(6, 2.5)], ruled=False)

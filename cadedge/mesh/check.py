@@ -90,12 +90,6 @@ def triangle_min_angles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return np.degrees(trimesh.triangles.angles(nodes[triangles]).min(axis=1))
 
 
-def min_angle_deg(nodes: np.ndarray, triangles: np.ndarray) -> float:
-    """Smallest interior angle over all triangles, in degrees."""
-    angles = triangle_min_angles(nodes, triangles)
-    return float(angles.min()) if len(angles) else float("nan")
-
-
 def small_angles(angles: np.ndarray, tri_faces: np.ndarray) -> tuple[float, list[tuple[int, int, float]]]:
     """Share of triangles under :data:`SMALL_ANGLE` and (face, count, worst angle) per face, worst first."""
     small = angles < SMALL_ANGLE

@@ -190,8 +190,8 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             barred = skip.setdefault(face, {})
             barred[k] = run.detail
             if run.status == "hung":  # other algorithms on the same sizes tend to hang too: go to other sizes
-                same = [j for j, s in enumerate(STRATEGIES) if j > k and (s.size_factor, s.split) ==
-                        (STRATEGIES[k].size_factor, STRATEGIES[k].split)]
+                kind = (STRATEGIES[k].size_factor, STRATEGIES[k].split, STRATEGIES[k].own_curves)
+                same = [j for j, s in enumerate(STRATEGIES) if j > k and (s.size_factor, s.split, s.own_curves) == kind]
                 barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
             events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                           "process")
