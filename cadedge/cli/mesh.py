@@ -43,6 +43,10 @@ def register(subparsers: Any) -> None:
                                                    "largest edge spacing)")
     p.add_argument("--timeout", metavar="SECONDS", default=str(DEFAULT_TIMEOUT),
                    help=f"bound on gmsh's work (default {DEFAULT_TIMEOUT:g}); one face attempt gets a fifth of it")
+    p.add_argument("--surface-ald", metavar="S", help="every face's |area deficit| (1 - mesh area / B-rep area) "
+                                                      "at most S (default: --ald)")
+    p.add_argument("--report", metavar="JSON", help="write the per-face mesh report (surface type, triangles, "
+                                                    "area deficit, min angle) as JSON")
     p.add_argument("--quiet", action="store_true", help="print only problems")
     p.add_argument("--verbose", action="store_true", help="every failed attempt of every face, and every note")
     p.set_defaults(func=run)
@@ -82,11 +86,12 @@ def _run(args: argparse.Namespace) -> int:
     growth = parse_number("--growth", args.growth, source, low=0.0)
     max_size = parse_number("--max-size", args.max_size, source, low=0.0)
     timeout = parse_number("--timeout", args.timeout, source, low=0.0)
+    surface_ald = parse_number("--surface-ald", args.surface_ald, source, low=0.0)
     out = Path(args.output)  # mesh_shape checks its suffix and folder before any work
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
         result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size,
-                            timeout=timeout, **opts)
+                            timeout=timeout, surface_ald=surface_ald, **opts)
     if not args.quiet:
         for line in _summary(result, verbose=args.verbose):
             print(line)
@@ -98,6 +103,10 @@ def _run(args: argparse.Namespace) -> int:
         _err(source, f"warning: {message}")
     if len(found) > len(shown):
         _err(source, f"warning: ... and {len(found) - len(shown)} more warnings (--verbose lists them)")
+    if args.report and result.report is not None:
+        result.report.write(args.report)
+        if not args.quiet:
+            print(f"wrote {args.report}")
     for problem in result.problems(verbose=args.verbose):
         _err(source, problem)
     return 0 if result.ok else 1

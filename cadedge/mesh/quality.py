@@ -44,8 +44,10 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  vertex_points: np.ndarray, angles: np.ndarray | None = None) -> list[SmallAngle]:
     """Every triangle under :data:`SLIVER_DEG`, worst first.
 
-    Forced: its smallest angle sits on a B-rep vertex (a node at one of ``vertex_points``) where the face's
-    corner, the sum of that face's triangle angles at the node, is itself under :data:`SLIVER_DEG`.
+    Forced: its face narrows to a corner sharper than :data:`SLIVER_DEG` at a B-rep vertex (a node at one
+    of ``vertex_points`` where the sum of that face's triangle angles is that small), and the triangle
+    stands on the face's boundary only (all three nodes on it): it spans the two sides of the wedge,
+    which no node placement inside the face can avoid.
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     ang = triangle_angles(nodes, tris) if angles is None else angles
@@ -55,19 +57,25 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     faces = np.asarray(triangle_faces, dtype=np.int64)
     nodes = np.asarray(nodes, dtype=float)
     vpts = np.asarray(vertex_points, dtype=float).reshape(-1, 3)
+    wedges: dict[int, tuple[float, set[int]]] = {}
+    for f in np.unique(faces[low]).tolist():
+        mine = faces == f
+        ftri, fang = tris[mine], ang[mine]
+        edges = np.sort(np.concatenate([ftri[:, [0, 1]], ftri[:, [1, 2]], ftri[:, [2, 0]]]), axis=1)
+        uniq, counts = np.unique(edges, axis=0, return_counts=True)
+        boundary = set(np.unique(uniq[counts == 1]).tolist())
+        sharpest = 180.0
+        if len(vpts):
+            for node in boundary:
+                if np.min(np.linalg.norm(vpts - nodes[node], axis=1)) <= 1e-9 * (1.0 + np.abs(nodes[node]).max()):
+                    sharpest = min(sharpest, float(np.sum(fang[ftri == node])))
+        wedges[f] = (sharpest, boundary)
     out = []
     for t in low[np.argsort(ang[low].min(axis=1))]:
-        k = int(np.argmin(ang[t]))
-        node = tris[t, k]
-        at_vertex = len(vpts) and np.min(np.linalg.norm(vpts - nodes[node], axis=1)) <= 1e-9 * (
-            1.0 + np.abs(nodes[node]).max())
-        reason = "not forced by the B-rep"
-        forced = False
-        if at_vertex:
-            same = (faces == faces[t]) & np.any(tris == node, axis=1)
-            corner = float(np.sum(ang[same][tris[same] == node]))
-            if corner < SLIVER_DEG:
-                forced = True
-                reason = f"the face's corner at that B-rep vertex is {corner:.2g} deg"
-        out.append(SmallAngle(face=int(faces[t]), angle=float(ang[t, k]), forced=forced, reason=reason))
+        f = int(faces[t])
+        sharpest, boundary = wedges[f]
+        forced = sharpest < SLIVER_DEG and all(int(n) in boundary for n in tris[t])
+        reason = (f"the face narrows to a {sharpest:.2g}-degree corner at a B-rep vertex and the triangle spans "
+                  "its two sides" if forced else "not forced by the B-rep")
+        out.append(SmallAngle(face=f, angle=float(ang[t].min()), forced=forced, reason=reason))
     return out
