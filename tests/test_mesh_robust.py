@@ -219,3 +219,25 @@ def test_hard_models_mesh_every_face(name):
     assert result.ok, result.problems(verbose=True)
     assert set(np.unique(result.triangle_faces)) == set(range(1, result.grid.faces + 1))
     assert result.check.missing_grid_nodes == 0
+
+
+def test_past_the_deadline_only_faces_meshed_before_are_replayed(cylinder):
+    """A child started after the soft deadline meshes the faces a killed child had meshed and names the
+    others: a partial mesh, not nothing."""
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.isolate import _learn
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    skip: dict = {}
+    known_ok: dict = {}
+    _learn(["import", "face 1 0", "result 1 0 ok", "face 2 0", "result 2 0 fail no triangles", "face 2 1"],
+           skip, known_ok)
+    assert known_ok == {1: 0} and skip == {2: {0: "no triangles"}}
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
+                  field=SizeField(cylinder), mode="nodes", skip=skip, known_ok=known_ok, deadline=time.time() - 1)
+    res = run_job(job)
+    outcome = {o.face: o for o in res.faces}
+    assert outcome[1].ok and not outcome[2].ok and not outcome[3].ok
+    assert "out of time" in outcome[3].attempts[-1][1]
+    assert set(np.unique(res.triangle_faces)) == {1}
