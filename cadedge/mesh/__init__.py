@@ -68,6 +68,8 @@ class MeshResult:
     faces: list[Any] = field(default_factory=list)
     #: edges no gmsh curve carries: gmsh meshed them itself, so their faces lack our grid nodes there
     unmatched_edges: list[int] = field(default_factory=list)
+    #: edges whose grid a failing face made the mesher replace by gmsh's own curve mesh (last fallback)
+    own_mesh_edges: list[int] = field(default_factory=list)
     #: the reason when gmsh produced nothing at all (import failed, crash, timeout)
     error: str | None = None
     #: what the child's ``after_mesh`` hooks returned (see :mod:`cadedge.mesh.worker`)
@@ -222,7 +224,8 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     return MeshResult(source=grid.source, mode=mode, grid=grid, nodes=res.nodes, triangles=res.triangles,
                       triangle_faces=res.triangle_faces, failures=failures, check=check,
                       output=out if res.written else None, seconds=time.perf_counter() - t0, notes=notes,
-                      faces=faces, unmatched_edges=list(res.unmatched_edges), error=res.error, extras=res.extras,
+                      faces=faces, unmatched_edges=list(res.unmatched_edges), own_mesh_edges=list(res.own_mesh_edges),
+                      error=res.error, extras=res.extras,
                       details=list(res.details))
 
 
