@@ -79,7 +79,7 @@ def test_interior_is_graded_not_overrefined(grids):
     area = trimesh.Trimesh(result.nodes, result.triangles, process=False).area
     finest = min(min(e.spacing) for e in grid.edges if not e.degenerate)
     uniform = area / (np.sqrt(3) / 4 * finest ** 2)
-    assert len(result.triangles) < uniform / 5
+    assert len(result.triangles) < uniform / 3  # curved faces are also sized for the area target
 
 
 def _shuffled_order(grid: cadedge.ShapeGrid) -> cadedge.ShapeGrid:
