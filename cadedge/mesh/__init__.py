@@ -173,6 +173,9 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
             grid = fit_to_sizes(grid, make_field)
         except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
             notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
+        from .fidelity import grade_faces
+
+        grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
                        job_options=job_options)
