@@ -21,6 +21,9 @@ are those of the retained run (not of the search). Prints a markdown table (the 
     python scripts/bench_mesh_fidelity.py --eps 1e-2 1e-3 --timeout 120
 
 The corpus is found through the CADEDGE_CORPUS environment variable, else ../shared/corpus.
+``--cadedge-only`` leaves out the tuned meshers (a quick sweep, e.g. over ``scripts/hard_models.py``'s
+models: ``python scripts/hard_models.py /tmp/hard && python scripts/bench_mesh_fidelity.py /tmp/hard/*.step
+--cadedge-only``).
 """
 
 from __future__ import annotations
@@ -199,6 +202,7 @@ def main() -> int:
     parser.add_argument("--eps", type=float, nargs="+", default=[1e-2, 1e-3])
     parser.add_argument("--timeout", type=float, default=120.0, help="seconds per mesher run")
     parser.add_argument("--tries", type=int, default=7, help="runs per tuned mesher and row")
+    parser.add_argument("--cadedge-only", action="store_true", help="no tuned gmsh/OCCT columns (quick sweeps)")
     parser.add_argument("--gmsh-run", nargs=3, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.gmsh_run:
@@ -222,6 +226,11 @@ def main() -> int:
                 ours, result = cadedge_run(path, eps, args.timeout)
             except CadedgeError as exc:
                 print(f"| {path.name} | {eps:g} | error: {exc} |" + " |" * 14, flush=True)
+                continue
+            if args.cadedge_only:
+                over = [f.face for f in result.report.over_target] if result.report else []
+                print(f"| {path.name} | {eps:g} | {_cell(ours)} | forced < 5 deg: {ours['forced']}, faces over "
+                      f"target: {over or 'none'} |", flush=True)
                 continue
             target = ours["worst"] if math.isfinite(ours["worst"]) and ours["worst"] > 0 else eps
             spacing = max((float(e.segment_lengths.max()) for e in result.grid.edges
