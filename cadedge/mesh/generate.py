@@ -194,10 +194,12 @@ def split_curves(curves: list[int]) -> list[int]:
 
 def remesh_curves(curves: list[int]) -> list[int]:
     """Replace the 1-D mesh of ``curves`` by gmsh's own (sized by the current size field); the faces using
-    them are cleared first and returned, to be meshed again."""
+    them are cleared first and returned, to be meshed again, with every other face whose mesh gmsh's 1-D
+    step wiped (``generate(1)`` clears all 2-D meshes, visible or not)."""
     touched: set[int] = set()
     for c in curves:
         touched.update(int(s) for s in gmsh.model.getAdjacencies(1, c)[0])
+    meshed = {t for _, t in gmsh.model.getEntities(2) if len(gmsh.model.mesh.getElementsByType(2, t)[0])}
     gmsh.model.mesh.clear([(2, s) for s in sorted(touched)])
     gmsh.model.mesh.clear([(1, c) for c in curves])
     visible = [(1, c) for c in curves]
@@ -208,7 +210,8 @@ def remesh_curves(curves: list[int]) -> list[int]:
         pass
     finally:
         gmsh.model.setVisibility(visible, 0)
-    return sorted(touched)
+    wiped = {t for t in meshed if not len(gmsh.model.mesh.getElementsByType(2, t)[0])}
+    return sorted(touched | wiped)
 
 
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
