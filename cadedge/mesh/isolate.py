@@ -5,7 +5,7 @@ caller) writes a progress line before each step and each face attempt. The watch
 
 - one face attempt runs longer than ``face_timeout``: that (face, strategy) is marked as hung and a new
   child runs the job again without it (the face goes on to the next strategy with other sizes: the
-  other algorithms on the same sizes tend to hang as well);
+  other algorithms on the same sizes tend to hang as well, and finer sizes take longer still);
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
 - the whole job passes ``timeout``: the job fails with "no result within ... s".
@@ -193,6 +193,8 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                 kind = (STRATEGIES[k].size_factor, STRATEGIES[k].split, STRATEGIES[k].own_curves)
                 same = [j for j, s in enumerate(STRATEGIES) if j > k and (s.size_factor, s.split, s.own_curves) == kind]
                 barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
+                finer = [j for j, s in enumerate(STRATEGIES) if j > k and s.size_factor < STRATEGIES[k].size_factor]
+                barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
             events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                           "process")
         return _failed(f"gave up after {MAX_RESTARTS} restarts of the mesh process", events)
