@@ -43,9 +43,9 @@ DEFAULT_TIMEOUT = 300.0
 #: One face attempt may take at most this share of the job's timeout before it counts as hung.
 FACE_SHARE = 0.2
 #: Share of the timeout after which the child starts no new face attempts.
-SOFT_SHARE = 0.7
+SOFT_SHARE = 0.6
 #: Share of the timeout at which a running face attempt is killed (the replay gets the rest).
-KILL_SHARE = 0.85
+KILL_SHARE = 0.7
 #: Restarts after hung or crashed face attempts, at most.
 MAX_RESTARTS = 12
 _POLL = 0.05
