@@ -153,8 +153,9 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             rec.status, rec.note = "failed", failed.get(fid, "no triangles")
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
-            rec.note = ("finer meshes did not reduce it: gmsh's face differs from the B-rep face (loose "
-                        "tolerances or a trimming gmsh reads differently)" if fid in stuck
+            rec.note = ("finer meshes did not reduce it: the meshed face and its B-rep area disagree (loose "
+                        "tolerances, or a trimming read differently by gmsh and by OCCT's area integration)"
+                        if fid in stuck
                         else "a planar face: its area is set by its boundary polygon" if surface_types[i] == "Plane"
                         else "still over after the face was meshed again finer")
         elif rec.area_deficit is None:
