@@ -193,7 +193,8 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                 kind = (STRATEGIES[k].size_factor, STRATEGIES[k].split, STRATEGIES[k].own_curves)
                 same = [j for j, s in enumerate(STRATEGIES) if j > k and (s.size_factor, s.split, s.own_curves) == kind]
                 barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
-                finer = [j for j, s in enumerate(STRATEGIES) if j > k and s.size_factor < STRATEGIES[k].size_factor]
+                finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
+                         if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
                 barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
             events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                           "process")
