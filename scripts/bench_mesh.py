@@ -11,8 +11,9 @@ its table still made), then printed as the markdown table of docs/mesh.md:
     python scripts/bench_mesh.py --ald 1e-1 1e-2 1e-3 --jsonl bench_mesh.jsonl
     python scripts/bench_mesh.py --table bench_mesh.jsonl      # the table of an earlier (partial) run
 
-Models: the third-party corpus (``$CADEDGE_CORPUS``, else ``../shared/corpus`` beside the repository), the
-fixtures with faces, and the hard models of ``scripts/hard_models.py`` (written to a temporary folder).
+Models: the third-party corpus (``$CADEDGE_CORPUS``, else the corpus folder next to the repository, as
+in the tests), the fixtures with faces, and the hard models of ``scripts/hard_models.py`` (written to a
+temporary folder).
 """
 
 from __future__ import annotations
