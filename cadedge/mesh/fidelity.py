@@ -279,6 +279,8 @@ def prepare(grid, surface_ald: float) -> tuple[object, dict]:
 
 #: Faces over the target are meshed again at most this many times, each time finer.
 PASSES = 3
+#: Curvature sizes stop at this share of the finest edge spacing (see ``sizes.configure_curvature_sizes``).
+MIN_SIZE_SHARE = 0.25
 #: A face meshed finer whose |deficit| kept more than this share is not converging (its gmsh face differs
 #: from the B-rep face, e.g. loose tolerances): it is left as it is and reported.
 CONVERGED = 0.8
@@ -324,7 +326,7 @@ def before_generate(ctx) -> None:
 
     opts = ctx.job.options.get("fidelity")
     if opts:
-        configure_curvature_sizes(opts["per_circle"])
+        configure_curvature_sizes(opts["per_circle"], MIN_SIZE_SHARE * ctx.job.field.min_size)
 
 
 def before_face(ctx) -> None:
