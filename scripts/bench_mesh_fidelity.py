@@ -20,9 +20,10 @@ are those of the retained run (not of the search). Prints a markdown table (the 
 
     python scripts/bench_mesh_fidelity.py --eps 1e-2 1e-3 --timeout 120
 
-The corpus is found through the CADEDGE_CORPUS environment variable, else ../shared/corpus.
+The corpus is found through the CADEDGE_CORPUS environment variable, else the corpus folder beside the
+repository.
 ``--cadedge-only`` leaves out the tuned meshers (a quick sweep, e.g. over ``scripts/hard_models.py``'s
-models: ``python scripts/hard_models.py /tmp/hard && python scripts/bench_mesh_fidelity.py /tmp/hard/*.step
+models: ``python scripts/hard_models.py hard && python scripts/bench_mesh_fidelity.py hard/*.step
 --cadedge-only``).
 """
 
