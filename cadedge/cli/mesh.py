@@ -2,23 +2,26 @@
 
 OUT's suffix picks the format: ``.msh``, ``.stl``, ``.vtk`` (the mesh) or ``.geo`` (spacing export plus a
 ``.brep`` beside it, not meshed). Prints the watertight/conforming check; exit 0 when every face meshed
-and the check passed, 1 otherwise (one line on stderr per problem), 2 on bad input.
+and the check passed, 1 otherwise (failed faces, a gmsh crash or timeout: a short summary on stderr,
+every line naming INPUT as typed; ``--verbose`` for every attempt), 2 on bad input.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import warnings
 from pathlib import Path
 from typing import Any
 
-from ..errors import CadedgeWarning, InputError
-from .refine import add_refine_options, check_writable, parse_number, print_warnings, refine_options
+from ..errors import CadedgeError, CadedgeWarning, InputError
+from .refine import add_refine_options, check_writable, parse_number, refine_options
 
 
 def register(subparsers: Any) -> None:
     from ..mesh import DEFAULT_GROWTH, MESH_MAX_GROWTH, MODES
+    from ..mesh.isolate import DEFAULT_TIMEOUT
 
     p = subparsers.add_parser(
         "mesh", help="surface mesh (gmsh) on the edge grids, with a watertight check",
@@ -26,7 +29,9 @@ def register(subparsers: Any) -> None:
                     "(faces sharing an edge share its nodes); print the watertight/conforming check. "
                     "OUT: .msh .stl .vtk, or .geo for the spacing export (with a .brep beside it).",
         epilog=f"For meshing, --max-growth defaults to {MESH_MAX_GROWTH} (graded edge grids avoid slivers "
-               "next to finely split edges). Exit 0 ok, 1 some face failed or the check failed, 2 bad input.")
+               "next to finely split edges). gmsh runs in a separate process: a crash or hang costs that face "
+               "or that run, never more. Exit 0 ok, 1 some face failed, gmsh crashed or timed out, or the "
+               "check failed, 2 bad input.")
     p.add_argument("input", metavar="INPUT", help="STEP (.step/.stp), IGES (.igs/.iges) or OCCT BREP (.brep) file")
     add_refine_options(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="output mesh (.msh .stl .vtk) or .geo")
@@ -36,15 +41,45 @@ def register(subparsers: Any) -> None:
                    help=f"interior size growth per unit distance from the edges (default {DEFAULT_GROWTH})")
     p.add_argument("--max-size", metavar="H", help="largest triangle size (default: --max-length, else the "
                                                    "largest edge spacing)")
+    p.add_argument("--timeout", metavar="SECONDS", default=str(DEFAULT_TIMEOUT),
+                   help=f"bound on gmsh's work (default {DEFAULT_TIMEOUT:g}); one face attempt gets a fifth of it")
+    p.add_argument("--surface-ald", metavar="S", help="every face's |area deficit| (1 - mesh area / B-rep area) "
+                                                      "at most S (default: --ald)")
+    p.add_argument("--report", metavar="JSON", help="write the per-face mesh report (surface type, triangles, "
+                                                    "area deficit, min angle) as JSON")
     p.add_argument("--plot", metavar="FILE", help="also draw the mesh and the edge grids: .png (static) or .html "
                                                   "(interactive 3-D page, works offline)")
     p.add_argument("--quiet", action="store_true", help="print only problems")
+    p.add_argument("--verbose", action="store_true", help="every failed attempt of every face, and every note")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    import cadedge
-    from ..mesh import MESH_MAX_GROWTH, MESH_SUFFIXES, mesh_shape
+    """Mesh INPUT; every error or problem is one stderr line naming INPUT as the user typed it."""
+    try:
+        return _run(args)
+    except InputError as exc:
+        _err(args.input, exc)
+        return 2
+    except CadedgeError as exc:  # a valid file our pipeline could not finish: not bad input
+        _err(args.input, exc)
+        return 1
+    except KeyboardInterrupt:
+        print(f"cadedge mesh: {args.input}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _err(source: str, message: object) -> None:
+    text = str(message)
+    for prefix in (f"{source}: ", f"{os.path.basename(source)}: "):
+        if text.startswith(prefix):
+            text = text[len(prefix):]
+            break
+    print(f"cadedge mesh: {source}: {text}", file=sys.stderr)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..mesh import MESH_MAX_GROWTH, mesh_shape
 
     source = args.input
     opts = refine_options(args, source)
@@ -52,32 +87,69 @@ def run(args: argparse.Namespace) -> int:
         opts["max_growth"] = MESH_MAX_GROWTH
     growth = parse_number("--growth", args.growth, source, low=0.0)
     max_size = parse_number("--max-size", args.max_size, source, low=0.0)
-    out = Path(args.output)  # checked before any work: the grids are made here, outside mesh_shape
-    if out.suffix.lower() not in MESH_SUFFIXES + (".geo",):
-        raise InputError(f"{out}: unsupported mesh output suffix {out.suffix!r} (use {', '.join(MESH_SUFFIXES)} "
-                         "or .geo)")
-    check_writable(args.output)
+    timeout = parse_number("--timeout", args.timeout, source, low=0.0)
+    surface_ald = parse_number("--surface-ald", args.surface_ald, source, low=0.0)
+    out = Path(args.output)  # mesh_shape checks its suffix and folder before any work; these, too:
+    for path in (args.output, args.report):
+        if path:
+            check_writable(path)
     if args.plot:
         from ..plot import check_plot_path
         check_plot_path(args.plot)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", CadedgeWarning)
-        grid = cadedge.refine_shape(args.input, **opts, allow_partial=args.allow_partial)
-    print_warnings("mesh", [*grid.warnings, *(str(w.message) for w in caught
-                                              if issubclass(w.category, CadedgeWarning))])
-    result = mesh_shape(grid, output=out, mode=args.mode, growth=growth, max_size=max_size, **opts)
-    if args.plot:
+        warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
+        result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size,
+                            timeout=timeout, surface_ald=surface_ald,
+                            allow_partial=args.allow_partial, **opts)
+    if not args.quiet:
+        for line in _summary(result, verbose=args.verbose):
+            print(line)
+    found = [str(w.message) if issubclass(w.category, CadedgeWarning) else f"{w.category.__name__}: {w.message}"
+             for w in caught]
+    found = list(dict.fromkeys([*result.grid.warnings, *found]))
+    shown = found if args.verbose else found[:MAX_WARNING_LINES]
+    for message in shown:
+        _err(source, f"warning: {message}")
+    if len(found) > len(shown):
+        _err(source, f"warning: ... and {len(found) - len(shown)} more warnings (--verbose lists them)")
+    if args.report and result.report is not None:
+        result.report.write(args.report)
+        if not args.quiet:
+            print(f"wrote {args.report}")
+    if args.plot and len(result.triangles):
         from ..plot import plot_mesh
         plot_mesh(result, args.plot)
-    if not args.quiet:
-        for line in result.lines()[: len(result.lines()) - len(result.problems())]:
-            print(line)
-        for note in result.notes:
-            print(f"note: {note}")
-        if out.suffix.lower() != ".geo":  # the .geo note already says what was written
-            print(f"wrote {out}")
-        if args.plot:
+        if not args.quiet:
             print(f"wrote {args.plot}")
-    for problem in result.problems():
-        print(f"cadedge mesh: {source}: {problem}", file=sys.stderr)
+    for problem in result.problems(verbose=args.verbose):
+        _err(source, problem)
     return 0 if result.ok else 1
+
+
+#: Warnings (from reading and refining) shown without ``--verbose``; the rest is counted.
+MAX_WARNING_LINES = 3
+
+
+#: Shells listed one by one up to this many (an assembly may have hundreds).
+MAX_SHELL_LINES = 8
+
+
+def _summary(result: Any, *, verbose: bool) -> list[str]:
+    """The printed report: head, check (shells capped unless verbose), faces meshed, notes, what was written."""
+    lines = result.lines()[: len(result.lines()) - len(result.problems())]
+    shells = [ln for ln in lines if ln.startswith("  shell ")]
+    if len(shells) > MAX_SHELL_LINES and not verbose:
+        first = lines.index(shells[0])
+        lines = lines[:first + MAX_SHELL_LINES] + [f"  ... {len(shells) - MAX_SHELL_LINES} more shells"] + \
+            lines[first + len(shells):]
+    if result.faces:
+        ok = [o for o in result.faces if o.ok]
+        fallback = [o for o in ok if o.attempts]
+        lines.append(f"faces meshed: {len(ok)}/{len(result.faces)}"
+                     + (f" ({len(fallback)} by a fallback strategy)" if fallback else ""))
+    lines += [f"note: {n}" for n in result.notes + (result.details if verbose else [])]
+    if result.output is not None:
+        lines.append(f"wrote {result.output}" if result.check is not None else "")
+    elif result.check is None or len(result.triangles) == 0:
+        lines.append("nothing meshed: no output written")
+    return [ln for ln in lines if ln]

@@ -9,8 +9,12 @@ same B-rep into gmsh, and then either
 - ``mode="sizes"``: gives gmsh only sizes (at the grid's parametric points on each curve and at each
   vertex) and lets it mesh the curves itself, for meshers that take sizes rather than nodes.
 
-The result carries the triangles, the faces gmsh failed on (with gmsh's reason; the rest is still
-meshed) and :class:`~cadedge.mesh.check.MeshCheck`. ``output`` may be ``.msh``, ``.stl`` or ``.vtk``
+gmsh runs in a child process under a watchdog (:mod:`cadedge.mesh.isolate`, the job itself in
+:mod:`cadedge.mesh.worker`): a gmsh crash, hang or exhausted memory costs that run or that face, never
+the caller, and ``timeout`` bounds the whole job. Every face is meshed on its own and retried with other
+strategies before it is given up. The result carries the triangles, the faces that still failed (with
+gmsh's reason; the rest is meshed) and :class:`~cadedge.mesh.check.MeshCheck`; nothing meshed means no
+output file. ``output`` may be ``.msh``, ``.stl`` or ``.vtk``
 (the mesh) or ``.geo`` (the spacing export, see :func:`~cadedge.mesh.sizes.write_geo`; no meshing).
 """
 
@@ -26,7 +30,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..atomic import atomic_path
 from ..errors import InputError, MeshError
 from ..shapegrid import ShapeGrid
 
@@ -59,74 +62,82 @@ class MeshResult:
     output: Path | None = None
     seconds: float = 0.0
     notes: list[str] = field(default_factory=list)
+    #: notes for ``--verbose`` only (how each edge and vertex was matched to gmsh's)
+    details: list[str] = field(default_factory=list)
+    #: per face: the strategy that meshed it and every failed attempt (``generate.FaceOutcome``)
+    faces: list[Any] = field(default_factory=list)
+    #: edges no gmsh curve carries: gmsh meshed them itself, so their faces lack our grid nodes there
+    unmatched_edges: list[int] = field(default_factory=list)
+    #: edges whose grid a failing face made the mesher replace by gmsh's own curve mesh (last fallback)
+    own_mesh_edges: list[int] = field(default_factory=list)
+    #: the reason when gmsh produced nothing at all (import failed, crash, timeout)
+    error: str | None = None
+    #: what the child's ``after_mesh`` hooks returned (see :mod:`cadedge.mesh.worker`)
+    extras: dict[str, Any] = field(default_factory=dict)
+    #: per face: surface type, triangles, area deficit, min angle (:class:`~cadedge.mesh.report.MeshReport`)
+    report: Any = None
 
     @property
     def ok(self) -> bool:
-        """No failed face and a passed check."""
-        return not self.failures and (self.check is None or self.check.ok)
+        """Every face meshed and the check passed."""
+        return not self.failures and self.error is None and (self.check is None or self.check.ok)
 
-    def problems(self) -> list[str]:
-        """One line per problem: failed faces first, then check failures."""
-        return [f.line() for f in self.failures] + (self.check.problems if self.check else [])
+    def problems(self, *, verbose: bool = False) -> list[str]:
+        """The failed faces grouped by reason (one line each, or one per face with every attempt when
+        ``verbose``), then the check's problems."""
+        from .generate import failure_lines
+
+        head = [self.error] if self.error and not self.failures else []
+        check = self.check.problems if self.check else []
+        return head + failure_lines(self.failures, self.faces, total=self.grid.faces, verbose=verbose) + check
 
     def lines(self) -> list[str]:
         """The printed report: the check summary and the problems."""
         head = f"{self.source}: {len(self.grid.edges)} edges, {self.grid.segments} segments, mode {self.mode}, " \
                f"{self.seconds:.2f} s"
-        return [head] + (self.check.lines() if self.check else []) + self.problems()
+        return [head] + (self.check.lines() if self.check else []) + (self.report.lines() if self.report else []) \
+            + self.problems()
 
 
 def _grid_of(source: Any, ald: float, min_length: float | None, max_length: float | None,
-             max_growth: float | None) -> ShapeGrid:
+             max_growth: float | None, allow_partial: bool) -> ShapeGrid:
     if isinstance(source, ShapeGrid):
         if source.shape is None:
             raise InputError(f"{source.source}: the shape grid carries no OCCT shape to mesh")
         return source
     from .. import refine_shape
-    return refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth)
-
-
-def _edge_multiplicity(raw, imposed, emap) -> dict[tuple[int, int], int]:
-    """Expected triangle count of every imposed segment: how often its curve bounds a face."""
-    import gmsh
-
-    from .gmsh_model import surface_curve_uses
-
-    uses: dict[int, int] = {}
-    for _, s in gmsh.model.getEntities(2):
-        for c, n in surface_curve_uses(s).items():
-            uses[c] = uses.get(c, 0) + n
-    out: dict[tuple[int, int], int] = {}
-    for eid, chain in imposed.edge_nodes.items():
-        idx = raw.index_of(chain)
-        n = uses.get(emap.edges[eid].tag, 0)
-        for a, b in np.sort(np.column_stack([idx[:-1], idx[1:]]), axis=1):
-            out[(int(a), int(b))] = n
-    return out
-
-
-def _write(path: Path) -> None:
-    import gmsh
-
-    with atomic_path(path) as tmp:
-        gmsh.write(str(tmp))
+    return refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth,
+                        allow_partial=allow_partial)
 
 
 def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | None = None,
                mode: str = "nodes", min_length: float | None = None, max_length: float | None = None,
                max_growth: float | None = MESH_MAX_GROWTH, growth: float = DEFAULT_GROWTH,
-               max_size: float | None = None) -> MeshResult:
+               max_size: float | None = None, timeout: float | None = None,
+               face_timeout: float | None = None, hooks: dict[str, list[str]] | None = None,
+               job_options: dict[str, Any] | None = None, surface_ald: float | None = None,
+               allow_partial: bool = False) -> MeshResult:
     """Mesh every face of ``source`` (STEP path, cadquery/build123d/OCP shape, or a ``ShapeGrid``).
 
     ``ald``, ``min_length``, ``max_length``, ``max_growth`` go to :func:`cadedge.refine_shape` (ignored for
     a ready ShapeGrid); ``max_growth`` defaults to :data:`MESH_MAX_GROWTH` here (``None`` for pure ALD
     grids). Interior sizes grow from the edge spacings by ``growth`` per unit distance, capped
     at ``max_size`` (default: ``max_length``, else the largest edge spacing). ``mode`` is ``"nodes"`` or
-    ``"sizes"`` (see the module doc). Raises :class:`InputError` on bad arguments or input; faces gmsh
-    fails on are returned in ``failures``, not raised.
+    ``"sizes"`` (see the module doc). gmsh's work is bounded by ``timeout`` seconds (default
+    :data:`~cadedge.mesh.isolate.DEFAULT_TIMEOUT`), one face attempt by ``face_timeout`` (default a fifth
+    of it); ``hooks`` are run inside the gmsh job with ``job_options`` (picklable) as ``job.options`` (see
+    :mod:`cadedge.mesh.worker`). Every face's area deficit ``1 - mesh area / B-rep area`` is aimed at
+    ``|deficit| <= surface_ald`` (default ``ald``; see :mod:`cadedge.mesh.fidelity`) and measured in
+    ``result.report``. ``allow_partial`` goes to :func:`cadedge.refine_shape` (a file OCCT transfers only
+    in part is an InputError without it). Raises
+    :class:`InputError` on bad arguments or input; faces gmsh fails on, crashes and timeouts are returned
+    in ``failures`` / ``error``, never raised.
     """
     if mode not in MODES:
         raise InputError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
+    for name, value in (("timeout", timeout), ("face_timeout", face_timeout)):
+        if value is not None and not value > 0:
+            raise InputError(f"{name} must be a positive number of seconds, got {value!r}")
     out = Path(output) if output is not None else None
     if out is not None and out.suffix.lower() not in MESH_SUFFIXES + (".geo",):
         raise InputError(f"{out}: unsupported mesh output suffix {out.suffix!r} "
@@ -137,7 +148,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     from .sizes import SizeField, write_geo
 
     t0 = time.perf_counter()
-    grid = _grid_of(source, ald, min_length, max_length, max_growth)
+    grid = _grid_of(source, ald, min_length, max_length, max_growth, allow_partial)
     if not grid.faces:
         raise InputError(f"{grid.source}: the shape has no faces to mesh (only loose edges)")
 
@@ -150,56 +161,84 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
+    from .fidelity import HOOKS, prepare
+
+    if surface_ald is not None and not surface_ald > 0:
+        raise InputError(f"surface_ald must be a positive number, got {surface_ald!r}")
+    if surface_ald is None:  # one knob: the edges' ALD (a ready grid's own) is the faces' area target too
+        surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
+    grid, fidelity = prepare(grid, surface_ald)  # faces' area target: boundary fit, curvature sizes
+    hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
+    job_options = {**(job_options or {}), "fidelity": fidelity}
+    notes = []
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
-        grid = fit_to_sizes(grid, make_field)
+        try:
+            grid = fit_to_sizes(grid, make_field)
+        except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
+            notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
+        from .fidelity import grade_faces
+
+        grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
     field_ = make_field(grid)
-    return _run_gmsh(grid, field_, mode, out, t0)
+    result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
+                       job_options=job_options)
+    result.notes[:0] = notes
+    from .report import report_of
+
+    result.report = report_of(result, fidelity)
+    return result
 
 
-def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float) -> MeshResult:
-    import gmsh
+def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, *,
+              timeout: float | None, face_timeout: float | None, hooks: dict[str, list[str]] | None,
+              job_options: dict[str, Any] | None) -> MeshResult:
+    """Mesh in a child process (:func:`~cadedge.mesh.isolate.run_isolated`), then check in this one."""
+    import dataclasses
 
     from .check import check_triangles
-    from .generate import FaceFailure, mesh_surfaces, read_mesh
-    from .gmsh_model import gmsh_session, import_shape, map_entities
-    from .impose import impose_edge_grids
-    from .sizes import apply_spacing_sizes, configure_gmsh_sizes
+    from .generate import FaceFailure
+    from .gmsh_model import shape_to_brep
+    from .isolate import DEFAULT_TIMEOUT, run_isolated
+    from .worker import MeshJob
 
-    with gmsh_session():
-        import_shape(grid.shape)
-        emap = map_entities(grid)
-        imposed = None
-        if mode == "nodes":
-            imposed = impose_edge_grids(grid, emap)
-            configure_gmsh_sizes(field_)
-            gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
-            gmsh.model.mesh.generate(1)  # only the degenerate and unmatched curves are still empty
-        else:
-            apply_spacing_sizes(grid, emap, field_)
-            configure_gmsh_sizes(field_)
-            gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 0)
-            gmsh.model.mesh.generate(1)
-        surfaces = [t for _, t in gmsh.model.getEntities(2)]
-        failed = mesh_surfaces(surfaces)
-        raw = read_mesh(surfaces)
-        face_of = emap.face_of_surface
-        failures = [FaceFailure(face=face_of.get(s, s), surface=s, reason=r) for s, r in sorted(failed.items())]
+    job = MeshJob(source=grid.source, brep=shape_to_brep(grid.shape), grid=dataclasses.replace(grid, shape=None),
+                  field=field_, mode=mode, hooks=dict(hooks or {}), options=dict(job_options or {}))
+    res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout)
+    faces = list(res.faces)
+    if res.error is not None:
+        failures = [FaceFailure(face=f, surface=f, reason=res.error) for f in range(1, grid.faces + 1)]
+    else:
+        failures = [FaceFailure(face=o.face, surface=o.surface, reason=o.reason()) for o in faces if not o.ok]
+    check = None
+    if len(res.triangles):
+        failed = {f.face for f in failures}
         grid_points = None
-        multiplicity = None
-        if imposed is not None:
-            grid_points = _face_grid_points(grid)
-            multiplicity = _edge_multiplicity(raw, imposed, emap)
-        tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
-        check = check_triangles(raw.nodes, raw.triangles, triangle_faces=tri_faces, grid_points=grid_points,
-                                edge_multiplicity=multiplicity)
-        if out is not None:
-            _write(out)
-    notes = list(emap.notes)
-    if emap.unmatched_curves:
-        notes.append(f"gmsh curves {emap.unmatched_curves} match no cadedge edge; gmsh meshed them itself")
-    return MeshResult(source=grid.source, mode=mode, grid=grid, nodes=raw.nodes, triangles=raw.triangles,
-                      triangle_faces=tri_faces, failures=failures, check=check, output=out,
-                      seconds=time.perf_counter() - t0, notes=notes)
+        if mode == "nodes":  # imposed grids whose faces all meshed must be there, node for node
+            imposed = set(res.imposed_edges)
+            pts = [e.points for e in grid.edges
+                   if e.id in imposed and e.faces and not failed.intersection(e.faces) and len(e.points)]
+            grid_points = np.vstack(pts) if pts else np.zeros((0, 3))
+        multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
+        check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
+                                grid_points=grid_points, edge_multiplicity=multiplicity)
+    notes = list(res.notes)
+    if res.unmatched_edges:
+        notes.append(f"edges {_ids(res.unmatched_edges)} match no gmsh curve: gmsh meshed those curves itself")
+    if res.own_mesh_edges:
+        notes.append(f"edges {_ids(res.own_mesh_edges)}: a face failed on their grids; gmsh's own curve mesh "
+                     "replaced them")
+    return MeshResult(source=grid.source, mode=mode, grid=grid, nodes=res.nodes, triangles=res.triangles,
+                      triangle_faces=res.triangle_faces, failures=failures, check=check,
+                      output=out if res.written else None, seconds=time.perf_counter() - t0, notes=notes,
+                      faces=faces, unmatched_edges=list(res.unmatched_edges), own_mesh_edges=list(res.own_mesh_edges),
+                      error=res.error, extras=res.extras,
+                      details=list(res.details))
+
+
+def _ids(ids: list[int], limit: int = 10) -> str:
+    """``1, 2, 5`` or ``1, 2, ... (12 in all)``."""
+    shown = ", ".join(str(i) for i in ids[:limit])
+    return shown + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
 
 
 def check_mesh(result_or_nodes: MeshResult | np.ndarray, triangles: np.ndarray | None = None, *,

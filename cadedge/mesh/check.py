@@ -5,7 +5,8 @@ shared by exactly two triangles, except edges on B-rep edges that bound fewer or
 boundaries of open shells are expected once; non-manifold edges as often as they have faces). Nodes at
 identical coordinates under different tags within one shell are a hidden crack and fail the check
 (separate shells may touch). Every edge-grid point must be a node of some triangle, at exactly its
-coordinates.
+coordinates. Quality is reported, not judged: the minimum angle, the share of triangles under
+:data:`SMALL_ANGLE` degrees and the faces that hold them (worst first).
 """
 
 from __future__ import annotations
@@ -14,6 +15,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import trimesh
+
+#: Triangles with an angle below this many degrees are counted and their faces named.
+SMALL_ANGLE = 10.0
+#: Faces named in the summary line, worst first.
+MAX_FACES_SHOWN = 5
 
 
 @dataclass
@@ -39,6 +45,10 @@ class MeshCheck:
     duplicate_nodes: int
     min_angle_deg: float
     problems: list[str] = field(default_factory=list)
+    #: share of triangles with an angle under :data:`SMALL_ANGLE` degrees (0 to 1)
+    small_angle_share: float = 0.0
+    #: faces holding such triangles, worst first: (face id, how many, smallest angle in degrees)
+    small_angle_faces: list[tuple[int, int, float]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -55,7 +65,15 @@ class MeshCheck:
                        + (f", {s.bad_edges} bad edges" if s.bad_edges else ""))
         if self.grid_nodes:
             out.append(f"  edge-grid nodes in mesh: {self.grid_nodes - self.missing_grid_nodes}/{self.grid_nodes}")
-        out.append("check: ok" if self.ok else f"check: FAILED ({len(self.problems)} problems)")
+        if self.small_angle_faces:
+            worst = ", ".join(f"{f} ({a:.1f} deg, {n})" for f, n, a in self.small_angle_faces[:MAX_FACES_SHOWN])
+            more = len(self.small_angle_faces) - MAX_FACES_SHOWN
+            out.append(f"  quality: {100 * self.small_angle_share:.2g}% of triangles under {SMALL_ANGLE:g} deg, "
+                       f"on faces {worst}" + (f" and {more} more" if more > 0 else ""))
+        verdict = "check: ok" if self.ok else f"check: FAILED ({len(self.problems)} problems)"
+        if self.ok and self.small_angle_faces:
+            verdict += f" (watertight and conforming, but min angle {self.min_angle_deg:.1f} deg)"
+        out.append(verdict)
         return out
 
 
@@ -65,11 +83,24 @@ def _row_keys(a: np.ndarray) -> np.ndarray:
     return a.view(np.dtype((np.void, a.dtype.itemsize * a.shape[1]))).ravel()
 
 
-def min_angle_deg(nodes: np.ndarray, triangles: np.ndarray) -> float:
-    """Smallest interior angle over all triangles, in degrees (trimesh's per-face angles)."""
+def triangle_min_angles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Smallest interior angle of each triangle, in degrees (trimesh's per-face angles)."""
     if len(triangles) == 0:
-        return float("nan")
-    return float(np.degrees(trimesh.triangles.angles(nodes[triangles]).min()))
+        return np.zeros(0)
+    return np.degrees(trimesh.triangles.angles(nodes[triangles]).min(axis=1))
+
+
+def small_angles(angles: np.ndarray, tri_faces: np.ndarray) -> tuple[float, list[tuple[int, int, float]]]:
+    """Share of triangles under :data:`SMALL_ANGLE` and (face, count, worst angle) per face, worst first."""
+    small = angles < SMALL_ANGLE
+    if not small.any():
+        return 0.0, []
+    faces, inverse = np.unique(tri_faces[small], return_inverse=True)
+    counts = np.bincount(inverse)
+    worst = np.full(len(faces), np.inf)
+    np.minimum.at(worst, inverse, angles[small])
+    order = np.argsort(worst)
+    return float(small.mean()), [(int(faces[i]), int(counts[i]), float(worst[i])) for i in order]
 
 
 def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces: np.ndarray | None = None,
@@ -128,6 +159,9 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
         n_missing = int((~np.isin(gkeys, keys)).sum())
         if n_missing:
             problems.append(f"{n_missing} of {n_grid} edge-grid nodes are not mesh nodes")
+    angles = triangle_min_angles(nodes, tris)
+    share, worst_faces = small_angles(angles, tri_faces)
     return MeshCheck(nodes=len(used_nodes), triangles=len(tris), shells=shells, grid_nodes=n_grid,
                      missing_grid_nodes=n_missing, duplicate_nodes=n_dup,
-                     min_angle_deg=min_angle_deg(nodes, tris), problems=problems)
+                     min_angle_deg=float(angles.min()) if len(angles) else float("nan"), problems=problems,
+                     small_angle_share=share, small_angle_faces=worst_faces)

@@ -1,23 +1,52 @@
-"""Run gmsh's surface meshers, retrying and reporting failed faces one by one; read the mesh back.
+"""Run gmsh's surface meshers face by face, retrying failed faces with other strategies; read the mesh back.
 
-gmsh meshes all empty surfaces in one call. Afterwards each surface is checked on its own (it has
-triangles, and its triangle edges on its boundary curves are exactly the curve segments, each used as
-often as the curve bounds the face); surfaces that fail are cleared and retried with the next 2-D
-algorithm, the others are kept. Faces that fail every algorithm are reported with gmsh's own messages.
+Every surface is meshed on its own (``Mesh.MeshOnlyVisible`` with only that surface visible), so one face
+that gmsh cannot mesh, or that hangs or crashes it, is known by name. A face passes when it carries
+triangles whose edges on its boundary curves are exactly the curve segments, each used as often as the
+curve bounds the face (seams twice), and whose other edges are shared by two triangles. A face that
+fails is cleared and retried through :data:`STRATEGIES`: other 2-D algorithms, finer and coarser local
+sizes, then its boundary segments split in two (faces sharing those curves are meshed again on the split
+curves), then its curves meshed by gmsh itself instead of imposed (likewise for the faces sharing them).
+Faces that fail every strategy are reported with gmsh's own messages.
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
+from typing import Callable
 
 import gmsh
 import numpy as np
 
 from .gmsh_model import surface_curve_uses
 
-# Frontal-Delaunay, then MeshAdapt, then Delaunay: gmsh's robust fallbacks for difficult faces.
-ALGORITHMS = {6: "Frontal-Delaunay", 1: "MeshAdapt", 5: "Delaunay"}
+
+@dataclass(frozen=True)
+class Strategy:
+    """One way to mesh a face: gmsh's 2-D ``algorithm``, a factor on the sizes, and whether to split the
+    face's boundary segments first."""
+
+    name: str
+    algorithm: int
+    size_factor: float = 1.0
+    split: bool = False
+    own_curves: bool = False  # drop the imposed curve meshes of the face: gmsh meshes its curves itself
+
+
+#: Tried in this order until a face meshes. 6 = Frontal-Delaunay, 1 = MeshAdapt, 5 = Delaunay.
+STRATEGIES = (
+    Strategy("Frontal-Delaunay", 6),
+    Strategy("MeshAdapt", 1),
+    Strategy("Delaunay", 5),
+    Strategy("Frontal-Delaunay, finer sizes", 6, 0.5),
+    Strategy("MeshAdapt, coarser sizes", 1, 2.0),
+    Strategy("split boundary segments, Frontal-Delaunay", 6, 1.0, True),
+    Strategy("split boundary segments, MeshAdapt", 1, 1.0, True),
+    Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
+    Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
+)
 
 
 @dataclass
@@ -30,6 +59,29 @@ class FaceFailure:
 
     def line(self) -> str:
         return f"face {self.face}: gmsh failed: {self.reason}"
+
+
+@dataclass
+class FaceOutcome:
+    """How a face fared: the strategy that meshed it (``None``: failed) and every failed attempt's reason."""
+
+    face: int
+    surface: int
+    strategy: str | None = None
+    attempts: list[tuple[str, str]] = field(default_factory=list)
+    triangles: int = 0
+
+    @property
+    def ok(self) -> bool:
+        return self.strategy is not None
+
+    def reason(self) -> str:
+        """Short reason for a failed face: gmsh's message for the first strategy, and how many were tried."""
+        if not self.attempts:
+            return "not meshed"
+        name, first = self.attempts[0]
+        more = f" (and {len(self.attempts) - 1} other strategies failed)" if len(self.attempts) > 1 else ""
+        return f"{name}: {first}{more}"
 
 
 def _surface_ok(surface: int) -> bool:
@@ -60,29 +112,172 @@ def _reason(surface: int, log: list[str], exc: str | None) -> str:
     return text or "no triangles, or triangles that do not match the face's boundary curves"
 
 
-def mesh_surfaces(surfaces: list[int]) -> dict[int, str]:
-    """Mesh every empty surface; returns {surface tag: gmsh's reason} for the ones that failed."""
+def _attempt(surface: int, strategy: Strategy) -> str | None:
+    """Mesh one (empty) surface with ``strategy``; None if it passed, else gmsh's reason (surface cleared)."""
+    gmsh.option.setNumber("Mesh.Algorithm", strategy.algorithm)
+    gmsh.option.setNumber("Mesh.MeshSizeFactor", strategy.size_factor)
+    gmsh.model.setVisibility([(2, surface)], 1)
+    gmsh.logger.get()  # drop older messages
+    exc = None
+    try:
+        gmsh.model.mesh.generate(2)
+    except Exception as err:  # gmsh raises a bare Exception with its last error message
+        exc = str(err)
+    finally:
+        gmsh.model.setVisibility([(2, surface)], 0)
+        gmsh.option.setNumber("Mesh.MeshSizeFactor", 1.0)
+    log = gmsh.logger.get()
+    if _surface_ok(surface):
+        return None
+    gmsh.model.mesh.clear([(2, surface)])
+    return _reason(surface, log, exc)
+
+
+def _curve_chain(curve: int) -> tuple[np.ndarray, np.ndarray]:
+    """Node tags of a curve's 1-D mesh from its first to its last node, and their gmsh parameters."""
+    _, seg = gmsh.model.mesh.getElementsByType(1, curve)
+    seg = np.asarray(seg, dtype=np.int64).reshape(-1, 2)
+    nxt = dict(zip(seg[:, 0].tolist(), seg[:, 1].tolist()))
+    start = (set(nxt) - set(seg[:, 1].tolist()) or {int(seg[0, 0])}).pop()  # a closed curve: any start
+    chain = [start]
+    while len(chain) <= len(seg):
+        chain.append(nxt[chain[-1]])
+    tags, _, params = gmsh.model.mesh.getNodes(1, curve, includeBoundary=False, returnParametricCoord=True)
+    param_of = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(params, dtype=float).tolist()))
+    lo, hi = (float(b[0]) for b in gmsh.model.getParametrizationBounds(1, curve))
+    u = np.array([param_of.get(t, np.nan) for t in chain])
+    u[0], u[-1] = lo, hi  # end nodes sit on point entities; chains run in gmsh's increasing parameter
+    return np.asarray(chain, dtype=np.int64), u
+
+
+def split_curves(curves: list[int]) -> list[int]:
+    """Split every segment of ``curves`` in two at its parameter midpoint (on gmsh's curve).
+
+    The faces using these curves are cleared first (their triangles reference the old segments); returns
+    those faces so they can be meshed again. Curves without a 1-D mesh, or with a chain that is not
+    monotonic in gmsh's parameter, are left alone.
+    """
+    touched: set[int] = set()
+    for c in curves:
+        _, seg = gmsh.model.mesh.getElementsByType(1, c)
+        if len(seg) == 0:
+            continue
+        chain, u = _curve_chain(c)
+        if not np.all(np.isfinite(u)) or not np.all(np.diff(u) > 0):
+            continue
+        users = [int(s) for s in gmsh.model.getAdjacencies(1, c)[0]]
+        gmsh.model.mesh.clear([(2, s) for s in users])
+        touched.update(users)
+        mid_u = 0.5 * (u[:-1] + u[1:])
+        mid_x = np.asarray(gmsh.model.getValue(1, c, mid_u.tolist()), dtype=float).reshape(-1, 3)
+        inner_tags = chain[1:-1]
+        tags, coords, _ = gmsh.model.mesh.getNodes(1, c, includeBoundary=False)
+        x_of = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords).reshape(-1, 3)))
+        inner_x = np.array([x_of[t] for t in inner_tags.tolist()]).reshape(-1, 3)
+        gmsh.model.mesh.clear([(1, c)])
+        first = int(gmsh.model.mesh.getMaxNodeTag()) + 1
+        new_tags = np.arange(first, first + len(mid_u), dtype=np.int64)
+        n_in = len(inner_tags)
+        all_tags = np.empty(n_in + len(new_tags), dtype=np.int64)
+        all_tags[1::2], all_tags[0::2] = inner_tags, new_tags
+        all_x = np.empty((len(all_tags), 3))
+        all_x[1::2], all_x[0::2] = inner_x, mid_x
+        all_u = np.empty(len(all_tags))
+        all_u[1::2], all_u[0::2] = u[1:-1], mid_u
+        gmsh.model.mesh.addNodes(1, c, all_tags.tolist(), all_x.ravel().tolist(), all_u.tolist())
+        full = np.concatenate([[chain[0]], all_tags, [chain[-1]]])
+        first_el = int(gmsh.model.mesh.getMaxElementTag()) + 1
+        conn = np.column_stack([full[:-1], full[1:]]).ravel()
+        gmsh.model.mesh.addElementsByType(c, 1, list(range(first_el, first_el + len(full) - 1)), conn.tolist())
+    return sorted(touched)
+
+
+def remesh_curves(curves: list[int]) -> list[int]:
+    """Replace the 1-D mesh of ``curves`` by gmsh's own (sized by the current size field); the faces using
+    them are cleared first and returned, to be meshed again, with every other face whose mesh gmsh's 1-D
+    step wiped (``generate(1)`` clears all 2-D meshes, visible or not)."""
+    touched: set[int] = set()
+    for c in curves:
+        touched.update(int(s) for s in gmsh.model.getAdjacencies(1, c)[0])
+    meshed = {t for _, t in gmsh.model.getEntities(2) if len(gmsh.model.mesh.getElementsByType(2, t)[0])}
+    gmsh.model.mesh.clear([(2, s) for s in sorted(touched)])
+    gmsh.model.mesh.clear([(1, c) for c in curves])
+    visible = [(1, c) for c in curves]
+    gmsh.model.setVisibility(visible, 1)
+    try:
+        gmsh.model.mesh.generate(1)
+    except Exception:  # gmsh's bare Exception: the faces' own checks will tell
+        pass
+    finally:
+        gmsh.model.setVisibility(visible, 0)
+    wiped = {t for t in meshed if not len(gmsh.model.mesh.getElementsByType(2, t)[0])}
+    return sorted(touched | wiped)
+
+
+def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
+               skip: dict[int, dict[int, str]] | None = None,
+               started: Callable[[int, int], None] = lambda face, strategy: None,
+               finished: Callable[[int, int, str | None], None] = lambda face, strategy, reason: None,
+               deadline: float | None = None, known_ok: dict[int, int] | None = None,
+               own_curves: set[int] | None = None) -> dict[int, FaceOutcome]:
+    """Mesh every surface on its own through :data:`STRATEGIES`; returns each surface's outcome.
+
+    ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
+    in an earlier run) with the reason to record. ``started(face, k)`` is called before each attempt and
+    ``finished(face, k, reason or None)`` after it, so a watchdog outside the process knows which attempt
+    was running when gmsh hung or crashed, and what an earlier run achieved. After ``deadline``
+    (``time.time()``) no attempt starts, except ``known_ok[face]``, the strategy that meshed that face in
+    an earlier run. ``own_curves`` collects the curves whose imposed mesh was replaced by gmsh's own.
+    """
+    skip = skip or {}
+    known_ok = known_ok or {}
+    own_curves = set() if own_curves is None else own_curves
     gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
-    pending = list(surfaces)
-    reasons: dict[int, str] = {}
-    for algo, name in ALGORITHMS.items():
-        if not pending:
-            break
-        gmsh.option.setNumber("Mesh.Algorithm", algo)
-        gmsh.logger.get()  # drop older messages
-        exc = None
-        try:
-            gmsh.model.mesh.generate(2)
-        except Exception as err:  # gmsh raises a bare Exception with its last error message
-            exc = str(err)
-        log = gmsh.logger.get()
-        failed = [s for s in pending if not _surface_ok(s)]
-        for s in failed:
-            reasons[s] = f"{name}: {_reason(s, log, exc)}"
-        if failed:
-            gmsh.model.mesh.clear([(2, s) for s in failed])
-        pending = failed
-    return {s: reasons[s] for s in pending}
+    gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
+    gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
+    out = {s: FaceOutcome(face=face_of.get(s, s), surface=s) for s in surfaces}
+    split_done: set[int] = set()
+    # faces with attempts barred (they hung, crashed or failed in an earlier run) go last: the others are
+    # meshed before the time runs out
+    queue = sorted(surfaces, key=lambda s: face_of.get(s, s) in skip and face_of.get(s, s) not in known_ok)
+    try:
+        while queue:
+            s = queue.pop(0)
+            rec = out[s]
+            for k, strategy in enumerate(STRATEGIES):
+                if k in skip.get(rec.face, {}):
+                    rec.attempts.append((strategy.name, skip[rec.face][k]))
+                    continue
+                if deadline is not None and time.time() > deadline and known_ok.get(rec.face) != k:
+                    rec.attempts.append((strategy.name, "not tried: out of time (timeout)"))
+                    break
+                started(rec.face, k)
+                touched: list[int] = []
+                if strategy.split:
+                    curves = [c for c in surface_curve_uses(s) if c not in split_done]  # split once
+                    split_done.update(curves)
+                    touched = split_curves(curves)
+                elif strategy.own_curves:
+                    curves = [c for c in surface_curve_uses(s) if c not in own_curves]
+                    own_curves.update(curves)
+                    touched = remesh_curves(curves)
+                for n in touched:  # their boundary changed: mesh them again
+                    if n == s or (n in out and not out[n].ok):
+                        continue  # this face, or a failed or not yet tried one: its own turn comes
+                    out[n] = FaceOutcome(face=face_of.get(n, n), surface=n)
+                    queue.append(n)
+                reason = _attempt(s, strategy)
+                finished(rec.face, k, reason)
+                if reason is None:
+                    rec.strategy = strategy.name
+                    break
+                rec.attempts.append((strategy.name, reason))
+    finally:
+        gmsh.model.setVisibility(gmsh.model.getEntities(), 1)
+        gmsh.option.setNumber("Mesh.MeshOnlyVisible", 0)
+    for s, rec in out.items():
+        rec.triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0]) if rec.ok else 0
+    return out
 
 
 @dataclass
@@ -116,3 +311,56 @@ def read_mesh(surfaces: list[int]) -> RawMesh:
     if tris:
         raw.triangles = raw.index_of(np.vstack(tris))
     return raw
+
+
+def boundary_multiplicity(raw: RawMesh, meshed: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """Every curve segment as a sorted node-index pair (k, 2), and how many triangles it should have:
+    the number of times its curve bounds a meshed surface (a failed neighbour leaves a boundary)."""
+    uses: dict[int, int] = {}
+    for s in meshed:
+        for c, n in surface_curve_uses(s).items():
+            uses[c] = uses.get(c, 0) + n
+    pairs, counts = [], []
+    for c, n in uses.items():
+        _, seg = gmsh.model.mesh.getElementsByType(1, c)
+        p = np.sort(raw.index_of(np.asarray(seg, dtype=np.int64).reshape(-1, 2)), axis=1)
+        pairs.append(p)
+        counts.append(np.full(len(p), n, dtype=np.int64))
+    if not pairs:
+        return np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.vstack(pairs), np.concatenate(counts)
+
+
+def _id_list(ids: list[int], limit: int = 8) -> str:
+    shown = ", ".join(str(i) for i in ids[:limit])
+    return shown + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
+
+
+#: At most this many failure lines without ``verbose``; the rest is counted.
+MAX_FAILURE_LINES = 5
+
+
+def failure_lines(failures: list[FaceFailure], outcomes: list[FaceOutcome], *, total: int,
+                  verbose: bool = False) -> list[str]:
+    """The failed faces, short: one line per distinct reason naming its faces (at most
+    :data:`MAX_FAILURE_LINES`); with ``verbose`` one line per face and failed attempt."""
+    if not failures:
+        return []
+    if verbose:
+        by_face = {o.face: o for o in outcomes}
+        out = []
+        for f in failures:
+            attempts = by_face[f.face].attempts if f.face in by_face else []
+            out += [f"face {f.face}: {name}: {why}" for name, why in attempts] or [f.line()]
+        return out
+    groups: dict[str, list[int]] = {}
+    for f in failures:
+        groups.setdefault(f.reason, []).append(f.face)
+    head = f"{len(failures)} of {total} faces failed" if total else f"{len(failures)} faces failed"
+    lines = []
+    for reason, faces in sorted(groups.items(), key=lambda kv: -len(kv[1]))[:MAX_FAILURE_LINES]:
+        word = "face" if len(faces) == 1 else "faces"
+        lines.append(f"{head}: {word} {_id_list(faces)}: {reason}")
+    if len(groups) > MAX_FAILURE_LINES:
+        lines.append(f"{head}: {len(groups) - MAX_FAILURE_LINES} more reasons (--verbose lists every face)")
+    return lines

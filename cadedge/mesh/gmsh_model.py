@@ -6,7 +6,8 @@ keeps the topology (shared vertices and edges, seams, degenerate edges, location
 binds its entities in ``TopExp::MapShapes`` order, which is the order of cadedge's ids. That identity is
 verified edge by edge (gmsh's curve evaluated at our parameters must land on our points); edges that
 fail it are matched by geometry instead (end points, then every grid point projected onto the curve),
-which also handles reversed parametrisations.
+which also handles reversed parametrisations. Edges and vertices that match nothing are listed, never
+raised: only the faces around them are meshed differently (on gmsh's own curve mesh).
 """
 
 from __future__ import annotations
@@ -38,24 +39,41 @@ def gmsh_session() -> Iterator[None]:
         gmsh.finalize()
 
 
-def import_shape(shape: object) -> None:
-    """Put the OCCT shape into the current gmsh model without healing, sewing or fragmenting."""
-    from OCP.BRepTools import BRepTools
+#: Import settings tried in turn: none of gmsh's healing first (the B-rep exactly as cadedge refined it),
+#: then gmsh's automatic wire fixing (some files only import with it; edges it changes are then matched
+#: by geometry or meshed by gmsh itself).
+IMPORT_ATTEMPTS = ({"Geometry.OCCAutoFix": 0}, {"Geometry.OCCAutoFix": 1})
 
+
+def import_brep(path: str, *, attempt: int = 0) -> None:
+    """Put the BREP file at ``path`` into the current gmsh model without healing, sewing or fragmenting.
+
+    ``attempt`` indexes :data:`IMPORT_ATTEMPTS`. Raises :class:`GeometryError` with gmsh's reason.
+    """
     for opt in ("Geometry.OCCFixDegenerated", "Geometry.OCCFixSmallEdges", "Geometry.OCCFixSmallFaces",
                 "Geometry.OCCSewFaces", "Geometry.OCCMakeSolids"):
         gmsh.option.setNumber(opt, 0)
+    for opt, value in IMPORT_ATTEMPTS[attempt].items():
+        gmsh.option.setNumber(opt, value)
     gmsh.option.setNumber("Geometry.OCCScaling", 1)
     gmsh.option.setNumber("Geometry.OCCImportLabels", 0)
+    try:
+        gmsh.model.occ.importShapes(path, highestDimOnly=False)
+        gmsh.model.occ.synchronize()
+    except Exception as exc:  # gmsh raises a bare Exception carrying its last error
+        raise GeometryError(f"gmsh could not import the shape: {exc}") from exc
+
+
+def shape_to_brep(shape: object) -> bytes:
+    """The OCCT shape as BREP text (the form in which it crosses to gmsh and to a child process)."""
+    from OCP.BRepTools import BRepTools
+
     with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
         path = os.path.join(tmp, "shape.brep")
         if not BRepTools.Write_s(shape, path):
             raise GeometryError("OCCT could not write the shape as BREP for gmsh")
-        try:
-            gmsh.model.occ.importShapes(path, highestDimOnly=False)
-            gmsh.model.occ.synchronize()
-        except Exception as exc:  # gmsh raises a bare Exception carrying its last error
-            raise GeometryError(f"gmsh could not import the shape: {exc}") from exc
+        with open(path, "rb") as f:
+            return f.read()
 
 
 @dataclass
@@ -76,6 +94,8 @@ class EntityMap:
     faces: dict[int, int]
     degenerate_curves: list[int] = field(default_factory=list)
     unmatched_curves: list[int] = field(default_factory=list)
+    #: cadedge edges no gmsh curve carries within tolerance: gmsh meshes the curves of their faces itself
+    unmatched_edges: list[int] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -108,11 +128,10 @@ def _match_vertices(grid: ShapeGrid, tol: float, notes: list[str]) -> dict[int, 
         if v.id <= len(tags) and np.linalg.norm(coords[v.id - 1] - p) <= tol:
             out[v.id] = tags[v.id - 1]
             continue
-        if tree is None:
-            raise MeshError(f"gmsh has no point entities; cannot place vertex {v.id}")
-        d, i = tree.query(p)
-        if d > tol:
-            raise MeshError(f"vertex {v.id} at {p.tolist()} has no gmsh point within {tol:.3g}")
+        d, i = tree.query(p) if tree is not None else (np.inf, 0)
+        if d > tol:  # its edges cannot carry imposed nodes: gmsh meshes them itself
+            notes.append(f"vertex {v.id} at {p.tolist()} has no gmsh point within {tol:.3g}")
+            continue
         out[v.id] = tags[int(i)]
         notes.append(f"vertex {v.id} matched to gmsh point {tags[int(i)]} by position")
     return out
@@ -164,17 +183,22 @@ def map_entities(grid: ShapeGrid) -> EntityMap:
                 continue
         pending.append(e)
     taken = {m.tag for m in edges.values()} | set(degenerate_curves)
+    unmatched_edges = []
     for e in pending:
-        m = _match_by_geometry(e, [t for t in curve_tags if t not in taken], tol)
+        try:
+            m = _match_by_geometry(e, [t for t in curve_tags if t not in taken], tol)
+        except Exception:  # gmsh raises on curves it cannot evaluate or project onto
+            m = None
         if m is None:
-            raise MeshError(f"edge {e.id} ({e.curve}) matches no gmsh curve within {tol:.3g}")
+            unmatched_edges.append(e.id)
+            continue
         edges[e.id] = m
         taken.add(m.tag)
         notes.append(f"edge {e.id} matched to gmsh curve {m.tag} by geometry")
     unmatched = [t for t in curve_tags if t not in taken]
     faces = _match_faces(grid, edges)
     return EntityMap(vertices=vertices, edges=edges, faces=faces, degenerate_curves=degenerate_curves,
-                     unmatched_curves=unmatched, notes=notes)
+                     unmatched_curves=unmatched, unmatched_edges=unmatched_edges, notes=notes)
 
 
 def _match_faces(grid: ShapeGrid, edges: dict[int, CurveMatch]) -> dict[int, int]:

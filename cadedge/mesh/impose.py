@@ -3,7 +3,8 @@
 Every B-rep vertex gets one node on its gmsh point entity; every edge's interior grid points become
 nodes on its gmsh curve (with gmsh parameters), and its line elements start and end on the vertex
 nodes. Faces sharing an edge therefore share its nodes. With ``Mesh.MeshOnlyEmpty`` gmsh leaves these
-curves alone and meshes only the faces (and the degenerate curves, which carry no grid).
+curves alone and meshes only the faces (and the degenerate curves, which carry no grid, and the curves
+of edges the mapping could not place, which gmsh meshes itself).
 """
 
 from __future__ import annotations
@@ -23,20 +24,28 @@ class ImposedNodes:
 
     vertex_nodes: dict[int, int]
     edge_nodes: dict[int, np.ndarray]
+    #: edges left to gmsh's own curve mesh (no matching curve, or an end vertex without a gmsh point)
+    skipped: list[int]
 
 
 def impose_edge_grids(grid: ShapeGrid, emap: EntityMap) -> ImposedNodes:
     """Add the grid nodes and line elements to the gmsh model; returns the node tags used."""
     vertex_nodes: dict[int, int] = {}
     for v in grid.vertices:
+        if v.id not in emap.vertices:
+            continue
         tag = v.id
         gmsh.model.mesh.addNodes(0, emap.vertices[v.id], [tag], np.asarray(v.point, dtype=float).tolist())
         vertex_nodes[v.id] = tag
     next_node = max(vertex_nodes.values(), default=0) + 1
     next_elem = 1
     edge_nodes: dict[int, np.ndarray] = {}
+    skipped = []
     for e in grid.edges:
-        if e.degenerate or e.id not in emap.edges:
+        if e.degenerate:
+            continue
+        if e.id not in emap.edges or not all(v in vertex_nodes for v in e.vertices):
+            skipped.append(e.id)
             continue
         match = emap.edges[e.id]
         inner = len(e.params) - 2
@@ -54,4 +63,4 @@ def impose_edge_grids(grid: ShapeGrid, emap: EntityMap) -> ImposedNodes:
         conn = np.column_stack([chain[:-1], chain[1:]]).ravel()
         gmsh.model.mesh.addElementsByType(match.tag, 1, list(range(next_elem, next_elem + n_seg)), conn.tolist())
         next_elem += n_seg
-    return ImposedNodes(vertex_nodes=vertex_nodes, edge_nodes=edge_nodes)
+    return ImposedNodes(vertex_nodes=vertex_nodes, edge_nodes=edge_nodes, skipped=skipped)

@@ -96,6 +96,16 @@ def configure_gmsh_sizes(field: SizeField) -> None:
     gmsh.model.mesh.field.setAsBackgroundMesh(ext)
 
 
+def configure_curvature_sizes(per_circle: float, min_size: float) -> None:
+    """Also size face interiors by surface curvature: ``2 pi / (per_circle * k)`` with ``k`` the largest
+    principal curvature where gmsh places a node (gmsh's ``Mesh.MeshSizeFromCurvature`` evaluates it on the
+    B-rep surface itself). Edge grids are imposed, so only face interiors follow it. Sizes stop at
+    ``min_size`` (a share of the finest edge spacing): a spline surface's curvature estimate can spike
+    where it is nearly singular, and gmsh then hangs filling a face with ever smaller triangles."""
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", float(per_circle))
+    gmsh.option.setNumber("Mesh.MeshSizeMin", float(min_size))
+
+
 def _samples(edge: ShapeEdgeGrid, max_size: float) -> tuple[np.ndarray, np.ndarray]:
     """Grid parameters and points, plus extra ones splitting segments longer than a quarter of ``max_size``."""
     parts = np.maximum(np.ceil(edge.segment_lengths / (0.25 * max_size)), 1).astype(int)

@@ -1,0 +1,207 @@
+"""Run a :class:`~cadedge.mesh.worker.MeshJob` in a child process under a watchdog.
+
+The child (``python -m cadedge.mesh.worker``, in its own session so a terminal's Ctrl-C reaches only the
+caller) writes a progress line before each step and each face attempt. The watchdog here kills it when
+
+- one face attempt runs longer than ``face_timeout``: that (face, strategy) is marked as hung and a new
+  child runs the job again without it (the face goes on to the next strategy with other sizes: the
+  other algorithms on the same sizes tend to hang as well, and finer sizes take longer still);
+- the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
+  and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
+- the whole job passes ``timeout``: the job fails with "no result within ... s".
+
+A new child replays what the progress file says the killed one achieved: each face starts at the
+strategy that meshed it, and attempts that failed are not tried again. After :data:`SOFT_SHARE` of the
+timeout the child starts no new attempts (the faces left fail with "out of time"), and an attempt still
+running at :data:`KILL_SHARE` of it is killed, so a replay has the rest of the time to deliver what was
+meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing.
+
+The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
+hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
+``KeyboardInterrupt`` the child is killed before the interrupt goes on.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..atomic import atomic_path
+from .generate import STRATEGIES
+from .worker import JobResult, MeshJob, empty_result
+
+#: Default bound on one mesh job (all faces, all retries, restarts included), in seconds.
+DEFAULT_TIMEOUT = 300.0
+#: One face attempt may take at most this share of the job's timeout before it counts as hung.
+FACE_SHARE = 0.2
+#: Share of the timeout after which the child starts no new face attempts.
+SOFT_SHARE = 0.6
+#: Share of the timeout at which a running face attempt is killed (the replay gets the rest).
+KILL_SHARE = 0.7
+#: Restarts after hung or crashed face attempts, at most.
+MAX_RESTARTS = 12
+_POLL = 0.05
+
+
+@dataclass
+class _Run:
+    result: JobResult | None
+    status: str  # "ok", "hung", "late" (past KILL_SHARE), "crashed", "timeout"
+    last: str  # the last progress line
+    detail: str
+
+
+def _signal_name(code: int) -> str:
+    try:
+        return signal.Signals(-code).name
+    except ValueError:
+        return f"signal {-code}"
+
+
+def _exit_reason(code: int, stderr: str) -> str:
+    if code < 0:
+        name = _signal_name(code)
+        hint = " (likely out of memory)" if name == "SIGKILL" else ""
+        return f"gmsh crashed ({name}{hint})"
+    tail = [ln for ln in stderr.strip().splitlines() if ln.strip()][-1:]
+    return f"the mesh process exited with code {code}" + (f": {tail[0][:200]}" if tail else "")
+
+
+def _last_line(path: str) -> str:
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            f.seek(max(0, f.tell() - 256))
+            lines = f.read().decode(errors="replace").splitlines()
+        return lines[-1] if lines else ""
+    except OSError:
+        return ""
+
+
+def _progress(path: str) -> list[str]:
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            return f.read().splitlines()
+    except OSError:
+        return []
+
+
+def _learn(lines: list[str], skip: dict[int, dict[int, str]], known_ok: dict[int, int]) -> None:
+    """What a killed child achieved, from its progress lines: strategies that meshed or failed each face."""
+    for line in lines:
+        words = line.split(" ", 4)
+        if words[0] != "result" or len(words) < 4:
+            continue
+        face, k = int(words[1]), int(words[2])
+        if words[3] == "ok":
+            known_ok[face] = k
+        else:
+            skip.setdefault(face, {})[k] = words[4] if len(words) > 4 else "failed"
+
+
+def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_timeout: float) -> _Run:
+    job_path, result_path, progress_path = (os.path.join(tmp, n) for n in ("job.pkl", "result.pkl", "progress"))
+    for p in (result_path, progress_path):
+        if os.path.exists(p):
+            os.remove(p)
+    with open(job_path, "wb") as f:
+        pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    with open(os.path.join(tmp, "stderr"), "w+") as err:
+        proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path],
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
+                                start_new_session=True)
+        last, since = "", time.monotonic()
+        try:
+            while True:
+                try:
+                    code = proc.wait(timeout=_POLL)
+                    break
+                except subprocess.TimeoutExpired:
+                    pass
+                now = time.monotonic()
+                line = _last_line(progress_path)
+                if line != last:
+                    last, since = line, now
+                if now > deadline:
+                    return _Run(None, "timeout", last, "")
+                if line.startswith("face ") and now - since > face_timeout:
+                    return _Run(None, "hung", last, f"hung: no result within {face_timeout:g} s")
+                if line.startswith("face ") and now > kill_at:
+                    return _Run(None, "late", last, "not finished: out of time (timeout)")
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        last = _last_line(progress_path)
+        err.seek(0)
+        stderr = err.read()
+    if code == 0 and os.path.exists(result_path):
+        with open(result_path, "rb") as f:
+            return _Run(pickle.load(f), "ok", last, "")
+    return _Run(None, "crashed", last, _exit_reason(code, stderr))
+
+
+def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = DEFAULT_TIMEOUT,
+                 face_timeout: float | None = None) -> JobResult:
+    """Run ``job`` in a child process (see the module doc); the mesh goes to ``output`` if anything meshed.
+
+    ``face_timeout`` defaults to :data:`FACE_SHARE` of ``timeout``. ``output`` is written atomically and
+    only when the result has triangles; ``job.output`` is set here to a file in a private folder.
+    """
+    face_timeout = face_timeout or FACE_SHARE * timeout
+    t0 = time.monotonic()
+    deadline = t0 + timeout
+    kill_at = t0 + KILL_SHARE * timeout
+    job.deadline = time.time() + SOFT_SHARE * timeout
+    events: list[str] = []
+    skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
+    known_ok: dict[int, int] = dict(job.known_ok)
+    with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
+        job.output = os.path.join(tmp, "mesh" + output.suffix.lower()) if output is not None else None
+        for _ in range(MAX_RESTARTS + 1):
+            job.skip, job.known_ok = skip, known_ok
+            run = _run_child(job, tmp, deadline, kill_at, face_timeout)
+            if run.status == "ok":
+                result = run.result
+                result.notes = events + result.notes
+                if output is not None and result.written and len(result.triangles):
+                    with atomic_path(output) as dst:
+                        shutil.copyfile(job.output, dst)
+                else:
+                    result.written = False
+                return result
+            if run.status == "timeout":
+                return _failed(f"no result within {timeout:g} s (--timeout)", events)
+            words = run.last.split()
+            if words[:1] != ["face"] or len(words) != 3:
+                where = f" while gmsh was at step '{run.last}'" if run.last else ""
+                return _failed(f"{run.detail}{where}", events)
+            _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+            face, k = int(words[1]), int(words[2])
+            barred = skip.setdefault(face, {})
+            barred[k] = run.detail
+            if run.status == "hung":  # other algorithms on the same sizes tend to hang too: go to other sizes
+                kind = (STRATEGIES[k].size_factor, STRATEGIES[k].split, STRATEGIES[k].own_curves)
+                same = [j for j, s in enumerate(STRATEGIES) if j > k and (s.size_factor, s.split, s.own_curves) == kind]
+                barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
+                finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
+                         if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
+                barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
+            events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
+                          "process")
+        return _failed(f"gave up after {MAX_RESTARTS} restarts of the mesh process", events)
+
+
+def _failed(reason: str, events: list[str]) -> JobResult:
+    result = empty_result(reason)
+    result.notes = events
+    return result

@@ -1,0 +1,183 @@
+"""The mesh report: per face id, surface type, triangles, area deficit and minimum angle.
+
+Returned by :func:`cadedge.mesh.mesh_shape` as ``result.report``, summarised (worst faces only) in the
+printed lines, and written as JSON by ``cadedge mesh --report mesh.json`` (schema ``cadedge.meshreport/1``).
+The area deficit of a face is ``1 - mesh area / B-rep area`` (see :mod:`cadedge.mesh.fidelity`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..atomic import atomic_path
+from .fidelity import area_deficits, face_mesh_areas
+from .quality import GOOD_DEG, SLIVER_DEG, SmallAngle, small_angles, triangle_angles
+
+SCHEMA = "cadedge.meshreport/1"
+#: Faces listed in the printed summary.
+WORST = 5
+#: Where the job's fidelity hook leaves what it did (``MeshResult.extras``).
+AFTER_MESH_HOOK = "cadedge.mesh.fidelity:after_mesh"
+
+
+@dataclass
+class FaceReport:
+    """One B-rep face. ``status``: ``ok``, ``over target`` (meshed, area deficit above the target) or
+    ``failed`` (not meshed); ``note`` says why when it is not ok."""
+
+    face: int
+    surface: str
+    triangles: int
+    brep_area: float
+    mesh_area: float
+    area_deficit: float | None
+    min_angle: float | None
+    below_20: float
+    status: str = "ok"
+    note: str = ""
+
+
+@dataclass
+class MeshReport:
+    """Per-face records plus whole-mesh figures: worst |area deficit|, minimum angle, share under 20 deg,
+    and every triangle under 5 deg (forced by the B-rep or not)."""
+
+    surface_ald: float | None
+    faces: list[FaceReport]
+    triangles: int
+    min_angle: float | None
+    below_20: float
+    worst_deficit: float | None
+    small_angles: list[SmallAngle] = field(default_factory=list)
+
+    @property
+    def over_target(self) -> list[FaceReport]:
+        return [f for f in self.faces if f.status == "over target"]
+
+    @property
+    def unforced_slivers(self) -> int:
+        return sum(not s.forced for s in self.small_angles)
+
+    def worst_faces(self, n: int = WORST) -> list[FaceReport]:
+        """The ``n`` meshed faces with the largest |area deficit|."""
+        meshed = [f for f in self.faces if f.area_deficit is not None and f.triangles]
+        return sorted(meshed, key=lambda f: -abs(f.area_deficit))[:n]
+
+    def lines(self, n: int = WORST) -> list[str]:
+        """The printed summary: whole-mesh figures, the worst faces, faces over target, slivers."""
+        target = f" (target {self.surface_ald:g})" if self.surface_ald else ""
+        out = [f"faces: worst |area deficit| {_num(self.worst_deficit)}{target}, min angle "
+               f"{_num(self.min_angle, '.1f')} deg, {100 * self.below_20:.2f}% of triangles under {GOOD_DEG:g} deg"]
+        for f in self.worst_faces(n):
+            out.append(f"  face {f.face} ({f.surface}): {f.triangles} triangles, area deficit "
+                       f"{f.area_deficit:.3g}, min angle {_num(f.min_angle, '.1f')} deg")
+        for f in self.over_target:
+            out.append(f"  face {f.face}: area deficit {f.area_deficit:.3g} over the target: {f.note}")
+        forced = [s for s in self.small_angles if s.forced]
+        if self.small_angles:
+            out.append(f"  {len(self.small_angles)} triangles under {SLIVER_DEG:g} deg "
+                       f"({len(forced)} forced by the B-rep) on faces "
+                       f"{sorted({s.face for s in self.small_angles})[:10]}")
+        for s in {s.face: s for s in reversed(forced)}.values():
+            out.append(f"  face {s.face}: {s.angle:.2g} deg forced: {s.reason}")
+        return out
+
+    def to_dict(self) -> dict:
+        """Plain JSON-ready data (NaN written as null)."""
+        return _clean({"schema": SCHEMA, "surface_ald": self.surface_ald, "triangles": self.triangles,
+                       "min_angle": self.min_angle, "below_20": self.below_20,
+                       "worst_area_deficit": self.worst_deficit,
+                       "faces": [asdict(f) for f in self.faces],
+                       "small_angles": [asdict(s) for s in self.small_angles]})
+
+    def write(self, path: str | os.PathLike) -> Path:
+        """Write :meth:`to_dict` as JSON, atomically."""
+        target = Path(path)
+        with atomic_path(target) as tmp:
+            tmp.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+        return target
+
+
+def _num(x: float | None, fmt: str = ".3g") -> str:
+    return "n/a" if x is None or not math.isfinite(x) else format(x, fmt)
+
+
+def _clean(obj):
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    return obj
+
+
+def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray, *,
+                 brep_areas: np.ndarray, surface_types: list[str], surface_ald: float | None = None,
+                 failed: dict[int, str] | None = None, vertex_points: np.ndarray | None = None,
+                 stuck: list[int] | tuple[int, ...] = ()) -> MeshReport:
+    """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
+
+    ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
+    (to tell small angles forced by a sharp face corner from the mesher's own slivers); ``stuck`` the faces
+    whose deficit finer meshes did not reduce.
+    """
+    nodes = np.asarray(nodes, dtype=float)
+    tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    tri_faces = np.asarray(triangle_faces, dtype=np.int64)
+    n = len(brep_areas)
+    failed = failed or {}
+    mesh_areas = face_mesh_areas(nodes, tris, tri_faces, n)
+    deficits = area_deficits(mesh_areas, brep_areas)
+    angles = triangle_angles(nodes, tris) if len(tris) else np.zeros((0, 3))
+    tri_min = angles.min(axis=1) if len(tris) else np.zeros(0)
+    counts = np.bincount(tri_faces - 1, minlength=n)[:n] if len(tris) else np.zeros(n, dtype=int)
+    faces = []
+    for i in range(n):
+        fid = i + 1
+        mine = tri_min[tri_faces == fid]
+        rec = FaceReport(face=fid, surface=surface_types[i], triangles=int(counts[i]),
+                         brep_area=float(brep_areas[i]), mesh_area=float(mesh_areas[i]),
+                         area_deficit=float(deficits[i]) if len(mine) and np.isfinite(deficits[i]) else None,
+                         min_angle=float(mine.min()) if len(mine) else None,
+                         below_20=float(np.mean(mine < GOOD_DEG)) if len(mine) else 0.0)
+        if fid in failed or not len(mine):
+            rec.status, rec.note = "failed", failed.get(fid, "no triangles")
+        elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
+            rec.status = "over target"
+            rec.note = ("finer meshes did not reduce it: the meshed face and its B-rep area disagree (loose "
+                        "tolerances, or a trimming read differently by gmsh and by OCCT's area integration)"
+                        if fid in stuck
+                        else "a planar face: its area is set by its boundary polygon" if surface_types[i] == "Plane"
+                        else "still over after the face was meshed again finer")
+        elif rec.area_deficit is None:
+            rec.note = "the B-rep face has no area (degenerate)"
+        faces.append(rec)
+    measured = [abs(f.area_deficit) for f in faces if f.area_deficit is not None]
+    smalls = small_angles(nodes, tris, tri_faces, np.zeros((0, 3)) if vertex_points is None else vertex_points,
+                          angles=angles) if len(tris) else []
+    return MeshReport(surface_ald=surface_ald, faces=faces, triangles=len(tris),
+                      min_angle=float(tri_min.min()) if len(tri_min) else None,
+                      below_20=float(np.mean(tri_min < GOOD_DEG)) if len(tri_min) else 0.0,
+                      worst_deficit=max(measured) if measured else None, small_angles=smalls)
+
+
+def report_of(result, opts: dict) -> MeshReport | None:
+    """The report of a :class:`~cadedge.mesh.MeshResult` meshed with the fidelity settings ``opts``
+    (:func:`cadedge.mesh.fidelity.prepare`); None when nothing was meshed."""
+    if result.check is None and not len(result.triangles):
+        return None
+    extras = result.extras.get(AFTER_MESH_HOOK, {}) or {}
+    failed = {f.face: f.reason for f in result.failures}
+    vertex_points = np.array([np.asarray(v.point, dtype=float) for v in result.grid.vertices]).reshape(-1, 3)
+    return build_report(result.nodes, result.triangles, result.triangle_faces, brep_areas=opts["brep_areas"],
+                        surface_types=opts["surface_types"], surface_ald=opts["surface_ald"], failed=failed,
+                        vertex_points=vertex_points, stuck=extras.get("stuck", ()))

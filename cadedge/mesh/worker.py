@@ -1,0 +1,256 @@
+"""The gmsh side of ``mesh_shape``: one picklable :class:`MeshJob` in, one :class:`JobResult` out.
+
+:func:`run_job` is the only place where gmsh meshes a model. It runs in a child process started by
+:mod:`cadedge.mesh.isolate` (``python -m cadedge.mesh.worker JOB RESULT PROGRESS``), so a gmsh crash,
+hang or exhausted memory costs that child, never the caller. Steps, in order:
+
+1. import the BREP text (no healing; gmsh's wire fixing as a second try, see ``IMPORT_ATTEMPTS``);
+2. map gmsh's entities onto cadedge's ids (:func:`~cadedge.mesh.gmsh_model.map_entities`, never raises);
+3. ``nodes`` mode: impose the edge grids; ``sizes`` mode: sizes at the grids' parameters; gmsh's size
+   field; **hooks "before_generate"**; curves gmsh still has to mesh (degenerate, unmatched, or all of
+   them in ``sizes`` mode);
+4. every face on its own through the retry strategies (:func:`~cadedge.mesh.generate.mesh_faces`), with
+   a progress line and **hooks "before_face"** (``context.face``, ``context.strategy`` set) before each
+   attempt (the parent's watchdog reads the line); **hooks "after_generate"** (a
+   hook may clear faces and mesh them again with ``mesh_faces``, updating ``context.outcomes``);
+5. read the mesh back; **hooks "before_write"**; write ``job.output`` if asked; **hooks "after_mesh"**.
+
+Hooks are ``"module:function"`` names in ``job.hooks[stage]``, imported in the child and called as
+``function(context)`` with a :class:`JobContext` (the job, the entity map, the gmsh surfaces, the face
+outcomes and the raw mesh once they exist; gmsh's current model is the one being meshed). What an
+``after_mesh`` hook returns (numpy arrays, plain data) lands in ``JobResult.extras[name]``. This is where
+size fields, physical groups and per-face measurements plug in without touching the isolation.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import pickle
+import sys
+import tempfile
+import traceback
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..shapegrid import ShapeGrid
+
+#: Address space a mesh child may use, as a share of physical memory: beyond it allocations fail inside
+#: the child (gmsh reports or crashes there) before the system's out-of-memory killer picks a process.
+MEMORY_SHARE = 0.8
+HOOK_STAGES = ("before_generate", "before_face", "after_generate", "before_write", "after_mesh")
+
+
+@dataclass
+class MeshJob:
+    """Everything the child needs, picklable: the shape as BREP text and the grid without its OCCT shape."""
+
+    source: str
+    brep: bytes
+    grid: ShapeGrid
+    field: Any  # cadedge.mesh.sizes.SizeField (kept untyped: sizes imports gmsh)
+    mode: str
+    output: str | None = None  # where the child writes the mesh (gmsh picks the format from the suffix)
+    skip: dict[int, dict[int, str]] = field(default_factory=dict)  # face -> {strategy index: reason}
+    known_ok: dict[int, int] = field(default_factory=dict)  # face -> strategy that meshed it in an earlier run
+    deadline: float | None = None  # time.time() after which only known_ok attempts start
+    hooks: dict[str, list[str]] = field(default_factory=dict)
+    options: dict[str, Any] = field(default_factory=dict)  # free-form settings for hooks
+
+
+@dataclass
+class JobContext:
+    """What a hook sees. Fields fill in as the job advances (``None`` before their step)."""
+
+    job: MeshJob
+    emap: Any = None  # cadedge.mesh.gmsh_model.EntityMap
+    surfaces: list[int] = field(default_factory=list)
+    outcomes: dict[int, Any] = field(default_factory=dict)  # gmsh surface -> generate.FaceOutcome
+    raw: Any = None  # cadedge.mesh.generate.RawMesh
+    face: int = 0  # the face attempt under way (for "before_face" hooks)
+    strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
+
+
+@dataclass
+class JobResult:
+    """The child's answer: plain arrays and records only.
+
+    ``nodes`` (n, 3); ``triangles`` (m, 3) 0-based; ``triangle_faces`` (m,) cadedge face ids; ``faces``
+    one :class:`~cadedge.mesh.generate.FaceOutcome` per face; ``edge_pairs`` (k, 2) node-index pairs of the
+    curve segments and ``edge_uses`` (k,) how many triangles each should have; ``imposed_edges`` the edges
+    whose grid was imposed; ``unmatched_edges`` the edges gmsh meshed itself; ``error`` a reason when the
+    job failed as a whole (gmsh could not import the shape, an internal error).
+    """
+
+    nodes: np.ndarray
+    triangles: np.ndarray
+    triangle_faces: np.ndarray
+    faces: list[Any]
+    edge_pairs: np.ndarray
+    edge_uses: np.ndarray
+    imposed_edges: list[int] = field(default_factory=list)
+    unmatched_edges: list[int] = field(default_factory=list)
+    own_mesh_edges: list[int] = field(default_factory=list)  # imposed grids a fallback replaced by gmsh's mesh
+    notes: list[str] = field(default_factory=list)
+    details: list[str] = field(default_factory=list)  # for --verbose: how each entity was matched
+    extras: dict[str, Any] = field(default_factory=dict)
+    error: str | None = None
+    written: bool = False
+
+
+def empty_result(error: str) -> JobResult:
+    """A result with no mesh and ``error`` as the reason."""
+    return JobResult(nodes=np.zeros((0, 3)), triangles=np.zeros((0, 3), dtype=np.int64),
+                     triangle_faces=np.zeros(0, dtype=np.int64), faces=[], edge_pairs=np.zeros((0, 2), np.int64),
+                     edge_uses=np.zeros(0, dtype=np.int64), error=error)
+
+
+def _hooks(ctx: JobContext, stage: str) -> dict[str, Any]:
+    out = {}
+    for name in ctx.job.hooks.get(stage, []):
+        module, _, func = name.partition(":")
+        out[name] = getattr(importlib.import_module(module), func)(ctx)
+    return out
+
+
+def _import(brep: bytes, notes: list[str]) -> str | None:
+    """Import the BREP into the current gmsh model; None, or the reason every import attempt failed."""
+    import gmsh
+
+    from ..errors import GeometryError
+    from .gmsh_model import IMPORT_ATTEMPTS, import_brep
+
+    errors = []
+    with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
+        path = os.path.join(tmp, "shape.brep")
+        with open(path, "wb") as f:
+            f.write(brep)
+        for attempt in range(len(IMPORT_ATTEMPTS)):
+            try:
+                import_brep(path, attempt=attempt)
+            except GeometryError as exc:
+                errors.append(str(exc))
+                gmsh.clear()
+                continue
+            if attempt:
+                notes.append(f"gmsh imported the shape only with its wire fixing ({errors[0]})")
+            return None
+    return errors[-1]
+
+
+def run_job(job: MeshJob, progress: Any = None) -> JobResult:
+    """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step."""
+    import gmsh
+
+    from .generate import boundary_multiplicity, mesh_faces, read_mesh
+    from .gmsh_model import gmsh_session, map_entities
+    from .impose import impose_edge_grids
+    from .sizes import apply_spacing_sizes, configure_gmsh_sizes
+
+    say = progress or (lambda line: None)
+    notes: list[str] = []
+    with gmsh_session():
+        say("import")
+        error = _import(job.brep, notes)
+        if error is not None:
+            return empty_result(error)
+        ctx = JobContext(job=job)
+        say("map")
+        emap = ctx.emap = map_entities(job.grid)
+        unmatched = list(emap.unmatched_edges)
+        imposed_edges: list[int] = []
+        if job.mode == "nodes":
+            imposed = impose_edge_grids(job.grid, emap)
+            imposed_edges = sorted(imposed.edge_nodes)
+            unmatched = sorted(set(unmatched) | set(imposed.skipped))
+            gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
+        else:
+            apply_spacing_sizes(job.grid, emap, job.field)
+            gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 0)
+        say("sizes")
+        configure_gmsh_sizes(job.field)
+        _hooks(ctx, "before_generate")
+        say("curves")
+        try:
+            gmsh.model.mesh.generate(1)
+        except Exception as exc:  # gmsh's bare Exception: the faces on the curves it missed fail below
+            notes.append(f"gmsh's curve meshing reported: {exc}")
+        ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        face_of = emap.face_of_surface
+        def started(face: int, k: int) -> None:
+            say(f"face {face} {k}")
+            ctx.face, ctx.strategy = face, k
+            _hooks(ctx, "before_face")
+
+        def finished(face: int, k: int, reason: str | None) -> None:
+            say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
+
+        own_curves: set[int] = set()
+        ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
+                                  deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves)
+        edge_of = {m.tag: eid for eid, m in emap.edges.items()}
+        own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
+        imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
+        _hooks(ctx, "after_generate")
+        say("read")
+        raw = ctx.raw = read_mesh(ctx.surfaces)
+        meshed = [s for s, o in ctx.outcomes.items() if o.ok]
+        pairs, uses = boundary_multiplicity(raw, meshed)
+        _hooks(ctx, "before_write")
+        written = False
+        if job.output and len(raw.triangles):
+            say("write")
+            gmsh.write(job.output)
+            written = True
+        extras = _hooks(ctx, "after_mesh")
+    tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
+    return JobResult(nodes=raw.nodes, triangles=raw.triangles, triangle_faces=tri_faces,
+                     faces=sorted(ctx.outcomes.values(), key=lambda o: o.face), edge_pairs=pairs, edge_uses=uses,
+                     imposed_edges=imposed_edges, unmatched_edges=unmatched, own_mesh_edges=own_edges, notes=notes,
+                     details=list(emap.notes),
+                     extras=extras,
+                     written=written)
+
+
+def _limit_memory() -> None:
+    try:
+        import resource
+
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        limit = int(MEMORY_SHARE * total)
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    except (ImportError, ValueError, OSError):  # not on this platform: the parent's timeout still bounds it
+        pass
+
+
+def main(argv: list[str]) -> int:
+    """``python -m cadedge.mesh.worker JOB RESULT PROGRESS``: unpickle the job, run it, pickle the result."""
+    job_path, result_path, progress_path = argv
+    _limit_memory()
+    with open(job_path, "rb") as f:
+        job = pickle.load(f)
+    with open(progress_path, "a", buffering=1) as prog:
+        def say(line: str) -> None:
+            prog.write(line + "\n")
+            prog.flush()
+
+        try:
+            result = run_job(job, say)
+        except Exception as exc:  # reported to the parent as the job's failure, with where it happened
+            where = traceback.extract_tb(exc.__traceback__)[-1]
+            result = empty_result(f"internal error: {type(exc).__name__}: {exc} "
+                                  f"({os.path.basename(where.filename)}:{where.lineno})")
+        say("done")
+    tmp = result_path + ".part"
+    with open(tmp, "wb") as f:
+        pickle.dump(result, f, protocol=pickle.HIGHEST_PROTOCOL)
+    os.replace(tmp, result_path)
+    return 0
+
+
+if __name__ == "__main__":  # run through the importable module, so results pickle under its real name
+    from cadedge.mesh.worker import main as _main
+
+    sys.exit(_main(sys.argv[1:]))

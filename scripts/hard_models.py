@@ -1,0 +1,229 @@
+"""Hard models for ``cadedge mesh``: the shapes that broke it, built with cadquery and OCP.
+
+Helical sweeps, revolved and lofted splines, thin and sliver faces, tiny edges beside long ones,
+multi-body assemblies (one part placed twice), a hole through a fillet, a B-spline cage, loose
+tolerances, free edges, seams and degenerate edges, and an AP242 STEP written with PMI (a dimension and
+annotation curves) through OCCT's XDE writer (``STEPCAFControl_Writer``).
+
+    python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step for every model
+
+``MODELS`` maps each name to a builder returning an OCP ``TopoDS_Shape``; ``write_model(name, folder)``
+writes one STEP file (the PMI model through XDE, the others through cadquery's exporter).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+from typing import Callable
+
+import cadquery as cq
+
+
+def spring() -> object:
+    """A circle swept along a helix (4 turns): helical B-spline faces with a seam along the sweep."""
+    path = cq.Wire.makeHelix(pitch=2.0, height=8.0, radius=3.0)
+    return cq.Workplane("XZ").center(3.0, 0.0).circle(0.5).sweep(cq.Workplane().add(path), isFrenet=True).val().wrapped
+
+
+def revolved_spline() -> object:
+    """A spline profile revolved a full turn: a B-spline surface of revolution with a seam and poles."""
+    prof = (cq.Workplane("XZ").moveTo(0, 0).lineTo(1.0, 0)
+            .spline([(2.0, 1.0), (1.2, 2.0), (2.6, 3.2), (1.0, 4.0)], includeCurrent=True).lineTo(0, 4.0).close())
+    return prof.revolve(360, (0, 0, 0), (0, 1, 0)).val().wrapped
+
+
+def lofted_spline() -> object:
+    """A loft through a circle, a rotated ellipse and a closed spline."""
+    w1 = cq.Wire.makeCircle(2.0, cq.Vector(0, 0, 0), cq.Vector(0, 0, 1))
+    w2 = cq.Wire.assembleEdges([cq.Edge.makeEllipse(3.0, 1.2, cq.Vector(0, 0, 3), cq.Vector(0.2, 0, 1))])
+    pts = [(1.5 * math.cos(t) * (1 + 0.3 * math.cos(3 * t)), 1.5 * math.sin(t) * (1 + 0.3 * math.cos(3 * t)), 6.0)
+           for t in [2 * math.pi * k / 9 for k in range(9)]]
+    w3 = cq.Wire.assembleEdges([cq.Edge.makeSpline([cq.Vector(*p) for p in pts], periodic=True)])
+    return cq.Solid.makeLoft([w1, w2, w3], ruled=False).wrapped
+
+
+def twisted_blade() -> object:
+    """A blade lofted through airfoil-like splines twisted by 60 degrees."""
+    wires = []
+    for k in range(4):
+        a, z = math.radians(20.0 * k), 3.0 * k
+        base = [(0, 0), (2, 1.5), (5, 1.8), (8, 0.6), (10, 0), (8, -0.3), (5, -0.6), (2, -0.6)]
+        rot = [cq.Vector(x * math.cos(a) - y * math.sin(a), x * math.sin(a) + y * math.cos(a), z) for x, y in base]
+        wires.append(cq.Wire.assembleEdges([cq.Edge.makeSpline(rot, periodic=True)]))
+    return cq.Solid.makeLoft(wires, ruled=False).wrapped
+
+
+def thin_plate() -> object:
+    """A 40 x 40 x 0.02 plate with a hole: side faces 2000 times longer than wide."""
+    return cq.Workplane().box(40, 40, 0.02).faces(">Z").workplane().hole(6).val().wrapped
+
+
+def sliver_faces() -> object:
+    """Two boxes fused, the second turned by 0.3 degrees: long sliver faces where they nearly coincide."""
+    a = cq.Workplane().box(10, 10, 10)
+    b = cq.Workplane().box(10, 10, 10).rotate((0, 0, 0), (0, 0, 1), 0.3).translate((0.0, 0.0, 5.0))
+    return a.union(b).val().wrapped
+
+
+def tiny_edges() -> object:
+    """A 100 x 20 x 5 bar with a 0.05 notch and a 0.02 chamfer: tiny edges beside 100-long ones."""
+    bar = cq.Workplane().box(100, 20, 5)
+    notch = cq.Workplane().box(0.05, 0.05, 5).translate((10, 10, 0))
+    return bar.cut(notch).edges("|X and >Z and >Y").chamfer(0.02).val().wrapped
+
+
+def hole_through_fillet() -> object:
+    """A block with a 4 mm fillet and a slanted hole drilled through the fillet."""
+    block = cq.Workplane().box(20, 20, 10).edges("|Y and >Z and >X").fillet(4.0)
+    drill = cq.Solid.makeCylinder(1.0, 30, cq.Vector(-2, 0, -8), cq.Vector(1, 0, 1.2))
+    return block.cut(cq.Workplane().add(drill)).val().wrapped
+
+
+def bspline_cage() -> object:
+    """An open cage of 4 B-spline faces (a lofted tube through spline rectangles, no caps)."""
+    def rect(z: float, s: float) -> cq.Wire:
+        c = [cq.Vector(-s, -s, z), cq.Vector(s, -s, z), cq.Vector(s, s, z), cq.Vector(-s, s, z)]
+        mids = [cq.Vector(0, -1.3 * s, z), cq.Vector(1.3 * s, 0, z), cq.Vector(0, 1.3 * s, z),
+                cq.Vector(-1.3 * s, 0, z)]
+        return cq.Wire.assembleEdges([cq.Edge.makeSpline([c[i], mids[i], c[(i + 1) % 4]]) for i in range(4)])
+
+    loft = cq.Solid.makeLoft([rect(0, 2.0), rect(3, 1.0), rect(6, 2.5)], ruled=False)
+    sides = [f for f in loft.Faces() if f.geomType() != "PLANE"]
+    return cq.Shell.makeShell(sides).wrapped
+
+
+def wavy_plate() -> object:
+    """A B-spline surface with waves, trimmed to a rectangle, plus its border as free edges."""
+    pts = [[cq.Vector(x, y, 0.6 * math.sin(x) * math.cos(0.7 * y)) for y in range(0, 11)] for x in range(0, 11)]
+    return cq.Face.makeSplineApprox(pts).wrapped
+
+
+def loose_tolerance() -> object:
+    """A filleted box whose edge and vertex tolerances are forced up to 0.05 (a loosely sewn file)."""
+    from OCP.ShapeFix import ShapeFix_ShapeTolerance
+    from OCP.TopAbs import TopAbs_SHAPE
+
+    shape = cq.Workplane().box(10, 8, 6).edges("|Z").fillet(1.5).faces(">Z").hole(3).val().wrapped
+    ShapeFix_ShapeTolerance().SetTolerance(shape, 0.05, TopAbs_SHAPE)
+    return shape
+
+
+def free_edges() -> object:
+    """An open box (one face removed) beside a loose circle and a loose line: free and lone edges."""
+    box = cq.Workplane().box(4, 4, 4).faces(">Z").shell(-0.5).val()
+    open_shell = cq.Shell.makeShell([f for f in box.Faces() if f.Center().z < 1.99 or f.geomType() != "PLANE"])
+    circle = cq.Edge.makeCircle(1.0, cq.Vector(8, 0, 0))
+    line = cq.Edge.makeLine(cq.Vector(8, 3, 0), cq.Vector(12, 3, 0))
+    return cq.Compound.makeCompound([open_shell, circle, line]).wrapped
+
+
+def seams_and_poles() -> object:
+    """A sphere, a cone with its apex, a torus and a half-revolved profile: seams and degenerate edges."""
+    return cq.Compound.makeCompound([
+        cq.Solid.makeSphere(2.0, angleDegrees1=-90, angleDegrees2=90),
+        cq.Solid.makeCone(1.5, 0.0, 3.0, pnt=cq.Vector(6, 0, 0)),
+        cq.Solid.makeTorus(3.0, 0.7, pnt=cq.Vector(0, 9, 0)),
+        cq.Workplane("XZ").moveTo(0, 0).lineTo(1, 0).threePointArc((1.5, 1), (1, 2)).lineTo(0, 2).close()
+          .revolve(180, (0, 0, 0), (0, 1, 0)).translate((12, 0, 0)).val(),
+    ]).wrapped
+
+
+def assembly() -> object:
+    """Five touching and overlapping bodies, one of them the same solid placed twice (shared TShape)."""
+    bolt = cq.Workplane().cylinder(6, 0.8).val()
+    loc1 = cq.Location(cq.Vector(2, 0, 3))
+    loc2 = cq.Location(cq.Vector(-2, 0, 3))
+    return cq.Compound.makeCompound([
+        cq.Workplane().box(8, 4, 2).val(),
+        bolt.moved(loc1), bolt.moved(loc2),
+        cq.Workplane().sphere(1.2).translate((0, 0, 1.5)).val(),
+        cq.Workplane().box(2, 2, 2).translate((4.5, 0, 0)).val(),
+    ]).wrapped
+
+
+def pmi_part() -> object:
+    """The PMI model's geometry: a bracket with holes and fillets, a second body, annotation curves."""
+    plate = (cq.Workplane().box(30, 20, 4).edges("|Z").fillet(3).faces(">Z").workplane()
+             .rarray(18, 10, 2, 2).hole(3).val())
+    boss = cq.Workplane().cylinder(8, 4).translate((0, 0, 6)).val()
+    leader = cq.Wire.makePolygon([cq.Vector(15, 10, 2), cq.Vector(25, 18, 2), cq.Vector(35, 18, 2)])
+    text = cq.Wire.makePolygon([cq.Vector(26, 19, 2), cq.Vector(27, 21, 2), cq.Vector(28, 19, 2),
+                                cq.Vector(29, 21, 2)])
+    ring = cq.Edge.makeCircle(1.5, cq.Vector(9, 5, 2.0))  # a diameter symbol drawn on the top face
+    return plate.wrapped, boss.wrapped, [leader.wrapped, text.wrapped, ring.wrapped]
+
+
+def write_pmi_step(path: Path) -> None:
+    """Write the PMI model as AP242 through XDE: two bodies, annotation wires and a diameter dimension."""
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.Interface import Interface_Static
+    from OCP.STEPCAFControl import STEPCAFControl_Writer
+    from OCP.STEPControl import STEPControl_AsIs
+    from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.TopoDS import TopoDS_Compound
+    from OCP.BRep import BRep_Builder
+    from OCP.XCAFDimTolObjects import XCAFDimTolObjects_DimensionObject, XCAFDimTolObjects_DimensionType
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool, XCAFDoc_Dimension
+    from OCP.TDF import TDF_LabelSequence
+
+    plate, boss, notes = pmi_part()
+    doc = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))
+    shapes = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    dims = XCAFDoc_DocumentTool.DimTolTool_s(doc.Main())
+    plate_label = shapes.AddShape(plate, False)
+    shapes.AddShape(boss, False)
+    comp = TopoDS_Compound()
+    builder = BRep_Builder()
+    builder.MakeCompound(comp)
+    for w in notes:
+        builder.Add(comp, w)
+    shapes.AddShape(comp, False)
+    dim_label = dims.AddDimension()
+    dim = XCAFDimTolObjects_DimensionObject()
+    dim.SetType(XCAFDimTolObjects_DimensionType.XCAFDimTolObjects_DimensionType_Size_Diameter)
+    dim.SetValue(3.0)
+    dim.SetPresentation(comp, TCollection_HAsciiString("3 mm"))
+    XCAFDoc_Dimension.Set_s(dim_label).SetObject(dim)
+    first = TDF_LabelSequence()
+    first.Append(plate_label)
+    dims.SetDimension(first, TDF_LabelSequence(), dim_label)
+    writer = STEPCAFControl_Writer()  # sets the STEP defaults: choose AP242 after it
+    Interface_Static.SetIVal_s("write.step.schema", 5)
+    writer.SetDimTolMode(True)
+    if not writer.Transfer(doc, STEPControl_AsIs) or writer.Write(str(path)) != IFSelect_RetDone:
+        raise RuntimeError(f"XDE could not write {path}")
+
+
+MODELS: dict[str, Callable[[], object]] = {
+    "spring": spring, "revolved_spline": revolved_spline, "lofted_spline": lofted_spline,
+    "twisted_blade": twisted_blade, "thin_plate": thin_plate, "sliver_faces": sliver_faces,
+    "tiny_edges": tiny_edges, "hole_through_fillet": hole_through_fillet, "bspline_cage": bspline_cage,
+    "wavy_plate": wavy_plate, "loose_tolerance": loose_tolerance, "free_edges": free_edges,
+    "seams_and_poles": seams_and_poles, "assembly": assembly,
+}
+NAMES = list(MODELS) + ["pmi_ap242"]
+
+
+def write_model(name: str, folder: Path) -> Path:
+    """Write model ``name`` as ``folder/<name>.step``; returns the path."""
+    path = Path(folder) / f"{name}.step"
+    if name == "pmi_ap242":
+        write_pmi_step(path)
+    else:
+        cq.exporters.export(cq.Shape.cast(MODELS[name]()), str(path), exportType="STEP")
+    return path
+
+
+def main(argv: list[str]) -> int:
+    folder = Path(argv[0]) if argv else Path("hard_models")
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in NAMES:
+        print(write_model(name, folder))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

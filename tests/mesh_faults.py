@@ -1,0 +1,30 @@
+"""Faults injected into the gmsh child process by the robustness tests (hooks of cadedge.mesh.worker).
+
+Each hook acts on the first attempt (strategy 0) at face ``FAULT_FACE`` only, so the restarted child gets
+past it with the next strategy.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import time
+
+FAULT_FACE = 2
+
+
+def segfault(ctx) -> None:
+    """A real segmentation fault: read address 0."""
+    if ctx.face == FAULT_FACE and ctx.strategy == 0:
+        ctypes.string_at(0)
+
+
+def hang(ctx) -> None:
+    """Never return (as gmsh's 2-D meshers sometimes do)."""
+    if ctx.face == FAULT_FACE and ctx.strategy == 0:
+        while True:
+            time.sleep(1)
+
+
+def crash_before_meshing(ctx) -> None:
+    """Abort the child outside any face attempt: the whole run fails, the caller does not."""
+    ctypes.string_at(0)

@@ -1,0 +1,146 @@
+"""Surface fidelity of cadedge.mesh: per-face area deficit against OCCT's B-rep areas, triangle quality,
+B-rep ids as physical groups, the mesh report (real cadquery parts, real OCCT, real gmsh)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+gmsh = pytest.importorskip("gmsh")
+cq = pytest.importorskip("cadquery")
+
+from cadedge.cli import main  # noqa: E402
+from cadedge.mesh import mesh_shape  # noqa: E402
+from cadedge.mesh.fidelity import brep_face_areas, fit_boundaries, surface_types  # noqa: E402
+from cadedge.mesh.quality import triangle_angles  # noqa: E402
+from cadedge.mesh.report import build_report  # noqa: E402
+
+from conftest import FIXTURES  # noqa: E402
+
+
+def _sphere():
+    return cq.Workplane().sphere(10.0).val()
+
+
+def _torus():
+    return cq.Solid.makeTorus(10.0, 3.0)
+
+
+def _filleted_cylinder():
+    return cq.Workplane().cylinder(20.0, 8.0).edges().fillet(2.0).val()
+
+
+def _independent_deficits(result) -> np.ndarray:
+    """1 - triangle area / B-rep area per face, computed here from the raw arrays."""
+    areas = brep_face_areas(result.grid.shape)
+    p = result.nodes[result.triangles]
+    tri = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    mesh = np.array([tri[result.triangle_faces == f].sum() for f in range(1, len(areas) + 1)])
+    return 1.0 - mesh / areas
+
+
+@pytest.mark.parametrize("make", [_sphere, _torus, _filleted_cylinder], ids=["sphere", "torus", "fillet"])
+def test_halving_eps_about_halves_the_worst_face_deficit(make):
+    shape = make()
+    worst = []
+    for eps in (1e-2, 5e-3):
+        result = mesh_shape(shape, ald=eps)
+        assert result.ok, result.problems()
+        deficits = _independent_deficits(result)
+        assert np.all(np.abs(deficits) <= eps), (eps, deficits)
+        assert result.report.worst_deficit == pytest.approx(np.abs(deficits).max(), rel=1e-9)
+        worst.append(np.abs(deficits).max())
+    assert 0.3 <= worst[1] / worst[0] <= 0.75, worst
+
+
+def test_boundary_polygon_is_fitted_to_the_face_target():
+    """A planar disk cap inscribed at the edges' ALD loses about 4x that ALD of its area: the cap's circle
+    is split (grid points kept, nodes added) until the cap's polygon is within its share of the target."""
+    import cadedge
+
+    shape = cq.Workplane().cylinder(5.0, 10.0).val()
+    eps = 1e-2
+    grid = cadedge.refine_shape(shape, ald=eps)
+    fitted = fit_boundaries(grid, eps)
+    kinds = surface_types(grid.shape)
+    for before, after in zip(grid.edges, fitted.edges):
+        kept = {tuple(p) for p in after.points}
+        assert all(tuple(p) in kept for p in before.points)  # nodes are only ever added
+        if before.curve == "Circle":
+            assert after.segments >= 2 * before.segments
+    result = mesh_shape(shape, ald=eps)
+    caps = [f for f in result.report.faces if kinds[f.face - 1] == "Plane"]
+    assert caps and all(abs(f.area_deficit) <= eps for f in caps)
+
+
+def test_every_face_and_edge_is_a_physical_group(tmp_path):
+    out = tmp_path / "bracket.msh"
+    result = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, output=out)
+    assert result.ok and out.exists()
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(out))
+        groups = gmsh.model.getPhysicalGroups()
+        faces = sorted(t for d, t in groups if d == 2)
+        edges = sorted(t for d, t in groups if d == 1)
+        assert faces == list(range(1, result.grid.faces + 1))
+        assert edges == [e.id for e in result.grid.edges if not e.degenerate]
+        for fid in faces:
+            assert gmsh.model.getPhysicalName(2, fid) == f"face {fid}"
+            (surface,) = gmsh.model.getEntitiesForPhysicalGroup(2, fid)
+            n = len(gmsh.model.mesh.getElementsByType(2, surface)[0])
+            assert n == int(np.sum(result.triangle_faces == fid))  # the group holds that face's triangles
+        assert gmsh.model.getPhysicalName(1, edges[0]) == f"edge {edges[0]}"
+    finally:
+        gmsh.finalize()
+
+
+def test_report_per_face_and_json(tmp_path):
+    result = mesh_shape(FIXTURES / "cylinder.step", ald=1e-2)
+    rep = result.report
+    assert [f.face for f in rep.faces] == list(range(1, result.grid.faces + 1))
+    assert sorted(f.surface for f in rep.faces) == ["Cylinder", "Plane", "Plane"]
+    assert sum(f.triangles for f in rep.faces) == len(result.triangles)
+    assert all(f.status == "ok" for f in rep.faces)
+    np.testing.assert_allclose([f.area_deficit for f in rep.faces], _independent_deficits(result), atol=1e-12)
+    angles = triangle_angles(result.nodes, result.triangles).min(axis=1)
+    assert rep.min_angle == pytest.approx(angles.min())
+    assert rep.below_20 == pytest.approx(np.mean(angles < 20.0))
+    assert any("worst |area deficit|" in line for line in result.lines())
+    data = json.loads(rep.write(tmp_path / "r.json").read_text())
+    assert data["schema"] == "cadedge.meshreport/1" and len(data["faces"]) == 3
+
+
+def test_faces_over_target_are_named_with_their_deficit():
+    """The same mesh judged against a target it was not made for: every face over it is named."""
+    result = mesh_shape(FIXTURES / "cylinder.step", ald=1e-2)
+    rep = build_report(result.nodes, result.triangles, result.triangle_faces,
+                       brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
+                       surface_ald=1e-6)
+    assert {f.face for f in rep.over_target} == {1, 2, 3}
+    assert all(f.note for f in rep.over_target)
+    assert sum("over the target" in line for line in rep.lines()) == 3
+
+
+def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():
+    """A prism on a triangle with a 2.9-degree corner: its end faces must hold a triangle that thin."""
+    shape = cq.Workplane().polyline([(0, 0), (10, 0), (10, 0.5)]).close().extrude(1.0).val()
+    result = mesh_shape(shape, ald=1e-2)
+    assert result.ok, result.problems()
+    small = result.report.small_angles
+    assert small and all(s.forced for s in small)
+    assert any("corner" in line and "forced" in line for line in result.report.lines())
+
+
+def test_cli_surface_ald_and_report(tmp_path, capsys):
+    out, rep = tmp_path / "cyl.msh", tmp_path / "cyl.json"
+    code = main(["mesh", str(FIXTURES / "cylinder.step"), "--ald", "1e-2", "--surface-ald", "2e-3",
+                 "-o", str(out), "--report", str(rep)])
+    assert code == 0
+    data = json.loads(rep.read_text())
+    assert data["surface_ald"] == 2e-3
+    assert max(abs(f["area_deficit"]) for f in data["faces"]) <= 2e-3
+    assert "worst |area deficit|" in capsys.readouterr().out

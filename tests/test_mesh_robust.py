@@ -1,0 +1,243 @@
+"""cadedge mesh under faults: gmsh crashes, hangs, timeouts, Ctrl-C, unmatched edges, retries, PMI files.
+
+Faults are real and happen in the gmsh child process (hooks in ``mesh_faults.py``: a read of address 0, an
+endless loop); the caller must get a result, never a crash.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("gmsh")
+trimesh = pytest.importorskip("trimesh")
+psutil = pytest.importorskip("psutil")
+
+import cadedge  # noqa: E402
+from cadedge.cli import main  # noqa: E402
+from cadedge.mesh import mesh_shape  # noqa: E402
+from cadedge.mesh.check import check_triangles  # noqa: E402
+from cadedge.mesh.generate import STRATEGIES  # noqa: E402
+
+from conftest import FIXTURES, ROOT  # noqa: E402
+
+ALD = 1e-2
+CYL = FIXTURES / "cylinder.step"
+FAULT_FACE = 2  # mesh_faults.FAULT_FACE
+
+
+@pytest.fixture(scope="module")
+def cylinder() -> cadedge.ShapeGrid:
+    return cadedge.refine_shape(CYL, ald=ALD, max_growth=2.0)
+
+
+def _watertight_with_every_face(result) -> None:
+    assert result.ok, result.problems(verbose=True)
+    assert all(s.watertight for s in result.check.shells)
+    assert set(np.unique(result.triangle_faces)) == set(range(1, result.grid.faces + 1))
+
+
+def test_a_segfault_in_gmsh_costs_one_attempt(cylinder, tmp_path):
+    out = tmp_path / "c.msh"
+    result = mesh_shape(cylinder, output=out, hooks={"before_face": ["mesh_faults:segfault"]})
+    _watertight_with_every_face(result)
+    face = next(o for o in result.faces if o.face == FAULT_FACE)
+    assert face.strategy == STRATEGIES[1].name and "SIGSEGV" in face.attempts[0][1]
+    assert any("SIGSEGV" in n for n in result.notes)
+    assert out.exists()
+
+
+def test_a_hang_in_gmsh_costs_one_attempt(cylinder):
+    t0 = time.monotonic()
+    result = mesh_shape(cylinder, hooks={"before_face": ["mesh_faults:hang"]}, timeout=60, face_timeout=2)
+    assert time.monotonic() - t0 < 40
+    _watertight_with_every_face(result)
+    face = next(o for o in result.faces if o.face == FAULT_FACE)
+    assert "hung" in face.attempts[0][1] and face.ok
+
+
+def test_a_crash_outside_the_faces_fails_the_run_not_the_caller(cylinder, tmp_path):
+    out = tmp_path / "c.msh"
+    result = mesh_shape(cylinder, output=out, hooks={"before_generate": ["mesh_faults:crash_before_meshing"]})
+    assert not result.ok and "SIGSEGV" in result.error
+    assert len(result.failures) == cylinder.faces and len(result.triangles) == 0
+    assert not out.exists() and result.output is None  # nothing meshed: no file
+
+
+def test_the_whole_run_is_bounded_by_the_timeout(cylinder, tmp_path):
+    t0 = time.monotonic()
+    result = mesh_shape(cylinder, output=tmp_path / "c.msh", hooks={"before_face": ["mesh_faults:hang"]},
+                        timeout=4, face_timeout=100)
+    assert time.monotonic() - t0 < 20
+    assert "no result within 4 s" in result.error and not result.ok
+    assert not (tmp_path / "c.msh").exists()
+
+
+def _offset_edge(grid: cadedge.ShapeGrid) -> tuple[cadedge.ShapeGrid, int]:
+    """The grid with one seamless circle edge lifted off its curve: no gmsh curve matches it any more."""
+    g = copy.copy(grid)
+    g.edges = list(grid.edges)
+    e = next(e for e in g.edges if e.curve == "Circle" and len(e.faces) == 2)
+    g.edges[e.id - 1] = dataclasses.replace(e, points=e.points + np.array([0.0, 0.0, 0.05]),
+                                            params=e.params + 0.01)
+    return g, e.id
+
+
+def test_an_edge_gmsh_cannot_match_leaves_its_faces_meshed(cylinder):
+    grid, eid = _offset_edge(cylinder)
+    for mode in ("nodes", "sizes"):
+        result = mesh_shape(grid, mode=mode)
+        _watertight_with_every_face(result)
+        assert result.unmatched_edges == [eid]
+        assert any(f"edges {eid} match no gmsh curve" in n for n in result.notes)
+
+
+@pytest.mark.parametrize("fallback", ["split", "own_curves"])
+def test_fallback_strategies_keep_neighbours_conforming(cylinder, fallback):
+    """Every earlier strategy barred on a face: it is meshed after its boundary segments are split, or on
+    gmsh's own curve mesh; its neighbours are meshed again on the changed curves and stay conforming, and
+    every grid node of the edges still imposed is a mesh node."""
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    first = next(k for k, s in enumerate(STRATEGIES) if getattr(s, fallback))
+    skip = {FAULT_FACE: {k: "barred by the test" for k in range(first)}}
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
+                  field=SizeField(cylinder), mode="nodes", skip=skip)
+    res = run_job(job)
+    face = next(o for o in res.faces if o.face == FAULT_FACE)
+    assert face.ok and face.strategy == STRATEGIES[first].name
+    assert all(o.ok for o in res.faces)
+    multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
+    imposed = set(res.imposed_edges)
+    pts = np.vstack([e.points for e in cylinder.edges if e.id in imposed])
+    check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces, grid_points=pts,
+                            edge_multiplicity=multiplicity)
+    assert check.ok and check.missing_grid_nodes == 0 and all(s.watertight for s in check.shells)
+    if fallback == "split":
+        assert sum(e.segments for e in cylinder.edges) < len(res.edge_pairs)  # more curve segments
+    else:
+        assert res.own_mesh_edges and not imposed.intersection(res.own_mesh_edges)
+
+
+def test_check_names_faces_with_small_angles():
+    nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [1.05, 0.5, 0]], dtype=float)
+    tris = np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3]])
+    check = check_triangles(nodes, tris, triangle_faces=np.array([1, 1, 7]))
+    assert check.small_angle_share == pytest.approx(1 / 3)
+    assert [f for f, _, _ in check.small_angle_faces] == [7]
+    text = "\n".join(check.lines())
+    assert "under 10 deg" in text and "faces 7 (" in text
+
+
+def _run_cli(tmp_path, *argv: str) -> tuple[int, list[str]]:
+    """``cadedge mesh`` in-process from ``tmp_path`` (relative paths as a user types them)."""
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        import io
+        from contextlib import redirect_stderr, redirect_stdout
+
+        err, out = io.StringIO(), io.StringIO()
+        with redirect_stderr(err), redirect_stdout(out):
+            code = main(["mesh", *argv])
+    finally:
+        os.chdir(cwd)
+    return code, err.getvalue().splitlines()
+
+
+def test_cli_timeout_is_exit_1_naming_the_file_and_writes_nothing(tmp_path):
+    (tmp_path / "in").mkdir()
+    (tmp_path / "in" / "part.step").write_bytes(CYL.read_bytes())
+    code, err = _run_cli(tmp_path, "in/part.step", "--ald", "1e-2", "-o", "part.msh", "--timeout", "0.2")
+    assert code == 1 and err
+    assert all(line.startswith("cadedge mesh: in/part.step: ") for line in err)
+    assert any("no result within 0.2 s" in line for line in err)
+    assert not (tmp_path / "part.msh").exists()
+
+
+def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]))
+    code = ("import functools, sys; import cadedge.mesh as m; from cadedge.cli import main; "
+            "m.mesh_shape = functools.partial(m.mesh_shape, hooks={'before_face': ['mesh_faults:hang']}); "
+            "sys.exit(main(['mesh', 'cyl.step', '--ald', '1e-2', '-o', 'c.msh']))")
+    (tmp_path / "cyl.step").write_bytes(CYL.read_bytes())
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    parent = psutil.Process(proc.pid)
+    deadline = time.monotonic() + 120
+    child = None
+    while child is None and time.monotonic() < deadline and proc.poll() is None:
+        child = next((c for c in parent.children() if "cadedge.mesh.worker" in " ".join(c.cmdline())), None)
+        time.sleep(0.05)
+    if child is None:
+        proc.kill()
+        pytest.fail("the gmsh child never started")
+    time.sleep(1.0)  # into the hung face attempt
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err.strip() == "cadedge mesh: cyl.step: interrupted"
+    assert not child.is_running() or child.status() == psutil.STATUS_ZOMBIE
+    assert not (tmp_path / "c.msh").exists()
+
+
+def _hard_models():
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        import hard_models
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    return hard_models
+
+
+def test_ap242_with_pmi_written_by_xde_meshes_every_face(tmp_path):
+    pytest.importorskip("cadquery")
+    path = tmp_path / "pmi.step"
+    _hard_models().write_pmi_step(path)
+    assert "AP242" in path.read_text()[:600] and "DIMENSIONAL_SIZE" in path.read_text()
+    for mode in ("nodes", "sizes"):
+        code, err = _run_cli(tmp_path, "pmi.step", "--ald", "1e-2", "--mode", mode, "-o", f"{mode}.msh")
+        assert code == 0, err
+        assert (tmp_path / f"{mode}.msh").exists()
+
+
+@pytest.mark.parametrize("name", ["revolved_spline", "bspline_cage"])
+def test_hard_models_mesh_every_face(name):
+    pytest.importorskip("cadquery")
+    shape = _hard_models().MODELS[name]()
+    result = mesh_shape(shape, ald=ALD)
+    assert result.ok, result.problems(verbose=True)
+    assert set(np.unique(result.triangle_faces)) == set(range(1, result.grid.faces + 1))
+    assert result.check.missing_grid_nodes == 0
+
+
+def test_past_the_deadline_only_faces_meshed_before_are_replayed(cylinder):
+    """A child started after the soft deadline meshes the faces a killed child had meshed and names the
+    others: a partial mesh, not nothing."""
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.isolate import _learn
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    skip: dict = {}
+    known_ok: dict = {}
+    _learn(["import", "face 1 0", "result 1 0 ok", "face 2 0", "result 2 0 fail no triangles", "face 2 1"],
+           skip, known_ok)
+    assert known_ok == {1: 0} and skip == {2: {0: "no triangles"}}
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
+                  field=SizeField(cylinder), mode="nodes", skip=skip, known_ok=known_ok, deadline=time.time() - 1)
+    res = run_job(job)
+    outcome = {o.face: o for o in res.faces}
+    assert outcome[1].ok and not outcome[2].ok and not outcome[3].ok
+    assert "out of time" in outcome[3].attempts[-1][1]
+    assert set(np.unique(res.triangle_faces)) == {1}
