@@ -49,7 +49,8 @@ def test_cli_refuses_with_one_line_naming_the_floor(tmp_path, capsys, command, a
     rc = main([command, str(FIXTURES / "bracket.step"), "--ald", ald, "-o", str(out)])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1
-    assert err[0] == (f"cadedge {command}: error: {FIXTURES / 'bracket.step'}: --ald {ald} is below "
+    lead = f"cadedge {command}: " if command == "mesh" else f"cadedge {command}: error: "
+    assert err[0] == (f"{lead}{FIXTURES / 'bracket.step'}: --ald {ald} is below "
                       f"{MIN_ALD_TEXT}, the smallest target double precision can resolve")
     assert not out.exists()
 

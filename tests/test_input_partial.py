@@ -141,7 +141,7 @@ def test_cli_info_and_mesh_refuse_then_allow(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "partial transfer refused" in err[0] and not out.exists()
     main(["mesh", str(path), "--ald", "1e-2", "--allow-partial", "-o", str(out), "--quiet"])
-    assert "cadedge mesh: warning: partial transfer: " in capsys.readouterr().err
+    assert f"cadedge mesh: {path}: warning: partial transfer: " in capsys.readouterr().err
 
 
 def test_batch_fails_a_partial_file_unless_allowed(tmp_path):

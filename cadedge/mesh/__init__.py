@@ -201,7 +201,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .isolate import DEFAULT_TIMEOUT, run_isolated
     from .worker import MeshJob
 
-    job = MeshJob(source=grid.source, brep=shape_to_brep(grid.shape), grid=dataclasses.replace(grid, shape=None),
+    job = MeshJob(source=grid.source, brep=shape_to_brep(grid.shape), grid=dataclasses.replace(grid, shape=None, curves=None),
                   field=field_, mode=mode, hooks=dict(hooks or {}), options=dict(job_options or {}))
     res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout)
     faces = list(res.faces)
