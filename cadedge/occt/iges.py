@@ -17,11 +17,10 @@ from pathlib import Path
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.IGESControl import IGESControl_Reader
 from OCP.Interface import Interface_Static
-from OCP.Standard import Standard_Failure
 
-from ..errors import GeometryError, InputError
-from .loading import (Completeness, LoadedShape, Transferred, accept, check_counts, check_messages, damaged,
-                      skipped_entities, sniff_path, transferred, unresolved_references)
+from ..errors import InputError
+from .loading import (Completeness, LoadedShape, Transferred, accept, check_counts, damaged, skipped_entities,
+                      sniff_path, transfer_roots, transferred, unresolved_references)
 
 SUFFIXES = (".igs", ".iges")
 FACE_TYPES = (510, 144, 143)
@@ -91,14 +90,7 @@ def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferre
         if roots == 0:
             what = f"{entities} entities, none of them a shape" if entities else "it holds no entities"
             raise InputError(f"{given}: no shape in the IGES file ({what})")
-        try:
-            done_roots = reader.TransferRoots()
-            shape = reader.OneShape()
-        except Standard_Failure as exc:
-            raise GeometryError(f"{given}: OCCT failed to transfer the IGES file: {exc}") from exc
-        warnings = check_messages(load, "IGES load")
-        transfer = check_counts(reader.WS().TransferReader().LastCheckList())
-        warnings += check_messages(transfer, "IGES transfer")
+        done_roots, shape, warnings, transfer = transfer_roots(reader, given, "IGES", load)
     got_faces, got_solids = transferred(shape)
     done = Completeness(faces=(got_faces, faces), solids=(got_solids, solids), roots=(done_roots, roots),
                         unresolved=unresolved_references(load), skipped=skipped_entities(transfer))

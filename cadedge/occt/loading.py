@@ -19,12 +19,13 @@ from typing import Any, Iterator
 
 from OCP.Interface import Interface_CheckIterator
 from OCP.Message import Message
+from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SOLID
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Shape
 
-from ..errors import InputError
+from ..errors import GeometryError, InputError
 from .compat import TopTools_IndexedMapOfShape
 
 #: Millimetres per unit for the length unit names files declare (lower-cased).
@@ -93,6 +94,20 @@ def check_counts(checks: Interface_CheckIterator) -> Counter[str]:
 def check_messages(counts: Counter[str], prefix: str) -> list[str]:
     """One line per distinct check message, with its count."""
     return [f"{prefix} {msg}" + (f" (x{n})" if n > 1 else "") for msg, n in counts.items()]
+
+
+def transfer_roots(reader: Any, given: str, kind: str, load: Counter[str]) -> tuple[int, TopoDS_Shape, list[str],
+                                                                                   Counter[str]]:
+    """Transfer every root of a loaded STEP or IGES ``reader``: (roots transferred, the shape, the load and
+    transfer messages, the transfer check counts). An OCCT exception is a GeometryError naming ``given``."""
+    try:
+        done_roots = reader.TransferRoots()
+        shape = reader.OneShape()
+    except Standard_Failure as exc:
+        raise GeometryError(f"{given}: OCCT failed to transfer the {kind} file: {exc}") from exc
+    transfer = check_counts(reader.WS().TransferReader().LastCheckList())
+    return done_roots, shape, check_messages(load, f"{kind} load") + check_messages(transfer, f"{kind} transfer"), \
+        transfer
 
 
 def count(shape: TopoDS_Shape, kind: Any) -> int:

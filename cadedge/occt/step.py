@@ -17,13 +17,12 @@ from pathlib import Path
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.StepBasic import StepBasic_UncertaintyMeasureWithUnit
 from OCP.StepShape import StepShape_ConnectedFaceSet, StepShape_FaceSurface, StepShape_ManifoldSolidBrep
-from OCP.Standard import Standard_Failure
 from OCP.STEPControl import STEPControl_Reader
 
-from ..errors import GeometryError, InputError
+from ..errors import InputError
 from .compat import TColStd_SequenceOfAsciiString
 from .loading import (MM_PER_UNIT, UNIT_NAMES, Completeness, LoadedShape, Transferred, accept, check_counts,
-                      check_messages, cut_short, damaged, skipped_entities, sniff_path, transferred,
+                      cut_short, damaged, skipped_entities, sniff_path, transfer_roots, transferred,
                       unresolved_references)
 
 SUFFIXES = (".step", ".stp")
@@ -124,14 +123,7 @@ def transfer_step(path: Path, given: str, *, isolate: bool = True) -> Transferre
         faces, solids, unresolved, declared = _survey(reader)
         if roots == 0:
             raise _no_roots(given, path, reader.StepModel().NbEntities(), faces)
-        try:
-            done_roots = reader.TransferRoots()
-            shape = reader.OneShape()
-        except Standard_Failure as exc:
-            raise GeometryError(f"{given}: OCCT failed to transfer the STEP file: {exc}") from exc
-        warnings = check_messages(load, "STEP load")
-        transfer = check_counts(reader.WS().TransferReader().LastCheckList())
-        warnings += check_messages(transfer, "STEP transfer")
+        done_roots, shape, warnings, transfer = transfer_roots(reader, given, "STEP", load)
     got_faces, got_solids = transferred(shape)
     done = Completeness(faces=(got_faces, faces + unresolved), solids=(got_solids, solids),
                         roots=(done_roots, roots), unresolved=max(unresolved, unresolved_references(load)),
