@@ -148,7 +148,20 @@ def test_worker_killed_mid_run_fails_that_input_only(tmp_path, scheduler):
     assert not (out / by_stem[CRASH_STEM].output).exists()
 
 
+def _warm_workers(scheduler: str, folder: Path) -> None:
+    """Run the refiner once on every worker: one restarted by an earlier test starts cold, and on a
+    loaded machine its first import of OCP and cadedge alone can outlast the 10 s limit below."""
+    from distributed import Client
+
+    from cadedge.batch import refine_task
+
+    options = {"ald": ALD, "min_length": None, "max_length": None, "max_growth": None}
+    with Client(scheduler) as client:
+        client.run(refine_task, str(FIXTURES / "cylinder.step"), str(folder / "warm.json"), options)
+
+
 def test_hung_task_times_out_and_the_rest_finish(tmp_path, scheduler):
+    _warm_workers(scheduler, tmp_path)
     copy_fixtures(tmp_path / "in", ["cylinder", "sphere"])
     shutil.copy(FIXTURES / "sphere.step", tmp_path / "in" / f"{HANG_STEM}.step")
     report = run_batch([tmp_path / "in"], tmp_path / "out", ald=ALD, scheduler=scheduler, timeout=10,
