@@ -167,7 +167,7 @@ def write_pmi_step(path: Path) -> None:
     from OCP.BRep import BRep_Builder
     from OCP.XCAFDimTolObjects import XCAFDimTolObjects_DimensionObject, XCAFDimTolObjects_DimensionType
     from OCP.XCAFDoc import XCAFDoc_DocumentTool, XCAFDoc_Dimension
-    from OCP.TDF import TDF_LabelSequence
+    from cadedge.occt.compat import TDF_LabelSequence
 
     plate, boss, notes = pmi_part()
     doc = TDocStd_Document(TCollection_ExtendedString("XmlXCAF"))

@@ -22,7 +22,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Curve  # noqa: E402
 from OCP.GCPnts import GCPnts_AbscissaPoint  # noqa: E402
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE  # noqa: E402
 from OCP.TopExp import TopExp, TopExp_Explorer  # noqa: E402
-from OCP.TopTools import TopTools_IndexedMapOfShape  # noqa: E402
+from cadedge.occt.compat import TopTools_IndexedMapOfShape  # noqa: E402
 
 import cadedge  # noqa: E402
 from cadedge.cli import main  # noqa: E402

@@ -5,7 +5,6 @@ with one line saying which problem it is."""
 from __future__ import annotations
 
 import json
-import math
 import re
 from contextlib import contextmanager
 from pathlib import Path
@@ -77,8 +76,7 @@ def test_same_edges_in_the_same_order_as_the_step(tmp_path, step, fmt):
 def _diag(shape) -> float:
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)
-    x0, y0, z0, x1, y1, z1 = box.Get()
-    return math.dist((x0, y0, z0), (x1, y1, z1))
+    return box.SquareExtent() ** 0.5  # not box.Get(): OCP 8.0 cannot return its Limits struct
 
 
 def test_iges_in_inches_is_read_in_millimetres(tmp_path):

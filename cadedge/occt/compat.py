@@ -20,8 +20,10 @@ try:  # OCP 8.0
     from OCP.collections import IndexedMap_TopoDS_Shape_TopTools_ShapeMapHasher as TopTools_IndexedMapOfShape
     from OCP.collections import List_TopoDS_Shape as TopTools_ListOfShape
     from OCP.collections import Sequence_TCollection_AsciiString as TColStd_SequenceOfAsciiString
+    from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence
 except ImportError:  # OCP 7.9
     from OCP.TColgp import TColgp_Array1OfPnt
+    from OCP.TDF import TDF_LabelSequence
     from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_SequenceOfAsciiString
     from OCP.TopTools import (TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape,
                               TopTools_ListOfShape)
@@ -41,4 +43,4 @@ class _TopoDSNamespace:
 TopoDS = _topods_module.TopoDS if hasattr(_topods_module.TopoDS, "Edge_s") else _TopoDSNamespace()
 
 __all__ = ["TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
-           "TColgp_Array1OfPnt", "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
+           "TColgp_Array1OfPnt", "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
