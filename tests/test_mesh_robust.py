@@ -77,8 +77,17 @@ def test_the_whole_run_is_bounded_by_the_timeout(cylinder, tmp_path):
     result = mesh_shape(cylinder, output=tmp_path / "c.msh", hooks={"before_face": ["mesh_faults:hang"]},
                         timeout=4, face_timeout=100)
     assert time.monotonic() - t0 < 20
-    assert "no result within 4 s" in result.error and not result.ok
-    assert not (tmp_path / "c.msh").exists()
+    assert not result.ok
+    # Out of time either with nothing delivered (the job's error) or, when the hung attempt was killed
+    # before the end, with the faces meshed so far: then face 2 is named as out of time and only a
+    # partial mesh is written.
+    if result.error is not None:
+        assert "no result within 4 s" in result.error
+        assert not (tmp_path / "c.msh").exists()
+    else:
+        failed = {f.face: f.reason for f in result.failures}
+        assert "out of time" in failed[2]
+        assert (tmp_path / "c.msh").exists() == (len(result.triangles) > 0)
 
 
 def _offset_edge(grid: cadedge.ShapeGrid) -> tuple[cadedge.ShapeGrid, int]:
