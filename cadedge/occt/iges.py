@@ -22,7 +22,6 @@ from ..errors import InputError
 from .loading import (Completeness, LoadedShape, Transferred, accept, check_counts, damaged, skipped_entities,
                       sniff_path, transfer_roots, transferred, unresolved_references)
 
-SUFFIXES = (".igs", ".iges")
 FACE_TYPES = (510, 144, 143)
 SOLID_TYPES = (186,)
 #: OCCT's session length unit (``xstep.cascade.unit``) as cadedge names units.

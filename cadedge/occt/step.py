@@ -25,7 +25,6 @@ from .loading import (MM_PER_UNIT, UNIT_NAMES, Completeness, LoadedShape, Transf
                       cut_short, damaged, skipped_entities, sniff_path, transfer_roots, transferred,
                       unresolved_references)
 
-SUFFIXES = (".step", ".stp")
 _READ_STATUS = {"RetVoid": "nothing to read", "RetError": "cannot open or unknown format",
                 "RetFail": "syntax error", "RetStop": "reading stopped"}
 #: Files up to this size are read whole to tell an empty DATA section from an unreadable one.
