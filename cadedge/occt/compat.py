@@ -45,4 +45,5 @@ class _TopoDSNamespace:
 TopoDS = _topods_module.TopoDS if hasattr(_topods_module.TopoDS, "Edge_s") else _TopoDSNamespace()
 
 __all__ = ["TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
-           "TColgp_Array1OfPnt", "TColgp_HArray1OfPnt", "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
+           "TColgp_Array1OfPnt", "TColgp_HArray1OfPnt", "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape",
+           "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
