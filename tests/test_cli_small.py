@@ -153,3 +153,17 @@ def test_ctrl_c_during_a_real_refine(tmp_path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == "cadedge refine: interrupted" and "Traceback" not in err
     assert not Path(tmp_path / "o.json").exists()
+
+
+def test_a_closed_stdout_pipe_ends_quietly():
+    pytest.importorskip("OCP")
+    # ``cadedge info x | head -1``: the reader is gone before cadedge writes
+    proc = subprocess.Popen([sys.executable, "-m", "cadedge", "info", str(BRACKET)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=_env(), cwd=ROOT)
+    proc.stdout.close()
+    try:
+        err = proc.stderr.read()
+        proc.wait(timeout=300)
+    finally:
+        proc.kill()
+    assert proc.returncode == 141 and "Traceback" not in err and "BrokenPipe" not in err, err
