@@ -167,3 +167,26 @@ def test_a_closed_stdout_pipe_ends_quietly():
     finally:
         proc.kill()
     assert proc.returncode == 141 and "Traceback" not in err and "BrokenPipe" not in err, err
+
+
+def test_ctrl_c_turned_into_another_error_by_native_code_is_still_interrupted(monkeypatch, capsys):
+    import cadedge.cli.info as info
+
+    def interrupted_while_loading(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:  # what an extension module interrupted in its init raises
+            raise ImportError("initialization failed") from exc
+
+    monkeypatch.setattr(info, "run", interrupted_while_loading)
+    assert main(["info", str(BRACKET)]) == 130
+    assert capsys.readouterr().err.strip() == "cadedge info: interrupted"
+    with pytest.raises(ImportError):  # --debug shows what happened
+        main(["--debug", "info", str(BRACKET)])
+
+    def plain_bug(args):
+        raise ImportError("a real import problem")
+
+    monkeypatch.setattr(info, "run", plain_bug)
+    with pytest.raises(ImportError, match="a real import problem"):
+        main(["info", str(BRACKET)])

@@ -3,7 +3,8 @@
 ``main(argv)`` is testable in-process. Each subcommand lives in its own module with
 ``register(subparsers)``, which adds its parser and sets ``func(args) -> int``. Library errors become
 one line on stderr naming the file and the reason, with exit code 2 (bad input or usage); ``--debug``
-shows the traceback instead. Ctrl-C ends with one "interrupted" line (exit 130); a closed stdout pipe
+shows the traceback instead. Ctrl-C ends with one "interrupted" line (exit 130), also when native code
+turned it into another error; a closed stdout pipe
 (``cadedge info x | head``) ends quietly with exit 141, as a process killed by SIGPIPE.
 """
 
@@ -63,6 +64,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"cadedge {args.command}: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        if args.debug or not _interrupted(exc):
+            raise
+        print(f"cadedge {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether Ctrl-C caused ``exc``: native code turns a KeyboardInterrupt raised inside it into another
+    error (an extension module interrupted while loading: "ImportError: initialization failed")."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 def _stdout_to_devnull() -> None:
