@@ -190,3 +190,22 @@ def test_ctrl_c_turned_into_another_error_by_native_code_is_still_interrupted(mo
     monkeypatch.setattr(info, "run", plain_bug)
     with pytest.raises(ImportError, match="a real import problem"):
         main(["info", str(BRACKET)])
+
+
+def test_ctrl_c_while_the_local_cluster_starts_leaves_no_traceback():
+    pytest.importorskip("distributed")
+    # SIGINT 0.6 s into connect(), distributed already imported: while the worker processes start
+    code = ("import os, signal, sys\n"
+            "import distributed\n"
+            "from cadedge.batch.runner import connect\n"
+            "signal.signal(signal.SIGALRM, lambda *a: os.kill(os.getpid(), signal.SIGINT))\n"
+            "signal.setitimer(signal.ITIMER_REAL, 0.6)\n"
+            "try:\n"
+            "    with connect(workers=1):\n"
+            "        print('started', flush=True)\n"
+            "except KeyboardInterrupt:\n"
+            "    print('interrupted', flush=True)\n"
+            "    sys.exit(130)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), timeout=120)
+    assert proc.stdout.strip() == "interrupted" and proc.returncode == 130, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr, proc.stderr
