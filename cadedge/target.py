@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from .errors import InputError
 from .explore import explore
 from .grid import polyline_length, row_norms, unique_sorted
 from .splitting import worst_growth
@@ -35,6 +36,9 @@ AGREEMENT = 0.25
 MAX_TRIALS = 10
 #: Samples per max_length that a max_length placement can choose among.
 MAX_LENGTH_SAMPLES = 8
+#: Most segments ``max_length`` may force on one curve (each takes ``MAX_LENGTH_SAMPLES`` samples): past
+#: that the option is refused up front instead of filling memory (1e-7 on a 100 mm edge asked for 8e9).
+MAX_LENGTH_SEGMENTS = 200_000
 #: Most re-placements along a graded size field for max_growth.
 GRADING_PASSES = 4
 
@@ -184,6 +188,9 @@ def refine_target(ev, a: float, b: float, *, ald: float, min_length: float | Non
                      "returning its two ends")
         return np.array([a, b]), p[[0, -1]], 0.0, notes
     if max_length is not None:
+        if total / max_length > MAX_LENGTH_SEGMENTS:
+            raise InputError(f"max_length {max_length:g} would split a curve {total:.6g} long into more than "
+                             f"{MAX_LENGTH_SEGMENTS:,} segments, the cap per edge; use a larger max_length")
         ex = _densify(ev, ex, max_length / MAX_LENGTH_SAMPLES)
         u, p = ex.params, ex.points
     known = getattr(ev.curve, "exact_length", None)

@@ -81,3 +81,18 @@ def test_a_model_past_the_segment_cap_is_one_clear_error(monkeypatch, tmp_path, 
     out = tmp_path / "b.json"
     assert main(["refine", str(FIXTURES / "bracket.step"), "--ald", "1e-4", "-o", str(out)]) == 2
     assert "would exceed 100 segments" in capsys.readouterr().err and not out.exists()
+
+
+def test_a_max_length_forcing_too_many_segments_is_refused_up_front(tmp_path, capsys):
+    from cadedge.target import MAX_LENGTH_SEGMENTS
+
+    t0 = time.perf_counter()
+    with pytest.raises(InputError, match=rf"max_length 1e-07 would split a curve 1 long into more than "
+                                         rf"{MAX_LENGTH_SEGMENTS:,} segments, the cap per edge"):
+        cadedge.refine_curve(lambda t: np.column_stack([t, 0 * t]), (0.0, 1.0), ald=1e-3, max_length=1e-7)
+    assert time.perf_counter() - t0 < 30  # it once filled 23 GB on a 36-edge model
+    pytest.importorskip("OCP")
+    out = tmp_path / "b.json"
+    assert main(["refine", str(FIXTURES / "bracket.step"), "--max-length", "1e-7", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bracket.step: edge 1: max_length 1e-07 would split" in err[0] and not out.exists()

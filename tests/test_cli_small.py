@@ -153,3 +153,59 @@ def test_ctrl_c_during_a_real_refine(tmp_path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == "cadedge refine: interrupted" and "Traceback" not in err
     assert not Path(tmp_path / "o.json").exists()
+
+
+def test_a_closed_stdout_pipe_ends_quietly():
+    pytest.importorskip("OCP")
+    # ``cadedge info x | head -1``: the reader is gone before cadedge writes
+    proc = subprocess.Popen([sys.executable, "-m", "cadedge", "info", str(BRACKET)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=_env(), cwd=ROOT)
+    proc.stdout.close()
+    try:
+        err = proc.stderr.read()
+        proc.wait(timeout=300)
+    finally:
+        proc.kill()
+    assert proc.returncode == 141 and "Traceback" not in err and "BrokenPipe" not in err, err
+
+
+def test_ctrl_c_turned_into_another_error_by_native_code_is_still_interrupted(monkeypatch, capsys):
+    import cadedge.cli.info as info
+
+    def interrupted_while_loading(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:  # what an extension module interrupted in its init raises
+            raise ImportError("initialization failed") from exc
+
+    monkeypatch.setattr(info, "run", interrupted_while_loading)
+    assert main(["info", str(BRACKET)]) == 130
+    assert capsys.readouterr().err.strip() == "cadedge info: interrupted"
+    with pytest.raises(ImportError):  # --debug shows what happened
+        main(["--debug", "info", str(BRACKET)])
+
+    def plain_bug(args):
+        raise ImportError("a real import problem")
+
+    monkeypatch.setattr(info, "run", plain_bug)
+    with pytest.raises(ImportError, match="a real import problem"):
+        main(["info", str(BRACKET)])
+
+
+def test_ctrl_c_while_the_local_cluster_starts_leaves_no_traceback():
+    pytest.importorskip("distributed")
+    # SIGINT 0.6 s into connect(), distributed already imported: while the worker processes start
+    code = ("import os, signal, sys\n"
+            "import distributed\n"
+            "from cadedge.batch.runner import connect\n"
+            "signal.signal(signal.SIGALRM, lambda *a: os.kill(os.getpid(), signal.SIGINT))\n"
+            "signal.setitimer(signal.ITIMER_REAL, 0.6)\n"
+            "try:\n"
+            "    with connect(workers=1):\n"
+            "        print('started', flush=True)\n"
+            "except KeyboardInterrupt:\n"
+            "    print('interrupted', flush=True)\n"
+            "    sys.exit(130)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), timeout=120)
+    assert proc.stdout.strip() == "interrupted" and proc.returncode == 130, proc.stdout + proc.stderr
+    assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr, proc.stderr

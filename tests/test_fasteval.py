@@ -8,15 +8,17 @@ import numpy as np
 import pytest
 
 pytest.importorskip("OCP")
-cq = pytest.importorskip("cadquery")
 
 from OCP.BRepAdaptor import BRepAdaptor_Curve  # noqa: E402
 from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_Transform  # noqa: E402
-from OCP.Geom import Geom_BSplineCurve  # noqa: E402
-from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec  # noqa: E402
+from OCP.GC import GC_MakeArcOfCircle, GC_MakeArcOfEllipse  # noqa: E402
+from OCP.Geom import Geom_BezierCurve, Geom_BSplineCurve  # noqa: E402
+from OCP.GeomAPI import GeomAPI_Interpolate  # noqa: E402
+from OCP.gp import gp_Ax1, gp_Ax2, gp_Circ, gp_Dir, gp_Elips, gp_Pnt, gp_Trsf, gp_Vec  # noqa: E402
 
 from cadedge import refine_curve  # noqa: E402
-from cadedge.occt.compat import TColgp_Array1OfPnt, TopoDS, TColStd_Array1OfInteger, TColStd_Array1OfReal  # noqa: E402
+from cadedge.occt.compat import (TColgp_Array1OfPnt, TColgp_HArray1OfPnt, TColStd_Array1OfInteger,  # noqa: E402
+                                 TColStd_Array1OfReal, TopoDS)
 from cadedge.occt.edgecurve import EdgeCurve  # noqa: E402
 from cadedge.occt.fasteval import fast_evaluator  # noqa: E402
 from cadedge.occt.reader import load_shape  # noqa: E402
@@ -46,15 +48,39 @@ def _moved(edge, angle: float = 0.7):
     return TopoDS.Edge_s(BRepBuilderAPI_Transform(edge, s.Multiplied(t), False).Shape())
 
 
+def _spline(points: list[tuple[float, float, float]], periodic: bool = False):
+    """The B-spline interpolating ``points`` (what cadquery's ``Edge.makeSpline`` builds)."""
+    array = TColgp_HArray1OfPnt(1, len(points))
+    for i, p in enumerate(points):
+        array.SetValue(i + 1, gp_Pnt(*p))
+    interpolate = GeomAPI_Interpolate(array, periodic, 1e-6)
+    interpolate.Perform()
+    assert interpolate.IsDone()
+    return BRepBuilderAPI_MakeEdge(interpolate.Curve()).Edge()
+
+
+def _bezier(points: list[tuple[float, float, float]]):
+    poles = TColgp_Array1OfPnt(1, len(points))
+    for i, p in enumerate(points):
+        poles.SetValue(i + 1, gp_Pnt(*p))
+    return BRepBuilderAPI_MakeEdge(Geom_BezierCurve(poles)).Edge()
+
+
 def _edges() -> dict:
+    """One edge of each type OCCT's numpy evaluators handle, built with plain OCP (as cadquery's
+    ``Edge.makeLine``/``makeCircle``/``makeEllipse``/``makeSpline``/``makeBezier`` do), then moved."""
+    arc = gp_Circ(gp_Ax2(gp_Pnt(1, 1, 1), gp_Dir(0, 1, 1)), 2.5)
+    ellipse = gp_Elips(gp_Ax2(gp_Pnt(0, 0, 1), gp_Dir(1, 0, 1), gp_Dir(1, 0, 0)), 4.0, 1.5)
     out = {
-        "line": cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(3, 1, 2)).wrapped,
-        "circle": cq.Edge.makeCircle(2.5, cq.Vector(1, 1, 1), cq.Vector(0, 1, 1), 30, 250).wrapped,
-        "ellipse": cq.Edge.makeEllipse(4.0, 1.5, cq.Vector(0, 0, 1), cq.Vector(1, 0, 1), angle1=10, angle2=300).wrapped,
-        "spline": cq.Edge.makeSpline([cq.Vector(x, math.sin(x), 0.1 * x * x) for x in np.linspace(0, 6, 9)]).wrapped,
-        "periodic": cq.Edge.makeSpline([cq.Vector(math.cos(t), math.sin(t), 0.2 * math.sin(3 * t))
-                                        for t in np.linspace(0, 2 * math.pi, 9)[:-1]], periodic=True).wrapped,
-        "bezier": cq.Edge.makeBezier([cq.Vector(0, 0, 0), cq.Vector(1, 2, 0), cq.Vector(3, -1, 1), cq.Vector(4, 0, 0)]).wrapped,
+        "line": BRepBuilderAPI_MakeEdge(gp_Pnt(0, 0, 0), gp_Pnt(3, 1, 2)).Edge(),
+        "circle": BRepBuilderAPI_MakeEdge(GC_MakeArcOfCircle(arc, math.radians(30), math.radians(250), True)
+                                          .Value()).Edge(),
+        "ellipse": BRepBuilderAPI_MakeEdge(GC_MakeArcOfEllipse(ellipse, math.radians(10), math.radians(300), True)
+                                           .Value()).Edge(),
+        "spline": _spline([(x, math.sin(x), 0.1 * x * x) for x in np.linspace(0, 6, 9)]),
+        "periodic": _spline([(math.cos(t), math.sin(t), 0.2 * math.sin(3 * t))
+                             for t in np.linspace(0, 2 * math.pi, 9)[:-1]], periodic=True),
+        "bezier": _bezier([(0, 0, 0), (1, 2, 0), (3, -1, 1), (4, 0, 0)]),
     }
     out.update({f"moved {k}": _moved(v) for k, v in list(out.items())})
     return out
@@ -93,7 +119,7 @@ def test_rational_periodic_spline_across_the_seam():
 
 
 def test_unsupported_type_keeps_occt():
-    edge = cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(1, 0, 0)).wrapped
+    edge = BRepBuilderAPI_MakeEdge(gp_Pnt(0, 0, 0), gp_Pnt(1, 0, 0)).Edge()
     ad = BRepAdaptor_Curve(edge)
     assert fast_evaluator(ad, (0.0, 1.0)) is not None
 

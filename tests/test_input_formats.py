@@ -170,3 +170,17 @@ def test_an_iges_face_pointing_at_nothing_is_a_partial_transfer(tmp_path):
     loaded = load_shape(bad, allow_partial=True)
     assert loaded.warnings[0].startswith("partial transfer: ")
     assert any("face D5 transfer failed" in w for w in loaded.warnings)
+
+
+def test_the_reader_and_the_batch_share_one_list_of_suffixes_without_loading_occt():
+    import subprocess
+    import sys
+
+    from cadedge.batch import inputs
+    from cadedge.formats import INPUT_FORMATS, INPUT_SUFFIXES
+    from cadedge.occt import reader
+
+    assert reader.SUFFIXES is INPUT_FORMATS and inputs.INPUT_SUFFIXES is INPUT_SUFFIXES
+    assert set(INPUT_FORMATS.values()) == {"STEP", "IGES", "BREP"}
+    code = "import sys, cadedge.batch.inputs; print('OCP' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout == "False\n"

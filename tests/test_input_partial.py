@@ -96,10 +96,11 @@ def test_truncated_garbage_and_empty_say_which(tmp_path):
         "nodata.step": header + b"DATA;\nENDSEC;\nEND-ISO-10303-21;\n",
         "zero.step": b"",
         "nostep.step": b"hello\n",
+        "syntax.step": header + b"DATA;\n#1=CARTESIAN_POINT('',(0.,0.,0.));\n#2=FOO(;;;\nENDSEC;\nEND-ISO-10303-21;\n",
     }
     expected = {"truncated.step": "truncated STEP file", "garbage.step": "corrupt STEP file (nothing in its DATA",
                 "nodata.step": "empty STEP file", "zero.step": "empty file (0 bytes)",
-                "nostep.step": "not a STEP file"}
+                "nostep.step": "not a STEP file", "syntax.step": "corrupt STEP file (OCCT: syntax error)"}
     for name, content in cases.items():
         (tmp_path / name).write_bytes(content)
         msg = error_of(tmp_path / name)

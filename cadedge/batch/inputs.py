@@ -18,9 +18,8 @@ from pathlib import Path
 from typing import Iterable, Mapping
 
 from ..errors import InputError
+from ..formats import INPUT_SUFFIXES
 
-#: The model files a folder or glob expands to (STEP, IGES, OCCT BREP).
-INPUT_SUFFIXES = (".step", ".stp", ".igs", ".iges", ".brep")
 _KINDS = "/".join(INPUT_SUFFIXES)
 _GLOB_CHARS = frozenset("*?[")
 

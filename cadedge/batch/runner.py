@@ -96,8 +96,12 @@ def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iter
     # kept for the cluster's whole life: nannies read the start method again when they restart a worker
     with dask.config.set(config):
         _preload_fork_server()
-        cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                               processes=True, silence_logs=logging.CRITICAL, **NO_DASHBOARD)
+        try:
+            cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                                   processes=True, silence_logs=logging.CRITICAL, **NO_DASHBOARD)
+        except KeyboardInterrupt:
+            _close_half_started_clusters()
+            raise
         with cluster, Client(cluster) as client:
             yield client
 
@@ -116,6 +120,20 @@ def _preload_fork_server() -> None:
     context = get_mp_context()
     if context.get_start_method() == "forkserver":
         context.set_forkserver_preload(WORKER_PRELOAD)
+
+
+def _close_half_started_clusters() -> None:
+    """Close the LocalCluster whose start Ctrl-C interrupted, and forget it: left registered, distributed's
+    exit hook closes it again and fails an assertion on its never-started workers (a traceback after the
+    "interrupted" line)."""
+    from distributed.deploy.spec import SpecCluster
+
+    for cluster in list(SpecCluster._instances):
+        try:
+            cluster.close(timeout=10)
+        except (AssertionError, TimeoutError, OSError, RuntimeError):  # the same assertion, or already gone
+            pass
+        SpecCluster._instances.discard(cluster)
 
 
 def _failure_reason(future: Any) -> str:

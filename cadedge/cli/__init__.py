@@ -3,7 +3,9 @@
 ``main(argv)`` is testable in-process. Each subcommand lives in its own module with
 ``register(subparsers)``, which adds its parser and sets ``func(args) -> int``. Library errors become
 one line on stderr naming the file and the reason, with exit code 2 (bad input or usage); ``--debug``
-shows the traceback instead.
+shows the traceback instead. Ctrl-C ends with one "interrupted" line (exit 130), also when native code
+turned it into another error; a closed stdout pipe
+(``cadedge info x | head``) ends quietly with exit 141, as a process killed by SIGPIPE.
 """
 
 from __future__ import annotations
@@ -48,7 +50,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
         return int(exc.code or 0)
     try:
-        return int(args.func(args))
+        code = int(args.func(args))
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:  # stdout's reader went away (``cadedge info x | head``): stop quietly, as on SIGPIPE
+        _stdout_to_devnull()
+        return 141
     except CadedgeError as exc:
         if args.debug:
             traceback.print_exc()
@@ -57,6 +64,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"cadedge {args.command}: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        if args.debug or not _interrupted(exc):
+            raise
+        print(f"cadedge {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether Ctrl-C caused ``exc``: native code turns a KeyboardInterrupt raised inside it into another
+    error (an extension module interrupted while loading: "ImportError: initialization failed")."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
+
+
+def _stdout_to_devnull() -> None:
+    """Point the process's stdout at /dev/null, so the interpreter's last flush does not fail again."""
+    import os
+
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # not a real file (in-process tests): nothing to flush
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
 
 
 def entry() -> None:  # pragma: no cover - console-script shim

@@ -20,7 +20,6 @@ from OCP.TopoDS import TopoDS_Shape
 from ..errors import GeometryError, InputError
 from .loading import Completeness, LoadedShape, accept, sniff_path, transferred
 
-SUFFIXES = (".brep",)
 _HEADER = re.compile(rb"^\s*(DBRep_DrawableShape\s+)?CASCADE Topology V\d")
 _TSHAPES = re.compile(rb"^TShapes (\d+)\s*$", re.MULTILINE)
 _RECORD = re.compile(rb"^(Ve|Ed|Wi|Fa|Sh|So|CS|Co)\s*$", re.MULTILINE)

@@ -13,6 +13,7 @@ from __future__ import annotations
 try:  # OCP 8.0
     from OCP.collections import Array1_double as TColStd_Array1OfReal
     from OCP.collections import Array1_gp_Pnt as TColgp_Array1OfPnt
+    from OCP.collections import HArray1_gp_Pnt as TColgp_HArray1OfPnt
     from OCP.collections import Array1_int as TColStd_Array1OfInteger
     from OCP.collections import \
         IndexedDataMap_TopoDS_Shape_List_TopoDS_Shape_TopTools_ShapeMapHasher as \
@@ -23,6 +24,7 @@ try:  # OCP 8.0
     from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence
 except ImportError:  # OCP 7.9
     from OCP.TColgp import TColgp_Array1OfPnt
+    from OCP.TColgp import TColgp_HArray1OfPnt
     from OCP.TDF import TDF_LabelSequence
     from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_SequenceOfAsciiString
     from OCP.TopTools import (TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape,
@@ -43,4 +45,5 @@ class _TopoDSNamespace:
 TopoDS = _topods_module.TopoDS if hasattr(_topods_module.TopoDS, "Edge_s") else _TopoDSNamespace()
 
 __all__ = ["TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
-           "TColgp_Array1OfPnt", "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
+           "TColgp_Array1OfPnt", "TColgp_HArray1OfPnt", "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape",
+           "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]

@@ -19,10 +19,9 @@ from OCP.IGESControl import IGESControl_Reader
 from OCP.Interface import Interface_Static
 
 from ..errors import InputError
-from .loading import (Completeness, LoadedShape, Transferred, accept, check_counts, damaged, skipped_entities,
-                      sniff_path, transfer_roots, transferred, unresolved_references)
+from .loading import (Completeness, LoadedShape, Transferred, accept, check_counts, damaged, first_failure,
+                      skipped_entities, sniff_path, transfer_roots, transferred, unresolved_references)
 
-SUFFIXES = (".igs", ".iges")
 FACE_TYPES = (510, 144, 143)
 SOLID_TYPES = (186,)
 #: OCCT's session length unit (``xstep.cascade.unit``) as cadedge names units.
@@ -77,8 +76,7 @@ def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferre
     with quiet_occt():
         status = reader.ReadFile(str(path))
         if status != IFSelect_RetDone:
-            fails = [m for m in check_counts(reader.WS().ModelCheckList()) if m.startswith("fail: ")]
-            first = f"; first error: {fails[0][6:]}" if fails else ""
+            first = first_failure(reader.WS().ModelCheckList())
             reason = _READ_STATUS.get(str(status).split("_")[-1], str(status))
             raise InputError(f"{given}: corrupt IGES file (OCCT: {reason}{first})")
         load = check_counts(reader.WS().ModelCheckList())

@@ -77,6 +77,10 @@ def quiet_occt() -> Iterator[None]:
                 _saved_printers = []
 
 
+#: OCCT's check message for an entity its parser could not build.
+_NO_DATA = "DATA NOT AVAILABLE FOR CHECK"
+
+
 def check_counts(checks: Interface_CheckIterator) -> Counter[str]:
     """Fail and warning messages of an OCCT check list, counted ("fail: ..." / "warning: ...")."""
     counts: Counter[str] = Counter()
@@ -89,6 +93,13 @@ def check_counts(checks: Interface_CheckIterator) -> Counter[str]:
             counts[f"warning: {ch.CWarning(i)}"] += 1
         checks.Next()
     return counts
+
+
+def first_failure(checks: Interface_CheckIterator) -> str:
+    """"; first error: ..." with OCCT's first informative fail message of a parse, or "" if it has none
+    (OCCT's placeholder for an entity it could not parse, "DATA NOT AVAILABLE FOR CHECK", says nothing)."""
+    fails = [m[6:] for m in check_counts(checks) if m.startswith("fail: ") and _NO_DATA not in m]
+    return f"; first error: {fails[0]}" if fails else ""
 
 
 def check_messages(counts: Counter[str], prefix: str) -> list[str]:

@@ -22,13 +22,14 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS_Compound, TopoDS_Shape
 
 from ..errors import InputError
+from ..formats import INPUT_FORMATS
 from .compat import TopoDS, TopTools_IndexedMapOfShape
 from .loading import LoadedShape, count, quiet_occt
 
 __all__ = ["LoadedShape", "load_shape", "quiet_occt", "tolerance_warnings", "SUFFIXES"]
 
-#: File suffixes (lower case) and the format they are read as.
-SUFFIXES = {".step": "STEP", ".stp": "STEP", ".igs": "IGES", ".iges": "IGES", ".brep": "BREP"}
+#: File suffixes (lower case) and the format they are read as (:data:`cadedge.formats.INPUT_FORMATS`).
+SUFFIXES = INPUT_FORMATS
 #: Warn when the worst edge tolerance exceeds this fraction of the model's bounding-box diagonal ...
 TOL_REL_MODEL = 5e-4
 #: ... or exceeds this many times the uncertainty the STEP file declares.
@@ -119,8 +120,9 @@ def load_shape(source: Any, *, allow_partial: bool = False) -> LoadedShape:
             raise InputError(f"{given}: no such file")
         if not path.is_file():
             raise InputError(f"{given}: not a file")
-        raise InputError(f"{given}: unsupported file type {path.suffix or '(none)'!r}; expected .step, .stp, "
-                         ".igs, .iges or .brep")
+        *others, last = SUFFIXES
+        raise InputError(f"{given}: unsupported file type {path.suffix or '(none)'!r}; expected "
+                         f"{', '.join(others)} or {last}")
     if kind == "STEP":
         from .step import read_step
         return read_step(path, given, allow_partial=allow_partial)

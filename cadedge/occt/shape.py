@@ -75,6 +75,8 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
         grid = refine_curve(curve, curve.domain, **opts)
     except CurveEvaluationError as exc:
         raise GeometryError(f"{src}: edge {eid}: {exc}") from exc
+    except InputError as exc:  # an option this edge cannot honour (e.g. a max_length past the cap)
+        raise InputError(f"{src}: edge {eid}: {exc}") from exc
     except GeometryError as exc:  # EdgeCurve's messages already name the edge
         raise GeometryError(f"{src}: {exc}") from exc
     common["curve"] = curve_type_name(curve.kind)

@@ -22,10 +22,9 @@ from OCP.STEPControl import STEPControl_Reader
 from ..errors import InputError
 from .compat import TColStd_SequenceOfAsciiString
 from .loading import (MM_PER_UNIT, UNIT_NAMES, Completeness, LoadedShape, Transferred, accept, check_counts,
-                      cut_short, damaged, skipped_entities, sniff_path, transfer_roots, transferred,
+                      cut_short, damaged, first_failure, skipped_entities, sniff_path, transfer_roots, transferred,
                       unresolved_references)
 
-SUFFIXES = (".step", ".stp")
 _READ_STATUS = {"RetVoid": "nothing to read", "RetError": "cannot open or unknown format",
                 "RetFail": "syntax error", "RetStop": "reading stopped"}
 #: Files up to this size are read whole to tell an empty DATA section from an unreadable one.
@@ -48,8 +47,7 @@ def _parse_failure(given: str, tail: bytes, reader: STEPControl_Reader, status: 
     body = _TRAILER.sub(b"", tail.rstrip())
     if body and not body.rstrip().endswith(b";"):
         return InputError(f"{given}: truncated STEP file (its last entity is cut off before the trailer)")
-    fails = [m for m in check_counts(reader.WS().ModelCheckList()) if m.startswith("fail: ")]
-    first = f"; first error: {fails[0][6:]}" if fails else ""
+    first = first_failure(reader.WS().ModelCheckList())
     return InputError(f"{given}: corrupt STEP file (OCCT: {_READ_STATUS.get(status, status)}{first})")
 
 
