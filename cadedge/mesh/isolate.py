@@ -3,9 +3,13 @@
 The child (``python -m cadedge.mesh.worker``, in its own session so a terminal's Ctrl-C reaches only the
 caller) writes a progress line before each step and each face attempt. The watchdog here kills it when
 
-- one face attempt runs longer than ``face_timeout``: that (face, strategy) is marked as hung and a new
-  child runs the job again without it (the face goes on to the next strategy with other sizes: the
-  other algorithms on the same sizes tend to hang as well, and finer sizes take longer still);
+- one face attempt runs longer than ``face_timeout`` of the child's CPU time (or :data:`WALL_SLACK` times
+  it on the clock, for a child that hangs without computing): that (face, strategy) is marked as hung and
+  a new child runs the job again without it (the face goes on to the next strategy with other sizes: the
+  other algorithms on the same sizes tend to hang as well, and finer sizes take longer still). CPU time,
+  because on a loaded machine a face that takes 20 s alone takes several times that on the clock. A batch
+  of first attempts that hangs or crashes is done again face by face; a face meshed again finer for the
+  surface target (``refine F``) that hangs or crashes is kept as it was first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
 - the whole job passes ``timeout``: the job fails with "no result within ... s".
@@ -46,9 +50,14 @@ FACE_SHARE = 0.2
 SOFT_SHARE = 0.6
 #: Share of the timeout at which a running face attempt is killed (the replay gets the rest).
 KILL_SHARE = 0.7
+#: A face attempt that computes little (a child blocked, not busy) counts as hung after this many times
+#: ``face_timeout`` on the clock.
+WALL_SLACK = 3.0
 #: Restarts after hung or crashed face attempts, at most.
 MAX_RESTARTS = 12
 _POLL = 0.05
+#: Progress lines that mark work the watchdog bounds: one face attempt, a batch of them, a finer re-mesh.
+_ATTEMPT_LINES = ("face ", "batch ", "refine ")
 
 
 @dataclass
@@ -75,11 +84,21 @@ def _exit_reason(code: int, stderr: str) -> str:
     return f"the mesh process exited with code {code}" + (f": {tail[0][:200]}" if tail else "")
 
 
+def _cpu_seconds(pid: int) -> float | None:
+    """CPU time (user + system) of process ``pid`` so far; None where ``/proc`` does not tell."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def _last_line(path: str) -> str:
     try:
         with open(path, "rb") as f:
             f.seek(0, os.SEEK_END)
-            f.seek(max(0, f.tell() - 256))
+            f.seek(max(0, f.tell() - 2048))
             lines = f.read().decode(errors="replace").splitlines()
         return lines[-1] if lines else ""
     except OSError:
@@ -119,7 +138,7 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
         proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
                                 start_new_session=True)
-        last, since = "", time.monotonic()
+        last, since, cpu_since = "", time.monotonic(), 0.0
         try:
             while True:
                 try:
@@ -129,13 +148,15 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                     pass
                 now = time.monotonic()
                 line = _last_line(progress_path)
+                cpu = _cpu_seconds(proc.pid)
                 if line != last:
-                    last, since = line, now
+                    last, since, cpu_since = line, now, cpu or 0.0
                 if now > deadline:
                     return _Run(None, "timeout", last, "")
-                if line.startswith("face ") and now - since > face_timeout:
+                busy = now - since if cpu is None else cpu - cpu_since
+                if line.startswith(_ATTEMPT_LINES) and (busy > face_timeout or now - since > WALL_SLACK * face_timeout):
                     return _Run(None, "hung", last, f"hung: no result within {face_timeout:g} s")
-                if line.startswith("face ") and now > kill_at:
+                if line.startswith(_ATTEMPT_LINES) and now > kill_at:
                     return _Run(None, "late", last, "not finished: out of time (timeout)")
         finally:
             if proc.poll() is None:
@@ -182,6 +203,19 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             if run.status == "timeout":
                 return _failed(f"no result within {timeout:g} s (--timeout)", events)
             words = run.last.split()
+            if words[:1] == ["batch"] and len(words) > 1:
+                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+                faces = [int(w) for w in words[1:]]
+                job.no_batch |= set(faces)
+                events.append(f"faces {', '.join(words[1:])}: meshing them together in one gmsh call: "
+                              f"{run.detail}; they were meshed one by one in a new process")
+                continue
+            if words[:1] == ["refine"] and len(words) == 2:
+                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+                job.no_refine.add(int(words[1]))
+                events.append(f"face {words[1]}: meshing it again finer for the surface target {run.detail}; "
+                              "it was kept as first meshed")
+                continue
             if words[:1] != ["face"] or len(words) != 3:
                 where = f" while gmsh was at step '{run.last}'" if run.last else ""
                 return _failed(f"{run.detail}{where}", events)
@@ -190,8 +224,8 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             barred = skip.setdefault(face, {})
             barred[k] = run.detail
             if run.status == "hung":  # other algorithms on the same sizes tend to hang too: go to other sizes
-                kind = (STRATEGIES[k].size_factor, STRATEGIES[k].split, STRATEGIES[k].own_curves)
-                same = [j for j, s in enumerate(STRATEGIES) if j > k and (s.size_factor, s.split, s.own_curves) == kind]
+                kind = STRATEGIES[k].sizes
+                same = [j for j, s in enumerate(STRATEGIES) if j > k and s.sizes == kind]
                 barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
                 finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
                          if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]

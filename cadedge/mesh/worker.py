@@ -10,9 +10,11 @@ hang or exhausted memory costs that child, never the caller. Steps, in order:
    field; **hooks "before_generate"**; curves gmsh still has to mesh (degenerate, unmatched, or all of
    them in ``sizes`` mode);
 4. every face on its own through the retry strategies (:func:`~cadedge.mesh.generate.mesh_faces`), with
-   a progress line and **hooks "before_face"** (``context.face``, ``context.strategy`` set) before each
-   attempt (the parent's watchdog reads the line); **hooks "after_generate"** (a
-   hook may clear faces and mesh them again with ``mesh_faces``, updating ``context.outcomes``);
+   a progress line (``face F K``, or ``batch F1 F2 ...`` before a batch of first attempts) and **hooks
+   "before_face"** (``context.face``, ``context.strategy`` set) before each attempt (the parent's
+   watchdog reads the line); **hooks "after_generate"** (a hook may clear faces and mesh them again with
+   ``mesh_faces``, updating ``context.outcomes``, after a ``refine F`` line through ``context.progress``
+   for each face; faces in ``job.no_refine`` are not meshed again);
 5. read the mesh back; **hooks "before_write"**; write ``job.output`` if asked; **hooks "after_mesh"**.
 
 Hooks are ``"module:function"`` names in ``job.hooks[stage]``, imported in the child and called as
@@ -56,6 +58,8 @@ class MeshJob:
     skip: dict[int, dict[int, str]] = field(default_factory=dict)  # face -> {strategy index: reason}
     known_ok: dict[int, int] = field(default_factory=dict)  # face -> strategy that meshed it in an earlier run
     deadline: float | None = None  # time.time() after which only known_ok attempts start
+    no_batch: set[int] = field(default_factory=set)  # faces meshed one by one (their batch hung or crashed)
+    no_refine: set[int] = field(default_factory=set)  # faces not to mesh again finer (that hung or crashed)
     hooks: dict[str, list[str]] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)  # free-form settings for hooks
 
@@ -71,6 +75,7 @@ class JobContext:
     raw: Any = None  # cadedge.mesh.generate.RawMesh
     face: int = 0  # the face attempt under way (for "before_face" hooks)
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
+    progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
 
 
 @dataclass
@@ -115,8 +120,10 @@ def _hooks(ctx: JobContext, stage: str) -> dict[str, Any]:
     return out
 
 
-def _import(brep: bytes, notes: list[str]) -> str | None:
-    """Import the BREP into the current gmsh model; None, or the reason every import attempt failed."""
+def _import(brep: bytes, notes: list[str]) -> tuple[str | None, str | None]:
+    """Import the BREP into the current gmsh model: ``(error, partial)``. ``error`` is the reason when
+    nothing could be imported; ``partial`` gmsh's reason when only part of the shape was (every attempt
+    failed, and what the first one bound is kept)."""
     import gmsh
 
     from ..errors import GeometryError
@@ -136,8 +143,13 @@ def _import(brep: bytes, notes: list[str]) -> str | None:
                 continue
             if attempt:
                 notes.append(f"gmsh imported the shape only with its wire fixing ({errors[0]})")
-            return None
-    return errors[-1]
+            return None, None
+        try:
+            partial = import_brep(path, attempt=0, partial=True)
+        except GeometryError:
+            return errors[-1], None
+    notes.append(f"gmsh imported the shape only in part ({partial}): the faces it left out are named")
+    return None, partial
 
 
 def run_job(job: MeshJob, progress: Any = None) -> JobResult:
@@ -153,7 +165,7 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
     notes: list[str] = []
     with gmsh_session():
         say("import")
-        error = _import(job.brep, notes)
+        error, partial = _import(job.brep, notes)
         if error is not None:
             return empty_result(error)
         ctx = JobContext(job=job)
@@ -179,17 +191,30 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
             notes.append(f"gmsh's curve meshing reported: {exc}")
         ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)]
         face_of = emap.face_of_surface
-        def started(face: int, k: int) -> None:
-            say(f"face {face} {k}")
+        ctx.progress = say
+
+        def prepare(face: int, k: int) -> None:
             ctx.face, ctx.strategy = face, k
             _hooks(ctx, "before_face")
+
+        def started(face: int, k: int) -> None:
+            say(f"face {face} {k}")
+            prepare(face, k)
 
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
 
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
-                                  deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves)
+                                  deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
+                                  batch_started=lambda faces: say("batch " + " ".join(map(str, faces))),
+                                  prepare=prepare, no_batch=job.no_batch)
+        if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
+            from .generate import FaceOutcome
+
+            missing = sorted(set(range(1, job.grid.faces + 1)) - set(emap.faces))
+            ctx.outcomes.update({-f: FaceOutcome(face=f, surface=0, attempts=[("gmsh import", partial)])
+                                 for f in missing})
         edge_of = {m.tag: eid for eid, m in emap.edges.items()}
         own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
