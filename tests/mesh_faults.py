@@ -44,3 +44,9 @@ def hang_refining(ctx) -> None:
         ctx.progress(f"refine {FAULT_FACE}")
         while True:
             time.sleep(1)
+
+
+def hang_after_meshing(ctx) -> None:
+    """Never return once every face is meshed (only the job's hard timeout ends it)."""
+    while True:
+        time.sleep(1)

@@ -107,3 +107,17 @@ def test_a_shape_gmsh_imports_only_in_part_meshes_the_rest_and_names_the_face(tm
     assert set(np.unique(result.triangle_faces)) == set(range(1, 7))
     assert result.check.ok and out.exists() and result.output == out
     assert any("only in part" in n for n in result.notes)
+
+
+def test_the_hard_timeout_delivers_the_faces_already_meshed(cylinder, tmp_path):
+    """A child stuck after meshing (no attempt under way, so only the hard timeout ends it) is killed; the
+    faces it delivered as it went make a complete, watertight mesh, written by meshio."""
+    trimesh = pytest.importorskip("trimesh")
+    out = tmp_path / "c.stl"
+    result = mesh_shape(cylinder, output=out, hooks={"after_generate": ["mesh_faults:hang_after_meshing"]},
+                        timeout=20, face_timeout=100)
+    assert result.error is None and not result.failures, result.problems()
+    assert set(np.unique(result.triangle_faces)) == set(range(1, cylinder.faces + 1))
+    assert result.check.ok and all(s.watertight for s in result.check.shells)
+    assert any("stopped" in n and "delivered" in n for n in result.notes)
+    assert result.output == out and trimesh.load(out).is_watertight

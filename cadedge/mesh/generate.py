@@ -327,7 +327,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                own_curves: set[int] | None = None,
                batch_started: Callable[[list[int]], None] | None = None,
                prepare: Callable[[int, int], None] = lambda face, strategy: None,
-               no_batch: set[int] | frozenset[int] = frozenset()) -> dict[int, FaceOutcome]:
+               no_batch: set[int] | frozenset[int] = frozenset(),
+               cleared: Callable[[list[int]], None] = lambda faces: None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`STRATEGIES`; returns each surface's outcome.
 
     ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
@@ -339,7 +340,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
 
     With ``batch_started``, the first strategy meshes faces in batches (faces in ``no_batch`` excepted):
     ``batch_started(faces)`` is called before each chunk, ``prepare(face, k)`` sets a face's options (it is
-    also what ``started`` should call), ``finished`` follows each face of the batch.
+    also what ``started`` should call), ``finished`` follows each face of the batch. ``cleared(faces)`` names
+    meshed faces cleared because a neighbour's strategy changed their boundary (they are meshed again).
     """
     skip = skip or {}
     known_ok = known_ok or {}
@@ -384,6 +386,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     curves = [c for c in surface_curve_uses(s) if c not in own_curves]
                     own_curves.update(curves)
                     touched = remesh_curves(curves)
+                cleared([out[n].face for n in touched if n in out and out[n].ok])
                 for n in touched:  # their boundary changed: mesh them again
                     tried_first.discard(n)  # a face whose batch attempt failed starts again on the new boundary
                     if n == s or (n in out and not out[n].ok):

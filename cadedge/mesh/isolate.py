@@ -12,7 +12,10 @@ caller) writes a progress line before each step and each face attempt. The watch
   surface target (``refine F``) that hangs or crashes is kept as it was first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
-- the whole job passes ``timeout``: the job fails with "no result within ... s".
+- the whole job passes ``timeout``: the faces the children had meshed (each child appends every face it
+  meshes to a file as it goes) are delivered, nodes merged by exact coordinates, with the other faces
+  failing "no result within ... s" (and the mesh written with meshio, since gmsh did not get to it); with
+  no face meshed the job fails with that reason.
 
 A new child replays what the progress file says the killed one achieved: each face starts at the
 strategy that meshed it, and attempts that failed are not tried again. After :data:`SOFT_SHARE` of the
@@ -37,6 +40,8 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from ..atomic import atomic_path
 from .generate import STRATEGIES
@@ -135,7 +140,8 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
         pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     with open(os.path.join(tmp, "stderr"), "w+") as err:
-        proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path],
+        proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path,
+                                 os.path.join(tmp, "faces")],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
                                 start_new_session=True)
         last, since, cpu_since = "", time.monotonic(), 0.0
@@ -201,7 +207,14 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                     result.written = False
                 return result
             if run.status == "timeout":
-                return _failed(f"no result within {timeout:g} s (--timeout)", events)
+                reason = f"no result within {timeout:g} s (--timeout)"
+                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+                result = _delivered(os.path.join(tmp, "faces"), job, known_ok, reason, events)
+                if result is None:
+                    return _failed(reason, events)
+                if output is not None:
+                    _write(result, output)
+                return result
             words = run.last.split()
             if words[:1] == ["batch"] and len(words) > 1:
                 _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
@@ -233,6 +246,56 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                           "process")
         return _failed(f"gave up after {MAX_RESTARTS} restarts of the mesh process", events)
+
+
+def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
+               events: list[str]) -> JobResult | None:
+    """The faces the killed children delivered (``worker.run_job``'s ``deliver``; the last record of a
+    face wins, a cleared face is dropped), as a result whose other faces fail with ``reason``; None when
+    no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes."""
+    from .generate import FaceOutcome
+
+    faces: dict[int, np.ndarray] = {}
+    try:
+        with open(path, "rb") as f:
+            while True:
+                face, tris = pickle.load(f)
+                if tris is None:
+                    faces.pop(face, None)
+                else:
+                    faces[face] = tris
+    except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError):  # the end, or a record cut off
+        pass
+    faces = {f: t for f, t in faces.items() if len(t)}
+    if not faces:
+        return None
+    order = sorted(faces)
+    corners = np.concatenate([faces[f].reshape(-1, 3) for f in order])
+    nodes, index = np.unique(corners, axis=0, return_inverse=True)
+    result = empty_result("")
+    result.error = None
+    result.nodes, result.triangles = nodes, index.reshape(-1, 3).astype(np.int64)
+    result.triangle_faces = np.concatenate([np.full(len(faces[f]), f, dtype=np.int64) for f in order])
+    names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
+    result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))
+                    if f in faces else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
+                    for f in range(1, job.grid.faces + 1)]
+    result.notes = events + [f"the mesh process was stopped ({reason}); the {len(faces)} faces it had meshed "
+                             "are delivered without the steps after meshing (re-meshing finer, gmsh's writer)"]
+    return result
+
+
+def _write(result: JobResult, output: Path) -> None:
+    """Write a delivered result with meshio (gmsh did not finish): triangles tagged with their face ids."""
+    import meshio
+
+    faces = result.triangle_faces.astype(np.int64)
+    mesh = meshio.Mesh(result.nodes, [("triangle", result.triangles)],
+                       cell_data={"gmsh:physical": [faces], "gmsh:geometrical": [faces]})
+    fmt = {".msh": "gmsh", ".stl": "stl", ".vtk": "vtk"}[output.suffix.lower()]
+    with atomic_path(output) as dst:
+        meshio.write(str(dst), mesh, file_format=fmt)
+    result.written = True
 
 
 def _failed(reason: str, events: list[str]) -> JobResult:

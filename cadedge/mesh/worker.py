@@ -152,8 +152,23 @@ def _import(brep: bytes, notes: list[str]) -> tuple[str | None, str | None]:
     return None, partial
 
 
-def run_job(job: MeshJob, progress: Any = None) -> JobResult:
-    """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step."""
+def _face_triangles(surface: int) -> np.ndarray:
+    """The triangles of one gmsh surface as corner coordinates, shape (m, 3, 3)."""
+    import gmsh
+
+    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
+    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+    tags = np.asarray(tags, dtype=np.int64)
+    lookup = np.full(int(tags.max()) + 1 if len(tags) else 1, -1, dtype=np.int64)
+    lookup[tags] = np.arange(len(tags))
+    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[np.asarray(tri, dtype=np.int64)]].reshape(-1, 3, 3)
+
+
+def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResult:
+    """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step and
+    ``deliver(face, triangles)`` each face's triangles as corner coordinates (m, 3, 3) as soon as it is
+    meshed (``None`` when a face meshed before is cleared), so a parent that must kill this process at
+    its hard timeout still has what was meshed."""
     import gmsh
 
     from .generate import boundary_multiplicity, mesh_faces, read_mesh
@@ -203,12 +218,15 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
 
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
+            if reason is None and deliver is not None and face in emap.faces:
+                deliver(face, _face_triangles(emap.faces[face]))
 
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
                                   batch_started=lambda faces: say("batch " + " ".join(map(str, faces))),
-                                  prepare=prepare, no_batch=job.no_batch)
+                                  prepare=prepare, no_batch=job.no_batch,
+                                  cleared=lambda faces: [deliver(f, None) for f in faces] if deliver else None)
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
             from .generate import FaceOutcome
 
@@ -251,18 +269,24 @@ def _limit_memory() -> None:
 
 
 def main(argv: list[str]) -> int:
-    """``python -m cadedge.mesh.worker JOB RESULT PROGRESS``: unpickle the job, run it, pickle the result."""
-    job_path, result_path, progress_path = argv
+    """``python -m cadedge.mesh.worker JOB RESULT PROGRESS [FACES]``: unpickle the job, run it, pickle the
+    result; each meshed face's triangles are appended to FACES as they come (see :func:`run_job`)."""
+    job_path, result_path, progress_path = argv[:3]
+    faces_path = argv[3] if len(argv) > 3 else os.devnull
     _limit_memory()
     with open(job_path, "rb") as f:
         job = pickle.load(f)
-    with open(progress_path, "a", buffering=1) as prog:
+    with open(progress_path, "a", buffering=1) as prog, open(faces_path, "ab") as faces:
+        def deliver(face: int, triangles: np.ndarray | None) -> None:
+            pickle.dump((face, triangles), faces, protocol=pickle.HIGHEST_PROTOCOL)
+            faces.flush()
+
         def say(line: str) -> None:
             prog.write(line + "\n")
             prog.flush()
 
         try:
-            result = run_job(job, say)
+            result = run_job(job, say, deliver)
         except Exception as exc:  # reported to the parent as the job's failure, with where it happened
             where = traceback.extract_tb(exc.__traceback__)[-1]
             result = empty_result(f"internal error: {type(exc).__name__}: {exc} "
