@@ -373,8 +373,8 @@ def after_generate(ctx) -> None:
     per_face: dict[int, float] = {}
     stuck: list[int] = []
     last: dict[int, float] = {}
-    no_refine = getattr(ctx.job, "no_refine", set())
-    say = getattr(ctx, "progress", None) or (lambda line: None)
+    no_refine = ctx.job.no_refine
+    say = ctx.progress or (lambda line: None)
     pending = [s for s, o in ctx.outcomes.items() if o.ok and face_of.get(s, s) in curved]
     for k in range(PASSES + 1):
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
