@@ -28,3 +28,25 @@ def hang(ctx) -> None:
 def crash_before_meshing(ctx) -> None:
     """Abort the child outside any face attempt: the whole run fails, the caller does not."""
     ctypes.string_at(0)
+
+
+def spin(ctx) -> None:
+    """Compute forever without returning (a busy hang, as gmsh's own are)."""
+    if ctx.face == FAULT_FACE and ctx.strategy == 0:
+        while True:
+            pass
+
+
+def hang_refining(ctx) -> None:
+    """After the faces are meshed, announce meshing face ``FAULT_FACE`` again finer and never return, unless
+    an earlier child hung there (the watchdog then lists the face in ``job.no_refine``)."""
+    if FAULT_FACE not in ctx.job.no_refine:
+        ctx.progress(f"refine {FAULT_FACE}")
+        while True:
+            time.sleep(1)
+
+
+def hang_after_meshing(ctx) -> None:
+    """Never return once every face is meshed (only the job's hard timeout ends it)."""
+    while True:
+        time.sleep(1)

@@ -1,7 +1,10 @@
 """Run gmsh's surface meshers face by face, retrying failed faces with other strategies; read the mesh back.
 
 Every surface is meshed on its own (``Mesh.MeshOnlyVisible`` with only that surface visible), so one face
-that gmsh cannot mesh, or that hangs or crashes it, is known by name. A face passes when it carries
+that gmsh cannot mesh, or that hangs or crashes it, is known by name. The first attempt meshes faces in
+batches of :data:`BATCH_FACES` (one ``generate`` call each: every call re-walks the whole model's mesh, so
+one call per face grows quadratically with the model, 15-25% of the time on a 192-face model); a batch
+that hangs or crashes gmsh is done again face by face. A face passes when it carries
 triangles whose edges on its boundary curves are exactly the curve segments, each used as often as the
 curve bounds the face (seams twice), and whose other edges are shared by two triangles. A face that
 fails is cleared and retried through :data:`STRATEGIES`: other 2-D algorithms, finer and coarser local
@@ -33,13 +36,23 @@ class Strategy:
     size_factor: float = 1.0
     split: bool = False
     own_curves: bool = False  # drop the imposed curve meshes of the face: gmsh meshes its curves itself
+    uniform: bool = False  # curvature sizes as one size from the face's sampled curvature (cheap to evaluate)
+
+    @property
+    def sizes(self) -> tuple:
+        """What sets this strategy's sizes: strategies alike in it tend to hang alike."""
+        return self.size_factor, self.split, self.own_curves, self.uniform
 
 
-#: Tried in this order until a face meshes. 6 = Frontal-Delaunay, 1 = MeshAdapt, 5 = Delaunay.
+#: Tried in this order until a face meshes. 6 = Frontal-Delaunay, 1 = MeshAdapt, 5 = Delaunay. "one
+#: curvature size" replaces gmsh's curvature sizing (evaluated on the surface at every candidate point:
+#: about 1 ms a triangle on the twisted blade's lofted B-spline face, 20 s for 19k triangles) by one size
+#: from the face's sampled largest curvature (:func:`uniform_curvature_size`).
 STRATEGIES = (
     Strategy("Frontal-Delaunay", 6),
     Strategy("MeshAdapt", 1),
     Strategy("Delaunay", 5),
+    Strategy("Frontal-Delaunay, one curvature size", 6, 1.0, False, False, True),
     Strategy("Frontal-Delaunay, finer sizes", 6, 0.5),
     Strategy("MeshAdapt, coarser sizes", 1, 2.0),
     Strategy("split boundary segments, Frontal-Delaunay", 6, 1.0, True),
@@ -103,10 +116,11 @@ def _surface_ok(surface: int) -> bool:
     return all(c == 2 for k, c in got.items() if k not in expected)
 
 
-def _reason(surface: int, log: list[str], exc: str | None) -> str:
+def _reason(surface: int, log: list[str], exc: str | None, *, alone: bool = True) -> str:
+    """gmsh's messages about ``surface``; when it was meshed ``alone``, else its last error."""
     pat = re.compile(rf"\b(surface|face)\s+{surface}\b", re.IGNORECASE)
     msgs = [m for m in log if pat.search(m) and ("rror" in m or "arning" in m)]
-    if not msgs:
+    if not msgs and alone:
         msgs = [m for m in log if "rror" in m][-1:] or ([exc] if exc else [])
     text = "; ".join(dict.fromkeys(m.strip() for m in msgs))
     return text or "no triangles, or triangles that do not match the face's boundary curves"
@@ -114,23 +128,84 @@ def _reason(surface: int, log: list[str], exc: str | None) -> str:
 
 def _attempt(surface: int, strategy: Strategy) -> str | None:
     """Mesh one (empty) surface with ``strategy``; None if it passed, else gmsh's reason (surface cleared)."""
+    return _attempt_many([surface], strategy)[surface]
+
+
+def _clear_log() -> None:
+    """Drop gmsh's logged messages (``gmsh.logger.get`` returns every message since the logger started:
+    reading it per attempt grew quadratically and mixed other faces' errors into a face's reason)."""
+    gmsh.logger.stop()
+    gmsh.logger.start()
+
+
+#: Curvature samples per parametric direction for :func:`uniform_curvature_size`.
+CURVATURE_SAMPLES = 24
+#: Percentile of the sampled curvatures taken as the face's curvature (spikes at poles and near-singular
+#: points of spline surfaces are left out).
+CURVATURE_PERCENTILE = 95.0
+#: A face meshed with one curvature size gets at most about this many triangles (the size grows to fit).
+MAX_FACE_TRIANGLES = 400_000
+
+
+def uniform_curvature_size(surface: int, per_circle: float) -> float | None:
+    """One size for the whole face: ``2 pi / (per_circle * k)`` with ``k`` a high percentile of the largest
+    principal curvature sampled on a grid of the surface's parameters, no smaller than the size giving
+    :data:`MAX_FACE_TRIANGLES` on the face's area. None when the face is flat or gmsh cannot sample it."""
+    try:
+        lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
+        t = (np.arange(CURVATURE_SAMPLES) + 0.5) / CURVATURE_SAMPLES
+        u, v = np.meshgrid(lo[0] + (hi[0] - lo[0]) * t, lo[1] + (hi[1] - lo[1]) * t)
+        uv = np.column_stack([u.ravel(), v.ravel()]).ravel().tolist()
+        kmax, kmin, _, _ = gmsh.model.getPrincipalCurvatures(surface, uv)
+        k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
+        k = k[np.isfinite(k)]
+        area = float(gmsh.model.occ.getMass(2, surface))
+    except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
+        return None
+    if not len(k) or not np.percentile(k, CURVATURE_PERCENTILE) > 0 or per_circle <= 0:
+        return None
+    h = 2.0 * np.pi / (per_circle * float(np.percentile(k, CURVATURE_PERCENTILE)))
+    return max(h, float(np.sqrt(2.3 * abs(area) / MAX_FACE_TRIANGLES)))
+
+
+def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | None]:
+    """Mesh (empty) ``surfaces`` in one gmsh call with ``strategy``; per surface None if it passed, else
+    gmsh's reason (the surface is then cleared). A ``uniform`` strategy takes its size from the first
+    surface (it is tried on one face at a time)."""
     gmsh.option.setNumber("Mesh.Algorithm", strategy.algorithm)
     gmsh.option.setNumber("Mesh.MeshSizeFactor", strategy.size_factor)
-    gmsh.model.setVisibility([(2, surface)], 1)
-    gmsh.logger.get()  # drop older messages
+    restore = {}
+    if strategy.uniform:
+        per_circle = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature")
+        h = uniform_curvature_size(surfaces[0], per_circle) if per_circle > 0 else None
+        restore = {o: gmsh.option.getNumber(o) for o in ("Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeMax")}
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+        if h is not None:
+            gmsh.option.setNumber("Mesh.MeshSizeMax", max(min(h, restore["Mesh.MeshSizeMax"]),
+                                                          gmsh.option.getNumber("Mesh.MeshSizeMin")))
+    visible = [(2, s) for s in surfaces]
+    gmsh.model.setVisibility(visible, 1)
+    _clear_log()
     exc = None
     try:
         gmsh.model.mesh.generate(2)
     except Exception as err:  # gmsh raises a bare Exception with its last error message
         exc = str(err)
     finally:
-        gmsh.model.setVisibility([(2, surface)], 0)
+        gmsh.model.setVisibility(visible, 0)
         gmsh.option.setNumber("Mesh.MeshSizeFactor", 1.0)
+        for o, value in restore.items():
+            gmsh.option.setNumber(o, value)
     log = gmsh.logger.get()
-    if _surface_ok(surface):
-        return None
-    gmsh.model.mesh.clear([(2, surface)])
-    return _reason(surface, log, exc)
+    _clear_log()
+    out: dict[int, str | None] = {}
+    for s in surfaces:
+        if _surface_ok(s):
+            out[s] = None
+        else:
+            gmsh.model.mesh.clear([(2, s)])
+            out[s] = _reason(s, log, exc, alone=len(surfaces) == 1)
+    return out
 
 
 def _curve_chain(curve: int) -> tuple[np.ndarray, np.ndarray]:
@@ -214,12 +289,46 @@ def remesh_curves(curves: list[int]) -> list[int]:
     return sorted(touched | wiped)
 
 
+#: Faces meshed in one gmsh call on the first attempt (see the module doc); a chunk must finish within the
+#: watchdog's time for one attempt.
+BATCH_FACES = 24
+#: gmsh options a ``prepare`` hook may set per face: faces share a gmsh call only when these agree.
+FACE_OPTIONS = ("Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeMin", "Mesh.MeshSizeMax", "Mesh.MeshSizeFactor")
+
+
+def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
+                  batch_started: Callable[[list[int]], None], prepare: Callable[[int, int], None],
+                  finished: Callable[[int, int, str | None], None]) -> None:
+    """The first strategy on ``surfaces`` in chunks of :data:`BATCH_FACES`, one gmsh call per group of
+    faces whose ``prepare`` leaves the same :data:`FACE_OPTIONS`; outcomes go into ``out``."""
+    first = STRATEGIES[0]
+    for i in range(0, len(surfaces), BATCH_FACES):
+        chunk = surfaces[i:i + BATCH_FACES]
+        batch_started([out[s].face for s in chunk])
+        groups: dict[tuple[float, ...], list[int]] = {}
+        for s in chunk:
+            prepare(out[s].face, 0)
+            groups.setdefault(tuple(gmsh.option.getNumber(o) for o in FACE_OPTIONS), []).append(s)
+        for group in groups.values():
+            prepare(out[group[0]].face, 0)
+            for s, reason in _attempt_many(group, first).items():
+                finished(out[s].face, 0, reason)
+                if reason is None:
+                    out[s].strategy = first.name
+                else:
+                    out[s].attempts.append((first.name, reason))
+
+
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                skip: dict[int, dict[int, str]] | None = None,
                started: Callable[[int, int], None] = lambda face, strategy: None,
                finished: Callable[[int, int, str | None], None] = lambda face, strategy, reason: None,
                deadline: float | None = None, known_ok: dict[int, int] | None = None,
-               own_curves: set[int] | None = None) -> dict[int, FaceOutcome]:
+               own_curves: set[int] | None = None,
+               batch_started: Callable[[list[int]], None] | None = None,
+               prepare: Callable[[int, int], None] = lambda face, strategy: None,
+               no_batch: set[int] | frozenset[int] = frozenset(),
+               cleared: Callable[[list[int]], None] = lambda faces: None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`STRATEGIES`; returns each surface's outcome.
 
     ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
@@ -228,6 +337,11 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     was running when gmsh hung or crashed, and what an earlier run achieved. After ``deadline``
     (``time.time()``) no attempt starts, except ``known_ok[face]``, the strategy that meshed that face in
     an earlier run. ``own_curves`` collects the curves whose imposed mesh was replaced by gmsh's own.
+
+    With ``batch_started``, the first strategy meshes faces in batches (faces in ``no_batch`` excepted):
+    ``batch_started(faces)`` is called before each chunk, ``prepare(face, k)`` sets a face's options (it is
+    also what ``started`` should call), ``finished`` follows each face of the batch. ``cleared(faces)`` names
+    meshed faces cleared because a neighbour's strategy changed their boundary (they are meshed again).
     """
     skip = skip or {}
     known_ok = known_ok or {}
@@ -240,11 +354,22 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     # faces with attempts barred (they hung, crashed or failed in an earlier run) go last: the others are
     # meshed before the time runs out
     queue = sorted(surfaces, key=lambda s: face_of.get(s, s) in skip and face_of.get(s, s) not in known_ok)
+    late = deadline is not None and time.time() > deadline
+    batched = [s for s in queue if batch_started is not None and out[s].face not in no_batch
+               and 0 not in skip.get(out[s].face, {}) and known_ok.get(out[s].face, 0) == 0
+               and (not late or out[s].face in known_ok)]
     try:
+        if batched:
+            _mesh_batches(out, batched, batch_started=batch_started, prepare=prepare, finished=finished)
+        tried_first = set(batched)
         while queue:
             s = queue.pop(0)
             rec = out[s]
+            if rec.ok:
+                continue
             for k, strategy in enumerate(STRATEGIES):
+                if k == 0 and s in tried_first:
+                    continue  # failed in its batch: recorded there
                 if k in skip.get(rec.face, {}):
                     rec.attempts.append((strategy.name, skip[rec.face][k]))
                     continue
@@ -261,10 +386,13 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     curves = [c for c in surface_curve_uses(s) if c not in own_curves]
                     own_curves.update(curves)
                     touched = remesh_curves(curves)
+                cleared([out[n].face for n in touched if n in out and out[n].ok])
                 for n in touched:  # their boundary changed: mesh them again
+                    tried_first.discard(n)  # a face whose batch attempt failed starts again on the new boundary
                     if n == s or (n in out and not out[n].ok):
                         continue  # this face, or a failed or not yet tried one: its own turn comes
                     out[n] = FaceOutcome(face=face_of.get(n, n), surface=n)
+                    tried_first.discard(n)
                     queue.append(n)
                 reason = _attempt(s, strategy)
                 finished(rec.face, k, reason)

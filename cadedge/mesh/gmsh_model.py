@@ -45,10 +45,13 @@ def gmsh_session() -> Iterator[None]:
 IMPORT_ATTEMPTS = ({"Geometry.OCCAutoFix": 0}, {"Geometry.OCCAutoFix": 1})
 
 
-def import_brep(path: str, *, attempt: int = 0) -> None:
+def import_brep(path: str, *, attempt: int = 0, partial: bool = False) -> str | None:
     """Put the BREP file at ``path`` into the current gmsh model without healing, sewing or fragmenting.
 
-    ``attempt`` indexes :data:`IMPORT_ATTEMPTS`. Raises :class:`GeometryError` with gmsh's reason.
+    ``attempt`` indexes :data:`IMPORT_ATTEMPTS`. Raises :class:`GeometryError` with gmsh's reason; with
+    ``partial``, a model gmsh bound only in part (it stops at the first surface whose wire it cannot fix,
+    "Could not fix wire in surface N", keeping the entities bound before) is kept when it has surfaces,
+    and gmsh's reason is returned (None when the import was clean).
     """
     for opt in ("Geometry.OCCFixDegenerated", "Geometry.OCCFixSmallEdges", "Geometry.OCCFixSmallFaces",
                 "Geometry.OCCSewFaces", "Geometry.OCCMakeSolids"):
@@ -61,7 +64,13 @@ def import_brep(path: str, *, attempt: int = 0) -> None:
         gmsh.model.occ.importShapes(path, highestDimOnly=False)
         gmsh.model.occ.synchronize()
     except Exception as exc:  # gmsh raises a bare Exception carrying its last error
+        if partial:
+            with contextlib.suppress(Exception):  # binds what it can, raising again on the same surface
+                gmsh.model.occ.synchronize()
+            if gmsh.model.getEntities(2):
+                return str(exc)
         raise GeometryError(f"gmsh could not import the shape: {exc}") from exc
+    return None
 
 
 def shape_to_brep(shape: object) -> bytes:

@@ -3,12 +3,19 @@
 The child (``python -m cadedge.mesh.worker``, in its own session so a terminal's Ctrl-C reaches only the
 caller) writes a progress line before each step and each face attempt. The watchdog here kills it when
 
-- one face attempt runs longer than ``face_timeout``: that (face, strategy) is marked as hung and a new
-  child runs the job again without it (the face goes on to the next strategy with other sizes: the
-  other algorithms on the same sizes tend to hang as well, and finer sizes take longer still);
+- one face attempt runs longer than ``face_timeout`` of the child's CPU time (or :data:`WALL_SLACK` times
+  it on the clock, for a child that hangs without computing): that (face, strategy) is marked as hung and
+  a new child runs the job again without it (the face goes on to the next strategy with other sizes: the
+  other algorithms on the same sizes tend to hang as well, and finer sizes take longer still). CPU time,
+  because on a loaded machine a face that takes 20 s alone takes several times that on the clock. A batch
+  of first attempts that hangs or crashes is done again face by face; a face meshed again finer for the
+  surface target (``refine F``) that hangs or crashes is kept as it was first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
-- the whole job passes ``timeout``: the job fails with "no result within ... s".
+- the whole job passes ``timeout``: the faces the children had meshed (each child appends every face it
+  meshes to a file as it goes) are delivered, nodes merged by exact coordinates, with the other faces
+  failing "no result within ... s" (and the mesh written with meshio, since gmsh did not get to it); with
+  no face meshed the job fails with that reason.
 
 A new child replays what the progress file says the killed one achieved: each face starts at the
 strategy that meshed it, and attempts that failed are not tried again. After :data:`SOFT_SHARE` of the
@@ -34,6 +41,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..atomic import atomic_path
 from .generate import STRATEGIES
 from .worker import JobResult, MeshJob, empty_result
@@ -46,9 +55,14 @@ FACE_SHARE = 0.2
 SOFT_SHARE = 0.6
 #: Share of the timeout at which a running face attempt is killed (the replay gets the rest).
 KILL_SHARE = 0.7
+#: A face attempt that computes little (a child blocked, not busy) counts as hung after this many times
+#: ``face_timeout`` on the clock.
+WALL_SLACK = 3.0
 #: Restarts after hung or crashed face attempts, at most.
 MAX_RESTARTS = 12
 _POLL = 0.05
+#: Progress lines that mark work the watchdog bounds: one face attempt, a batch of them, a finer re-mesh.
+_ATTEMPT_LINES = ("face ", "batch ", "refine ")
 
 
 @dataclass
@@ -75,11 +89,21 @@ def _exit_reason(code: int, stderr: str) -> str:
     return f"the mesh process exited with code {code}" + (f": {tail[0][:200]}" if tail else "")
 
 
+def _cpu_seconds(pid: int) -> float | None:
+    """CPU time (user + system) of process ``pid`` so far; None where ``/proc`` does not tell."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            fields = f.read().rsplit(b")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def _last_line(path: str) -> str:
     try:
         with open(path, "rb") as f:
             f.seek(0, os.SEEK_END)
-            f.seek(max(0, f.tell() - 256))
+            f.seek(max(0, f.tell() - 2048))
             lines = f.read().decode(errors="replace").splitlines()
         return lines[-1] if lines else ""
     except OSError:
@@ -116,10 +140,11 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
         pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     with open(os.path.join(tmp, "stderr"), "w+") as err:
-        proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path],
+        proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path,
+                                 os.path.join(tmp, "faces")],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
                                 start_new_session=True)
-        last, since = "", time.monotonic()
+        last, since, cpu_since = "", time.monotonic(), 0.0
         try:
             while True:
                 try:
@@ -129,13 +154,15 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                     pass
                 now = time.monotonic()
                 line = _last_line(progress_path)
+                cpu = _cpu_seconds(proc.pid)
                 if line != last:
-                    last, since = line, now
+                    last, since, cpu_since = line, now, cpu or 0.0
                 if now > deadline:
                     return _Run(None, "timeout", last, "")
-                if line.startswith("face ") and now - since > face_timeout:
+                busy = now - since if cpu is None else cpu - cpu_since
+                if line.startswith(_ATTEMPT_LINES) and (busy > face_timeout or now - since > WALL_SLACK * face_timeout):
                     return _Run(None, "hung", last, f"hung: no result within {face_timeout:g} s")
-                if line.startswith("face ") and now > kill_at:
+                if line.startswith(_ATTEMPT_LINES) and now > kill_at:
                     return _Run(None, "late", last, "not finished: out of time (timeout)")
         finally:
             if proc.poll() is None:
@@ -180,8 +207,28 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                     result.written = False
                 return result
             if run.status == "timeout":
-                return _failed(f"no result within {timeout:g} s (--timeout)", events)
+                reason = f"no result within {timeout:g} s (--timeout)"
+                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+                result = _delivered(os.path.join(tmp, "faces"), job, known_ok, reason, events)
+                if result is None:
+                    return _failed(reason, events)
+                if output is not None:
+                    _write(result, output)
+                return result
             words = run.last.split()
+            if words[:1] == ["batch"] and len(words) > 1:
+                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+                faces = [int(w) for w in words[1:]]
+                job.no_batch |= set(faces)
+                events.append(f"faces {', '.join(words[1:])}: meshing them together in one gmsh call: "
+                              f"{run.detail}; they were meshed one by one in a new process")
+                continue
+            if words[:1] == ["refine"] and len(words) == 2:
+                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+                job.no_refine.add(int(words[1]))
+                events.append(f"face {words[1]}: meshing it again finer for the surface target {run.detail}; "
+                              "it was kept as first meshed")
+                continue
             if words[:1] != ["face"] or len(words) != 3:
                 where = f" while gmsh was at step '{run.last}'" if run.last else ""
                 return _failed(f"{run.detail}{where}", events)
@@ -190,8 +237,8 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             barred = skip.setdefault(face, {})
             barred[k] = run.detail
             if run.status == "hung":  # other algorithms on the same sizes tend to hang too: go to other sizes
-                kind = (STRATEGIES[k].size_factor, STRATEGIES[k].split, STRATEGIES[k].own_curves)
-                same = [j for j, s in enumerate(STRATEGIES) if j > k and (s.size_factor, s.split, s.own_curves) == kind]
+                kind = STRATEGIES[k].sizes
+                same = [j for j, s in enumerate(STRATEGIES) if j > k and s.sizes == kind]
                 barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
                 finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
                          if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
@@ -199,6 +246,56 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                           "process")
         return _failed(f"gave up after {MAX_RESTARTS} restarts of the mesh process", events)
+
+
+def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
+               events: list[str]) -> JobResult | None:
+    """The faces the killed children delivered (``worker.run_job``'s ``deliver``; the last record of a
+    face wins, a cleared face is dropped), as a result whose other faces fail with ``reason``; None when
+    no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes."""
+    from .generate import FaceOutcome
+
+    faces: dict[int, np.ndarray] = {}
+    try:
+        with open(path, "rb") as f:
+            while True:
+                face, tris = pickle.load(f)
+                if tris is None:
+                    faces.pop(face, None)
+                else:
+                    faces[face] = tris
+    except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError):  # the end, or a record cut off
+        pass
+    faces = {f: t for f, t in faces.items() if len(t)}
+    if not faces:
+        return None
+    order = sorted(faces)
+    corners = np.concatenate([faces[f].reshape(-1, 3) for f in order])
+    nodes, index = np.unique(corners, axis=0, return_inverse=True)
+    result = empty_result("")
+    result.error = None
+    result.nodes, result.triangles = nodes, index.reshape(-1, 3).astype(np.int64)
+    result.triangle_faces = np.concatenate([np.full(len(faces[f]), f, dtype=np.int64) for f in order])
+    names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
+    result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))
+                    if f in faces else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
+                    for f in range(1, job.grid.faces + 1)]
+    result.notes = events + [f"the mesh process was stopped ({reason}); the {len(faces)} faces it had meshed "
+                             "are delivered without the steps after meshing (re-meshing finer, gmsh's writer)"]
+    return result
+
+
+def _write(result: JobResult, output: Path) -> None:
+    """Write a delivered result with meshio (gmsh did not finish): triangles tagged with their face ids."""
+    import meshio
+
+    faces = result.triangle_faces.astype(np.int64)
+    mesh = meshio.Mesh(result.nodes, [("triangle", result.triangles)],
+                       cell_data={"gmsh:physical": [faces], "gmsh:geometrical": [faces]})
+    fmt = {".msh": "gmsh", ".stl": "stl", ".vtk": "vtk"}[output.suffix.lower()]
+    with atomic_path(output) as dst:
+        meshio.write(str(dst), mesh, file_format=fmt)
+    result.written = True
 
 
 def _failed(reason: str, events: list[str]) -> JobResult:

@@ -128,7 +128,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
 
     ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
     (to tell small angles forced by a sharp face corner from the mesher's own slivers); ``stuck`` the faces
-    whose deficit finer meshes did not reduce.
+    whose deficit finer meshes did not reduce, or was too large to come from meshing.
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -153,7 +153,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             rec.status, rec.note = "failed", failed.get(fid, "no triangles")
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
-            rec.note = ("finer meshes did not reduce it: the meshed face and its B-rep area disagree (loose "
+            rec.note = ("not meshed finer, or finer meshes did not reduce it: the meshed face and its B-rep "
+                        "area disagree by more than meshing explains (loose "
                         "tolerances, or a trimming read differently by gmsh and by OCCT's area integration)"
                         if fid in stuck
                         else "a planar face: its area is set by its boundary polygon" if surface_types[i] == "Plane"

@@ -10,9 +10,11 @@ hang or exhausted memory costs that child, never the caller. Steps, in order:
    field; **hooks "before_generate"**; curves gmsh still has to mesh (degenerate, unmatched, or all of
    them in ``sizes`` mode);
 4. every face on its own through the retry strategies (:func:`~cadedge.mesh.generate.mesh_faces`), with
-   a progress line and **hooks "before_face"** (``context.face``, ``context.strategy`` set) before each
-   attempt (the parent's watchdog reads the line); **hooks "after_generate"** (a
-   hook may clear faces and mesh them again with ``mesh_faces``, updating ``context.outcomes``);
+   a progress line (``face F K``, or ``batch F1 F2 ...`` before a batch of first attempts) and **hooks
+   "before_face"** (``context.face``, ``context.strategy`` set) before each attempt (the parent's
+   watchdog reads the line); **hooks "after_generate"** (a hook may clear faces and mesh them again with
+   ``mesh_faces``, updating ``context.outcomes``, after a ``refine F`` line through ``context.progress``
+   for each face; faces in ``job.no_refine`` are not meshed again);
 5. read the mesh back; **hooks "before_write"**; write ``job.output`` if asked; **hooks "after_mesh"**.
 
 Hooks are ``"module:function"`` names in ``job.hooks[stage]``, imported in the child and called as
@@ -56,6 +58,8 @@ class MeshJob:
     skip: dict[int, dict[int, str]] = field(default_factory=dict)  # face -> {strategy index: reason}
     known_ok: dict[int, int] = field(default_factory=dict)  # face -> strategy that meshed it in an earlier run
     deadline: float | None = None  # time.time() after which only known_ok attempts start
+    no_batch: set[int] = field(default_factory=set)  # faces meshed one by one (their batch hung or crashed)
+    no_refine: set[int] = field(default_factory=set)  # faces not to mesh again finer (that hung or crashed)
     hooks: dict[str, list[str]] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)  # free-form settings for hooks
 
@@ -71,6 +75,7 @@ class JobContext:
     raw: Any = None  # cadedge.mesh.generate.RawMesh
     face: int = 0  # the face attempt under way (for "before_face" hooks)
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
+    progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
 
 
 @dataclass
@@ -115,8 +120,10 @@ def _hooks(ctx: JobContext, stage: str) -> dict[str, Any]:
     return out
 
 
-def _import(brep: bytes, notes: list[str]) -> str | None:
-    """Import the BREP into the current gmsh model; None, or the reason every import attempt failed."""
+def _import(brep: bytes, notes: list[str]) -> tuple[str | None, str | None]:
+    """Import the BREP into the current gmsh model: ``(error, partial)``. ``error`` is the reason when
+    nothing could be imported; ``partial`` gmsh's reason when only part of the shape was (every attempt
+    failed, and what the first one bound is kept)."""
     import gmsh
 
     from ..errors import GeometryError
@@ -136,12 +143,32 @@ def _import(brep: bytes, notes: list[str]) -> str | None:
                 continue
             if attempt:
                 notes.append(f"gmsh imported the shape only with its wire fixing ({errors[0]})")
-            return None
-    return errors[-1]
+            return None, None
+        try:
+            partial = import_brep(path, attempt=0, partial=True)
+        except GeometryError:
+            return errors[-1], None
+    notes.append(f"gmsh imported the shape only in part ({partial}): the faces it left out are named")
+    return None, partial
 
 
-def run_job(job: MeshJob, progress: Any = None) -> JobResult:
-    """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step."""
+def _face_triangles(surface: int) -> np.ndarray:
+    """The triangles of one gmsh surface as corner coordinates, shape (m, 3, 3)."""
+    import gmsh
+
+    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
+    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+    tags = np.asarray(tags, dtype=np.int64)
+    lookup = np.full(int(tags.max()) + 1 if len(tags) else 1, -1, dtype=np.int64)
+    lookup[tags] = np.arange(len(tags))
+    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[np.asarray(tri, dtype=np.int64)]].reshape(-1, 3, 3)
+
+
+def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResult:
+    """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step and
+    ``deliver(face, triangles)`` each face's triangles as corner coordinates (m, 3, 3) as soon as it is
+    meshed (``None`` when a face meshed before is cleared), so a parent that must kill this process at
+    its hard timeout still has what was meshed."""
     import gmsh
 
     from .generate import boundary_multiplicity, mesh_faces, read_mesh
@@ -153,7 +180,7 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
     notes: list[str] = []
     with gmsh_session():
         say("import")
-        error = _import(job.brep, notes)
+        error, partial = _import(job.brep, notes)
         if error is not None:
             return empty_result(error)
         ctx = JobContext(job=job)
@@ -179,17 +206,33 @@ def run_job(job: MeshJob, progress: Any = None) -> JobResult:
             notes.append(f"gmsh's curve meshing reported: {exc}")
         ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)]
         face_of = emap.face_of_surface
-        def started(face: int, k: int) -> None:
-            say(f"face {face} {k}")
+        ctx.progress = say
+
+        def prepare(face: int, k: int) -> None:
             ctx.face, ctx.strategy = face, k
             _hooks(ctx, "before_face")
 
+        def started(face: int, k: int) -> None:
+            say(f"face {face} {k}")
+            prepare(face, k)
+
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
+            if reason is None and deliver is not None and face in emap.faces:
+                deliver(face, _face_triangles(emap.faces[face]))
 
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
-                                  deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves)
+                                  deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
+                                  batch_started=lambda faces: say("batch " + " ".join(map(str, faces))),
+                                  prepare=prepare, no_batch=job.no_batch,
+                                  cleared=lambda faces: [deliver(f, None) for f in faces] if deliver else None)
+        if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
+            from .generate import FaceOutcome
+
+            missing = sorted(set(range(1, job.grid.faces + 1)) - set(emap.faces))
+            ctx.outcomes.update({-f: FaceOutcome(face=f, surface=0, attempts=[("gmsh import", partial)])
+                                 for f in missing})
         edge_of = {m.tag: eid for eid, m in emap.edges.items()}
         own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
@@ -226,18 +269,24 @@ def _limit_memory() -> None:
 
 
 def main(argv: list[str]) -> int:
-    """``python -m cadedge.mesh.worker JOB RESULT PROGRESS``: unpickle the job, run it, pickle the result."""
-    job_path, result_path, progress_path = argv
+    """``python -m cadedge.mesh.worker JOB RESULT PROGRESS [FACES]``: unpickle the job, run it, pickle the
+    result; each meshed face's triangles are appended to FACES as they come (see :func:`run_job`)."""
+    job_path, result_path, progress_path = argv[:3]
+    faces_path = argv[3] if len(argv) > 3 else os.devnull
     _limit_memory()
     with open(job_path, "rb") as f:
         job = pickle.load(f)
-    with open(progress_path, "a", buffering=1) as prog:
+    with open(progress_path, "a", buffering=1) as prog, open(faces_path, "ab") as faces:
+        def deliver(face: int, triangles: np.ndarray | None) -> None:
+            pickle.dump((face, triangles), faces, protocol=pickle.HIGHEST_PROTOCOL)
+            faces.flush()
+
         def say(line: str) -> None:
             prog.write(line + "\n")
             prog.flush()
 
         try:
-            result = run_job(job, say)
+            result = run_job(job, say, deliver)
         except Exception as exc:  # reported to the parent as the job's failure, with where it happened
             where = traceback.extract_tb(exc.__traceback__)[-1]
             result = empty_result(f"internal error: {type(exc).__name__}: {exc} "

@@ -1,0 +1,123 @@
+"""Every face meshed or named: batches of first attempts, the watchdog's CPU-time bound, the one-size
+fallback, a finer re-mesh that hangs, and a shape gmsh imports only in part.
+
+Real gmsh in a child process and real OCCT shapes; faults are injected into the child through hooks
+(``mesh_faults.py``).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("gmsh")
+pytest.importorskip("trimesh")
+
+import cadedge  # noqa: E402
+from cadedge.mesh import mesh_shape  # noqa: E402
+from cadedge.mesh.generate import STRATEGIES  # noqa: E402
+
+from conftest import FIXTURES  # noqa: E402
+
+ALD = 1e-2
+FAULT_FACE = 2  # mesh_faults.FAULT_FACE
+ONE_SIZE = next(s.name for s in STRATEGIES if s.uniform)
+
+
+@pytest.fixture(scope="module")
+def cylinder() -> cadedge.ShapeGrid:
+    return cadedge.refine_shape(FIXTURES / "cylinder.step", ald=ALD, max_growth=2.0)
+
+
+def _every_face(result) -> None:
+    assert result.ok, result.problems(verbose=True)
+    assert set(np.unique(result.triangle_faces)) == set(range(1, result.grid.faces + 1))
+
+
+def test_a_busy_hang_is_caught_by_cpu_time_and_the_face_meshes_with_one_size(cylinder):
+    """A spinning attempt is stopped once it has used ``face_timeout`` of CPU; its batch is meshed face by
+    face, and the face goes on to the one-size strategy (the others on the same sizes are barred)."""
+    t0 = time.monotonic()
+    result = mesh_shape(cylinder, hooks={"before_face": ["mesh_faults:spin"]}, timeout=120, face_timeout=2)
+    assert time.monotonic() - t0 < 60
+    _every_face(result)
+    face = next(o for o in result.faces if o.face == FAULT_FACE)
+    assert face.strategy == ONE_SIZE and "hung" in face.attempts[0][1]
+    assert any("one by one" in n for n in result.notes)  # the batch it was in
+    assert all(o.strategy == STRATEGIES[0].name for o in result.faces if o.face != FAULT_FACE)
+
+
+def test_one_curvature_size_follows_the_sampled_curvature():
+    """On a sphere of radius 2 the size is 2 pi R / per_circle; on a plane there is none."""
+    import gmsh
+
+    from cadedge.mesh.generate import uniform_curvature_size
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    with gmsh_session():
+        gmsh.model.occ.addSphere(0, 0, 0, 2.0)
+        gmsh.model.occ.addRectangle(5, 0, 0, 1, 1)
+        gmsh.model.occ.synchronize()
+        assert uniform_curvature_size(1, 20.0) == pytest.approx(2 * np.pi * 2.0 / 20.0, rel=1e-3)
+        assert uniform_curvature_size(2, 20.0) is None
+
+
+def test_a_hang_while_meshing_a_face_again_finer_keeps_it_as_first_meshed(cylinder):
+    """The re-mesh for the surface target announces each face (``refine F``): when it hangs, the new child
+    skips that face's re-mesh and delivers every face."""
+    result = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:hang_refining"]}, timeout=120,
+                        face_timeout=2)
+    _every_face(result)
+    assert any(f"face {FAULT_FACE}: meshing it again finer" in n for n in result.notes)
+
+
+def _box_and_open_face():
+    """A 10 mm box and, beside it, a planar face whose wire is two disjoint segments: gmsh cannot fix that
+    wire with or without its wire fixing ("Could not fix wire in surface 7")."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.Geom import Geom_Plane
+    from OCP.gp import gp_Dir, gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound, TopoDS_Face, TopoDS_Wire
+
+    b = BRep_Builder()
+    wire = TopoDS_Wire()
+    b.MakeWire(wire)
+    b.Add(wire, BRepBuilderAPI_MakeEdge(gp_Pnt(20, 0, 0), gp_Pnt(30, 0, 0)).Edge())
+    b.Add(wire, BRepBuilderAPI_MakeEdge(gp_Pnt(30, 10, 0), gp_Pnt(20, 10, 0)).Edge())
+    face = TopoDS_Face()
+    b.MakeFace(face, Geom_Plane(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 1e-7)
+    b.Add(face, wire)
+    compound = TopoDS_Compound()
+    b.MakeCompound(compound)
+    b.Add(compound, BRepPrimAPI_MakeBox(10, 10, 10).Shape())
+    b.Add(compound, face)
+    return compound
+
+
+def test_a_shape_gmsh_imports_only_in_part_meshes_the_rest_and_names_the_face(tmp_path):
+    out = tmp_path / "part.msh"
+    result = mesh_shape(_box_and_open_face(), ald=ALD, output=out)
+    assert result.error is None and not result.ok
+    assert [f.face for f in result.failures] == [7]
+    assert "Could not fix wire" in result.failures[0].reason
+    assert set(np.unique(result.triangle_faces)) == set(range(1, 7))
+    assert result.check.ok and out.exists() and result.output == out
+    assert any("only in part" in n for n in result.notes)
+
+
+def test_the_hard_timeout_delivers_the_faces_already_meshed(cylinder, tmp_path):
+    """A child stuck after meshing (no attempt under way, so only the hard timeout ends it) is killed; the
+    faces it delivered as it went make a complete, watertight mesh, written by meshio."""
+    trimesh = pytest.importorskip("trimesh")
+    out = tmp_path / "c.stl"
+    result = mesh_shape(cylinder, output=out, hooks={"after_generate": ["mesh_faults:hang_after_meshing"]},
+                        timeout=20, face_timeout=100)
+    assert result.error is None and not result.failures, result.problems()
+    assert set(np.unique(result.triangle_faces)) == set(range(1, cylinder.faces + 1))
+    assert result.check.ok and all(s.watertight for s in result.check.shells)
+    assert any("stopped" in n and "delivered" in n for n in result.notes)
+    assert result.output == out and trimesh.load(out).is_watertight
