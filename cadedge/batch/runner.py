@@ -17,6 +17,7 @@ import contextlib
 import logging
 import multiprocessing
 import os
+import signal
 import uuid
 from collections import deque
 from dataclasses import dataclass
@@ -96,14 +97,44 @@ def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iter
     # kept for the cluster's whole life: nannies read the start method again when they restart a worker
     with dask.config.set(config):
         _preload_fork_server()
-        try:
-            cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
-                                   processes=True, silence_logs=logging.CRITICAL, **NO_DASHBOARD)
-        except KeyboardInterrupt:
-            _close_half_started_clusters()
-            raise
+        with _ctrl_c_deferred() as interrupted:
+            try:
+                cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
+                                       processes=True, silence_logs=logging.CRITICAL, **NO_DASHBOARD)
+            except KeyboardInterrupt:
+                _close_half_started_clusters()
+                raise
         with cluster, Client(cluster) as client:
+            if interrupted:
+                raise KeyboardInterrupt
             yield client
+
+
+@contextlib.contextmanager
+def _ctrl_c_deferred() -> Iterator[list[int]]:
+    """Hold a first Ctrl-C back while the cluster starts (about a second), so it is closed whole.
+
+    A worker process interrupted half-way through its start finds the semaphores its parent already
+    removed and prints a traceback of its own. The caller raises KeyboardInterrupt once the cluster is
+    up, if the yielded list is not empty. A second Ctrl-C interrupts at once. Outside the main thread,
+    where signal handlers cannot be set, nothing is deferred.
+    """
+    received: list[int] = []
+
+    def hold(signum: int, frame: Any) -> None:
+        if received:
+            raise KeyboardInterrupt
+        received.append(signum)
+
+    try:
+        previous = signal.signal(signal.SIGINT, hold)
+    except ValueError:  # not the main thread
+        yield received
+        return
+    try:
+        yield received
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _preload_fork_server() -> None:
