@@ -153,6 +153,15 @@ static Py_ssize_t unique_sorted(double *v, Py_ssize_t n)
 
 /* ---------------------------------------------------------------- evaluation */
 
+/* True when all n values are finite (the per-edge path's Evaluator raises on any other). */
+static int all_finite(const double *v, Py_ssize_t n)
+{
+    for (Py_ssize_t i = 0; i < n; i++)
+        if (!isfinite(v[i]))
+            return 0;
+    return 1;
+}
+
 /* Points of edge e at u[0:m] into out (m x 3); 0, or -1 if out of memory. */
 static int evaluate(const Geometry *g, Py_ssize_t e, const double *u, Py_ssize_t m, double *out)
 {
@@ -451,6 +460,10 @@ static int explore(const Geometry *g, Py_ssize_t e, const Job *job, const Settin
         n++;
     }
     x->n = n;
+    if (!all_finite(x->p, 3 * n)) { /* the per-edge path reports the parameter */
+        status = PYTHON_PATH;
+        goto fail;
+    }
     TRY(x->corners = malloc((C.n ? C.n : 1) * sizeof(double)));
     memcpy(x->corners, C.d, C.n * sizeof(double));
     x->n_corners = unique_sorted(x->corners, C.n);
@@ -468,7 +481,8 @@ fail:
     return status;
 }
 
-/* target._evaluate_new: points at params (m), from the samples where a parameter is one; counts the rest. */
+/* target._evaluate_new: points at params (m), from the samples where a parameter is one; counts the rest.
+ * Returns 0, 1 for a non-finite point or -1 if out of memory. */
 static int evaluate_new(const Geometry *g, Py_ssize_t e, const Explored *x, const double *params, Py_ssize_t m,
                         double *out, int64_t *evaluations)
 {
@@ -494,6 +508,8 @@ static int evaluate_new(const Geometry *g, Py_ssize_t e, const Explored *x, cons
     int status = 0;
     if (k) {
         status = evaluate(g, e, want, k, got);
+        if (status == 0 && !all_finite(got, 3 * k))
+            status = 1;
         for (Py_ssize_t i = 0; i < k && status == 0; i++)
             memcpy(out + 3 * slot[i], got + 3 * i, 3 * sizeof(double));
         *evaluations += k;
@@ -570,7 +586,7 @@ done:
 
 /* The fewest of the equidistributed placements that meets the limit (target._equidistributed): its
  * parameters and points in *params, *points (allocated here), or a count of 0 for none; -1 if out of
- * memory, -2 for a count too large to place here. */
+ * memory, -2 for what the per-edge path must do (a count too large to place here, a non-finite point). */
 static Py_ssize_t equidistributed(const Geometry *g, Py_ssize_t e, const Explored *x, const double *cum,
                                   const int64_t *cidx, Py_ssize_t nc, double total, double limit, double budget,
                                   const Settings *s, double **params, double **points, int64_t *evaluations)
@@ -593,8 +609,11 @@ static Py_ssize_t equidistributed(const Geometry *g, Py_ssize_t e, const Explore
         Py_ssize_t m = equidistribute(x, cum, measure, cidx, nc, n, &try_u);
         if (m < 0 || !(try_p = malloc(3 * m * sizeof(double))) || !(scratch = malloc(m * sizeof(double))))
             goto done;
-        if (evaluate_new(g, e, x, try_u, m, try_p, evaluations) < 0)
+        int got = evaluate_new(g, e, x, try_u, m, try_p, evaluations);
+        if (got) {
+            result = got > 0 ? -2 : -1;
             goto done;
+        }
         double miss = total - polyline(try_p, m, scratch);
         free(scratch), scratch = NULL;
         double predicted = budget > 0 ? ceil((double)n * sqrt(dmax(miss - fixed, 0.0) / budget)) : (double)(n + 1);

@@ -1,4 +1,5 @@
-/* cadedge's inner loops in C: exploration levels, node placement and de Boor evaluation.
+/* cadedge's inner loops in C: exploration levels, node placement and de Boor evaluation (the functions
+ * cadedge/_batch.c shares are declared in cadedge/_kernels.h; this module also registers _batch.c's).
  *
  * A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
  * dominates. They are compiled once, when the package is installed, and load in a millisecond (a

@@ -1,9 +1,10 @@
-"""numpy-facing wrappers of the refiner's compiled inner loops (``cadedge/_kernels.c``).
+"""numpy-facing wrappers of the refiner's compiled inner loops (``cadedge/_kernels.c``, ``cadedge/_batch.c``).
 
 A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
-dominated. They are plain C compiled when the package is installed, so a new process loads them in
-about a millisecond and never compiles anything. Each wrapper allocates the outputs and passes
-C-contiguous arrays of the right type; the C side checks them.
+dominated; :func:`refine_edges` runs the whole target mode of many edges in one call. They are plain C
+compiled when the package is installed, so a new process loads them in about a millisecond and never
+compiles anything. Each wrapper allocates the outputs and passes C-contiguous arrays of the right
+type; the C side checks them.
 """
 
 from __future__ import annotations
