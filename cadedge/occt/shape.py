@@ -41,10 +41,6 @@ MAX_MODEL_SEGMENTS = 5_000_000
 CHUNK = 256
 
 
-def _point(vertex) -> np.ndarray:
-    return np.array(BRep_Tool.Pnt_s(vertex).Coord(), dtype=float)
-
-
 def _anchor(points: np.ndarray, first: np.ndarray, last: np.ndarray, estimate: float) -> tuple[np.ndarray, float]:
     """Put the vertex points at the ends; shift the deficit estimate by the change in length.
 
@@ -150,7 +146,7 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
         targets, local_records, notes = edge_targets(local, topo, opts["ald"])
     except InputError as exc:
         raise InputError(f"{loaded.source}: {exc}") from exc
-    vpoints = [_point(v) for v in topo.vertices]
+    vpoints = list(np.array([BRep_Tool.Pnt_s(v).Coord() for v in topo.vertices], dtype=float).reshape(-1, 3))
     total = len(topo.edges)
     batched = opts["min_length"] is None and opts["max_length"] is None and opts["max_growth"] is None
     table = EdgeTable(topo.edges, [i for i in range(total) if not topo.is_degenerate(i)] if batched else [])
