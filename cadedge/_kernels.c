@@ -1,4 +1,5 @@
-/* cadedge's inner loops in C: exploration levels, node placement and de Boor evaluation.
+/* cadedge's inner loops in C: exploration levels, node placement and de Boor evaluation (the functions
+ * cadedge/_batch.c shares are declared in cadedge/_kernels.h; this module also registers _batch.c's).
  *
  * A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
  * dominates. They are compiled once, when the package is installed, and load in a millisecond (a
@@ -17,9 +18,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* ---------------------------------------------------------------- buffers */
+#include "_kernels.h"
 
-enum { F64 = 'd', I64 = 'q', BOOL = '?' };
+/* ---------------------------------------------------------------- buffers */
 
 /* Get a C-contiguous buffer of the given element kind; 0 on success, -1 with an exception set. */
 static int get(PyObject *obj, int kind, int writable, Py_buffer *view, const char *name)
@@ -45,13 +46,7 @@ static int get(PyObject *obj, int kind, int writable, Py_buffer *view, const cha
     return 0;
 }
 
-#define MAXBUF 20
-typedef struct {
-    Py_buffer v[MAXBUF];
-    int n;
-} Buffers;
-
-static void release(Buffers *b)
+void ck_release(Buffers *b)
 {
     for (int i = 0; i < b->n; i++)
         PyBuffer_Release(&b->v[i]);
@@ -59,7 +54,7 @@ static void release(Buffers *b)
 }
 
 /* The next argument as a buffer; returns its data or NULL (exception set). */
-static void *arg(Buffers *b, PyObject *args, Py_ssize_t i, int kind, int writable, Py_ssize_t *count)
+void *ck_arg(Buffers *b, PyObject *args, Py_ssize_t i, int kind, int writable, Py_ssize_t *count)
 {
     if (i >= PyTuple_GET_SIZE(args)) {
         PyErr_SetString(PyExc_TypeError, "too few arguments");
@@ -75,7 +70,7 @@ static void *arg(Buffers *b, PyObject *args, Py_ssize_t i, int kind, int writabl
     return v->buf;
 }
 
-static int num(PyObject *args, Py_ssize_t i, double *out)
+int ck_num(PyObject *args, Py_ssize_t i, double *out)
 {
     if (i >= PyTuple_GET_SIZE(args)) {
         PyErr_SetString(PyExc_TypeError, "too few arguments");
@@ -85,70 +80,29 @@ static int num(PyObject *args, Py_ssize_t i, double *out)
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
-/* ---------------------------------------------------------------- geometry */
-
-static inline double distance(const double *p, Py_ssize_t i, const double *q, Py_ssize_t j)
-{
-    double dx = q[3 * j] - p[3 * i];
-    double dy = q[3 * j + 1] - p[3 * i + 1];
-    double dz = q[3 * j + 2] - p[3 * i + 2];
-    return sqrt(dx * dx + dy * dy + dz * dz);
-}
-
-static inline double dmax(double a, double b) { return b > a ? b : a; }
-
-/* Gain of the triple pa[i], pm[j], pb[k]; *two gets the two half chords. */
-static inline double gain(const double *pa, Py_ssize_t i, const double *pm, Py_ssize_t j, const double *pb,
-                          Py_ssize_t k, double *two)
-{
-    double t = distance(pa, i, pm, j) + distance(pm, j, pb, k);
-    *two = t;
-    return dmax(t - distance(pa, i, pb, k), 0.0);
-}
-
 /* ---------------------------------------------------------------- exploration */
 
-/* classify(ua, um, ub, pa, pm, pb, ratio, corners_out, split_out, gains_out,
- *          tol, scale, min_width, noise, straight, asymptotic) -> (remainder, n_corners, n_split, scale)
- * One level: which live triples are finished (their Richardson remainder summed), which are corners,
- * which split (indices and gains). scale < 0 sets it from this level's half chords. */
-static PyObject *classify(PyObject *self, PyObject *args)
+Py_ssize_t ck_classify(Py_ssize_t n, const double *ua, const double *um, const double *ub, const double *pa,
+                       const double *pm, const double *pb, const double *ratio, double tol, double *scale,
+                       double min_width, double noise, double straight_share, double asymptotic, double *corners,
+                       Py_ssize_t *n_corners_out, int64_t *split, double *gains, double *remainder_out)
 {
-    Buffers b = {.n = 0};
-    Py_ssize_t n, nc;
-    double tol, scale, min_width, noise, straight_share, asymptotic;
-    PyObject *result = NULL;
-    const double *ua = arg(&b, args, 0, F64, 0, &n);
-    const double *um = ua ? arg(&b, args, 1, F64, 0, NULL) : NULL;
-    const double *ub = um ? arg(&b, args, 2, F64, 0, NULL) : NULL;
-    const double *pa = ub ? arg(&b, args, 3, F64, 0, NULL) : NULL;
-    const double *pm = pa ? arg(&b, args, 4, F64, 0, NULL) : NULL;
-    const double *pb = pm ? arg(&b, args, 5, F64, 0, NULL) : NULL;
-    const double *ratio = pb ? arg(&b, args, 6, F64, 0, NULL) : NULL;
-    double *corners = ratio ? arg(&b, args, 7, F64, 1, &nc) : NULL;
-    int64_t *split = corners ? arg(&b, args, 8, I64, 1, NULL) : NULL;
-    double *gains = split ? arg(&b, args, 9, F64, 1, NULL) : NULL;
-    if (!gains || num(args, 10, &tol) || num(args, 11, &scale) || num(args, 12, &min_width) ||
-        num(args, 13, &noise) || num(args, 14, &straight_share) || num(args, 15, &asymptotic))
-        goto done;
     double *g = malloc(2 * (n > 0 ? n : 1) * sizeof(double));
-    if (!g) {
-        PyErr_NoMemory();
-        goto done;
-    }
+    if (!g)
+        return -1;
     double *two = g + n;
     for (Py_ssize_t i = 0; i < n; i++)
         g[i] = gain(pa, i, pm, i, pb, i, &two[i]);
-    if (scale < 0.0) {
+    if (*scale < 0.0) {
         double s = 0.0;
         for (Py_ssize_t i = 0; i < n; i++)
             s += two[i];
-        scale = dmax(s, 0.0);
+        *scale = dmax(s, 0.0);
     }
     double remainder = 0.0;
     Py_ssize_t n_corners = 0, n_split = 0;
     for (Py_ssize_t i = 0; i < n; i++) {
-        int straight = g[i] <= dmax(straight_share * dmax(two[i], scale * 1e-3), noise);
+        int straight = g[i] <= dmax(straight_share * dmax(two[i], *scale * 1e-3), noise);
         int resolved = g[i] / 3.0 <= tol * two[i] && ratio[i] <= asymptotic;
         int tiny = (ub[i] - ua[i]) <= min_width;
         if (straight)
@@ -163,40 +117,55 @@ static PyObject *classify(PyObject *self, PyObject *args)
         }
     }
     free(g);
+    *n_corners_out = n_corners;
+    *remainder_out = remainder;
+    return n_split;
+}
+
+/* classify(ua, um, ub, pa, pm, pb, ratio, corners_out, split_out, gains_out,
+ *          tol, scale, min_width, noise, straight, asymptotic) -> (remainder, n_corners, n_split, scale)
+ * One level: which live triples are finished (their Richardson remainder summed), which are corners,
+ * which split (indices and gains). scale < 0 sets it from this level's half chords. */
+static PyObject *classify(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n, nc;
+    double tol, scale, min_width, noise, straight_share, asymptotic;
+    PyObject *result = NULL;
+    const double *ua = ck_arg(&b, args, 0, F64, 0, &n);
+    const double *um = ua ? ck_arg(&b, args, 1, F64, 0, NULL) : NULL;
+    const double *ub = um ? ck_arg(&b, args, 2, F64, 0, NULL) : NULL;
+    const double *pa = ub ? ck_arg(&b, args, 3, F64, 0, NULL) : NULL;
+    const double *pm = pa ? ck_arg(&b, args, 4, F64, 0, NULL) : NULL;
+    const double *pb = pm ? ck_arg(&b, args, 5, F64, 0, NULL) : NULL;
+    const double *ratio = pb ? ck_arg(&b, args, 6, F64, 0, NULL) : NULL;
+    double *corners = ratio ? ck_arg(&b, args, 7, F64, 1, &nc) : NULL;
+    int64_t *split = corners ? ck_arg(&b, args, 8, I64, 1, NULL) : NULL;
+    double *gains = split ? ck_arg(&b, args, 9, F64, 1, NULL) : NULL;
+    if (!gains || ck_num(args, 10, &tol) || ck_num(args, 11, &scale) || ck_num(args, 12, &min_width) ||
+        ck_num(args, 13, &noise) || ck_num(args, 14, &straight_share) || ck_num(args, 15, &asymptotic))
+        goto done;
+    double remainder;
+    Py_ssize_t n_corners, n_split = ck_classify(n, ua, um, ub, pa, pm, pb, ratio, tol, &scale, min_width, noise,
+                                                straight_share, asymptotic, corners, &n_corners, split, gains,
+                                                &remainder);
+    if (n_split < 0) {
+        PyErr_NoMemory();
+        goto done;
+    }
     result = Py_BuildValue("dnnd", remainder, n_corners, n_split, scale);
 done:
-    release(&b);
+    ck_release(&b);
     return result;
 }
 
-/* children(ua, um, ub, pa, pm, pb, split, gains, q, pq, c_ua, c_um, c_ub, c_pa, c_pm, c_pb, c_ratio)
- * The live triples of the next level: (a, q1, m) and (m, q3, b) of each split (a, m, b), all left
- * halves first, each with (G_left + G_right) / G_parent. */
-static PyObject *children(PyObject *self, PyObject *args)
+/* The live triples of the next level: (a, q1, m) and (m, q3, b) of each of the n split triples (a, m, b), all
+ * left halves first, each with (G_left + G_right) / G_parent. */
+void ck_children(Py_ssize_t n, const double *ua, const double *um, const double *ub, const double *pa,
+                 const double *pm, const double *pb, const int64_t *split, const double *gains, const double *q,
+                 const double *pq, double *c_ua, double *c_um, double *c_ub, double *c_pa, double *c_pm,
+                 double *c_pb, double *c_ratio)
 {
-    Buffers b = {.n = 0};
-    Py_ssize_t n;
-    const double *ua = arg(&b, args, 0, F64, 0, NULL);
-    const double *um = ua ? arg(&b, args, 1, F64, 0, NULL) : NULL;
-    const double *ub = um ? arg(&b, args, 2, F64, 0, NULL) : NULL;
-    const double *pa = ub ? arg(&b, args, 3, F64, 0, NULL) : NULL;
-    const double *pm = pa ? arg(&b, args, 4, F64, 0, NULL) : NULL;
-    const double *pb = pm ? arg(&b, args, 5, F64, 0, NULL) : NULL;
-    const int64_t *split = pb ? arg(&b, args, 6, I64, 0, &n) : NULL;
-    const double *gains = split ? arg(&b, args, 7, F64, 0, NULL) : NULL;
-    const double *q = gains ? arg(&b, args, 8, F64, 0, NULL) : NULL;
-    const double *pq = q ? arg(&b, args, 9, F64, 0, NULL) : NULL;
-    double *c_ua = pq ? arg(&b, args, 10, F64, 1, NULL) : NULL;
-    double *c_um = c_ua ? arg(&b, args, 11, F64, 1, NULL) : NULL;
-    double *c_ub = c_um ? arg(&b, args, 12, F64, 1, NULL) : NULL;
-    double *c_pa = c_ub ? arg(&b, args, 13, F64, 1, NULL) : NULL;
-    double *c_pm = c_pa ? arg(&b, args, 14, F64, 1, NULL) : NULL;
-    double *c_pb = c_pm ? arg(&b, args, 15, F64, 1, NULL) : NULL;
-    double *c_ratio = c_pb ? arg(&b, args, 16, F64, 1, NULL) : NULL;
-    if (!c_ratio) {
-        release(&b);
-        return NULL;
-    }
     double unused;
     for (Py_ssize_t k = 0; k < n; k++) {
         Py_ssize_t i = split[k];
@@ -214,7 +183,38 @@ static PyObject *children(PyObject *self, PyObject *args)
         }
         c_ratio[left] = c_ratio[right] = r;
     }
-    release(&b);
+}
+
+/* children(ua, um, ub, pa, pm, pb, split, gains, q, pq, c_ua, c_um, c_ub, c_pa, c_pm, c_pb, c_ratio)
+ * The live triples of the next level: (a, q1, m) and (m, q3, b) of each split (a, m, b), all left
+ * halves first, each with (G_left + G_right) / G_parent. */
+static PyObject *children(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n;
+    const double *ua = ck_arg(&b, args, 0, F64, 0, NULL);
+    const double *um = ua ? ck_arg(&b, args, 1, F64, 0, NULL) : NULL;
+    const double *ub = um ? ck_arg(&b, args, 2, F64, 0, NULL) : NULL;
+    const double *pa = ub ? ck_arg(&b, args, 3, F64, 0, NULL) : NULL;
+    const double *pm = pa ? ck_arg(&b, args, 4, F64, 0, NULL) : NULL;
+    const double *pb = pm ? ck_arg(&b, args, 5, F64, 0, NULL) : NULL;
+    const int64_t *split = pb ? ck_arg(&b, args, 6, I64, 0, &n) : NULL;
+    const double *gains = split ? ck_arg(&b, args, 7, F64, 0, NULL) : NULL;
+    const double *q = gains ? ck_arg(&b, args, 8, F64, 0, NULL) : NULL;
+    const double *pq = q ? ck_arg(&b, args, 9, F64, 0, NULL) : NULL;
+    double *c_ua = pq ? ck_arg(&b, args, 10, F64, 1, NULL) : NULL;
+    double *c_um = c_ua ? ck_arg(&b, args, 11, F64, 1, NULL) : NULL;
+    double *c_ub = c_um ? ck_arg(&b, args, 12, F64, 1, NULL) : NULL;
+    double *c_pa = c_ub ? ck_arg(&b, args, 13, F64, 1, NULL) : NULL;
+    double *c_pm = c_pa ? ck_arg(&b, args, 14, F64, 1, NULL) : NULL;
+    double *c_pb = c_pm ? ck_arg(&b, args, 15, F64, 1, NULL) : NULL;
+    double *c_ratio = c_pb ? ck_arg(&b, args, 16, F64, 1, NULL) : NULL;
+    if (!c_ratio) {
+        ck_release(&b);
+        return NULL;
+    }
+    ck_children(n, ua, um, ub, pa, pm, pb, split, gains, q, pq, c_ua, c_um, c_ub, c_pa, c_pm, c_pb, c_ratio);
+    ck_release(&b);
     Py_RETURN_NONE;
 }
 
@@ -321,31 +321,14 @@ static Py_ssize_t plan(const Cover *c, double cap, int64_t *nodes, double *miss)
     return count;
 }
 
-/* fewest(points, cum, stops, fixed, out, budget, min_length, max_length) -> count
- * The fewest node indices (greedy + bisection on the cap, polished) whose chords miss at most budget
- * of the samples' length; written to out. */
-static PyObject *fewest(PyObject *self, PyObject *args)
+/* The fewest node indices (greedy + bisection on the cap, polished) whose chords miss at most budget
+ * of the samples' length, written to out (n entries); returns their count, -1 if out of memory. */
+Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int64_t *stops, const uint8_t *fixed,
+                     int64_t *out, double budget, double min_length, double max_length)
 {
-    Buffers b = {.n = 0};
-    Py_ssize_t n;
-    double budget, min_length, max_length;
-    PyObject *result = NULL;
-    const double *p = arg(&b, args, 0, F64, 0, NULL);
-    const double *cum = p ? arg(&b, args, 1, F64, 0, &n) : NULL;
-    const int64_t *stops = cum ? arg(&b, args, 2, I64, 0, NULL) : NULL;
-    const uint8_t *fixed = stops ? arg(&b, args, 3, BOOL, 0, NULL) : NULL;
-    int64_t *out = fixed ? arg(&b, args, 4, I64, 1, NULL) : NULL;
-    if (!out || num(args, 5, &budget) || num(args, 6, &min_length) || num(args, 7, &max_length))
-        goto done;
-    if (n < 1) {
-        PyErr_SetString(PyExc_ValueError, "fewest: no samples");
-        goto done;
-    }
     int64_t *work = malloc(3 * n * sizeof(int64_t));
-    if (!work) {
-        PyErr_NoMemory();
-        goto done;
-    }
+    if (!work)
+        return -1;
     int64_t *buf = work, *tmp = work + n, *best = out;
     Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf};
     double total = cum[n - 1], miss;
@@ -396,31 +379,42 @@ static PyObject *fewest(PyObject *self, PyObject *args)
         best_count = fewer_count;
     }
     free(work);
-    result = PyLong_FromSsize_t(best_count);
+    return best_count;
+}
+
+/* fewest(points, cum, stops, fixed, out, budget, min_length, max_length) -> count (see ck_fewest) */
+static PyObject *fewest(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n;
+    double budget, min_length, max_length;
+    PyObject *result = NULL;
+    const double *p = ck_arg(&b, args, 0, F64, 0, NULL);
+    const double *cum = p ? ck_arg(&b, args, 1, F64, 0, &n) : NULL;
+    const int64_t *stops = cum ? ck_arg(&b, args, 2, I64, 0, NULL) : NULL;
+    const uint8_t *fixed = stops ? ck_arg(&b, args, 3, BOOL, 0, NULL) : NULL;
+    int64_t *out = fixed ? ck_arg(&b, args, 4, I64, 1, NULL) : NULL;
+    if (!out || ck_num(args, 5, &budget) || ck_num(args, 6, &min_length) || ck_num(args, 7, &max_length))
+        goto done;
+    if (n < 1) {
+        PyErr_SetString(PyExc_ValueError, "fewest: no samples");
+        goto done;
+    }
+    Py_ssize_t count = ck_fewest(p, cum, n, stops, fixed, out, budget, min_length, max_length);
+    result = count < 0 ? PyErr_NoMemory() : PyLong_FromSsize_t(count);
 done:
-    release(&b);
+    ck_release(&b);
     return result;
 }
 
-/* deficit_measure(points, cum, corners, out): cumulative measure M such that a chord spanning dM
- * misses about dM**3 (see cadedge.placement.deficit_measure). */
-static PyObject *deficit_measure(PyObject *self, PyObject *args)
+/* Cumulative measure M such that a chord spanning dM misses about dM**3 (see
+ * cadedge.placement.deficit_measure); 0 on success, -1 if out of memory. */
+int ck_deficit_measure(const double *p, const double *cum, Py_ssize_t n, const int64_t *corners, Py_ssize_t nc,
+                       double *measure)
 {
-    Buffers b = {.n = 0};
-    Py_ssize_t n, nc;
-    const double *p = arg(&b, args, 0, F64, 0, NULL);
-    const double *cum = p ? arg(&b, args, 1, F64, 0, &n) : NULL;
-    const int64_t *corners = cum ? arg(&b, args, 2, I64, 0, &nc) : NULL;
-    double *measure = corners ? arg(&b, args, 3, F64, 1, NULL) : NULL;
-    if (!measure) {
-        release(&b);
-        return NULL;
-    }
     double *rho = calloc(n > 0 ? n : 1, sizeof(double));
-    if (!rho) {
-        release(&b);
-        return PyErr_NoMemory();
-    }
+    if (!rho)
+        return -1;
     for (Py_ssize_t i = 1; i < n - 1; i++) {
         double h1 = cum[i] - cum[i - 1], h2 = cum[i + 1] - cum[i];
         double denom = 3.0 * h1 * h2 * (h1 + h2);
@@ -436,12 +430,31 @@ static PyObject *deficit_measure(PyObject *self, PyObject *args)
     for (Py_ssize_t i = 0; i + 1 < n; i++)
         measure[i + 1] = measure[i] + 0.5 * (rho[i] + rho[i + 1]) * (cum[i + 1] - cum[i]);
     free(rho);
-    release(&b);
+    return 0;
+}
+
+/* deficit_measure(points, cum, corners, out) (see ck_deficit_measure) */
+static PyObject *deficit_measure(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t n, nc;
+    const double *p = ck_arg(&b, args, 0, F64, 0, NULL);
+    const double *cum = p ? ck_arg(&b, args, 1, F64, 0, &n) : NULL;
+    const int64_t *corners = cum ? ck_arg(&b, args, 2, I64, 0, &nc) : NULL;
+    double *measure = corners ? ck_arg(&b, args, 3, F64, 1, NULL) : NULL;
+    if (!measure) {
+        ck_release(&b);
+        return NULL;
+    }
+    int status = ck_deficit_measure(p, cum, n, corners, nc, measure);
+    ck_release(&b);
+    if (status < 0)
+        return PyErr_NoMemory();
     Py_RETURN_NONE;
 }
 
 /* np.interp(x, xp, fp) for increasing x and non-decreasing xp, by one forward sweep. */
-static void interp(const double *x, Py_ssize_t nx, const double *xp, const double *fp, Py_ssize_t np_,
+void ck_interp(const double *x, Py_ssize_t nx, const double *xp, const double *fp, Py_ssize_t np_,
                    double *out)
 {
     Py_ssize_t last = np_ - 1, j = 0;
@@ -466,49 +479,37 @@ static PyObject *interp_sorted(PyObject *self, PyObject *args)
 {
     Buffers b = {.n = 0};
     Py_ssize_t nx, nxp, nfp, nout;
-    const double *x = arg(&b, args, 0, F64, 0, &nx);
-    const double *xp = x ? arg(&b, args, 1, F64, 0, &nxp) : NULL;
-    const double *fp = xp ? arg(&b, args, 2, F64, 0, &nfp) : NULL;
-    double *out = fp ? arg(&b, args, 3, F64, 1, &nout) : NULL;
+    const double *x = ck_arg(&b, args, 0, F64, 0, &nx);
+    const double *xp = x ? ck_arg(&b, args, 1, F64, 0, &nxp) : NULL;
+    const double *fp = xp ? ck_arg(&b, args, 2, F64, 0, &nfp) : NULL;
+    double *out = fp ? ck_arg(&b, args, 3, F64, 1, &nout) : NULL;
     if (!out) {
-        release(&b);
+        ck_release(&b);
         return NULL;
     }
     if (nxp < 1 || nfp != nxp || nout != nx) {
-        release(&b);
+        ck_release(&b);
         PyErr_SetString(PyExc_ValueError, "interp_sorted: mismatched lengths");
         return NULL;
     }
-    interp(x, nx, xp, fp, nxp, out);
-    release(&b);
+    ck_interp(x, nx, xp, fp, nxp, out);
+    ck_release(&b);
     Py_RETURN_NONE;
 }
 
-/* place(params, cum, measure, cut, alloc, out) -> count
- * Parameters at equal steps of measure within each piece between cut samples (alloc segments each),
- * interpolated in arc length then in parameter; strictly increasing. out holds 1 + sum(max(alloc, 1)). */
-static PyObject *place(PyObject *self, PyObject *args)
+/* Parameters at equal steps of measure within each piece between cut samples (alloc segments each),
+ * interpolated in arc length then in parameter; strictly increasing. out holds size >= 1 + sum(max(alloc,
+ * 1)) entries. Returns the count, -1 if out of memory. */
+Py_ssize_t ck_place(const double *params, const double *cum, const double *measure, const int64_t *cut,
+                    const int64_t *alloc, Py_ssize_t pieces, double *out, Py_ssize_t size)
 {
-    Buffers b = {.n = 0};
-    Py_ssize_t pieces, size;
-    PyObject *result = NULL;
-    const double *params = arg(&b, args, 0, F64, 0, NULL);
-    const double *cum = params ? arg(&b, args, 1, F64, 0, NULL) : NULL;
-    const double *measure = cum ? arg(&b, args, 2, F64, 0, NULL) : NULL;
-    const int64_t *cut = measure ? arg(&b, args, 3, I64, 0, NULL) : NULL;
-    const int64_t *alloc = cut ? arg(&b, args, 4, I64, 0, &pieces) : NULL;
-    double *out = alloc ? arg(&b, args, 5, F64, 1, &size) : NULL;
-    if (!out)
-        goto done;
     int64_t most = 1;
     for (Py_ssize_t piece = 0; piece < pieces; piece++)
         if (alloc[piece] > most)
             most = alloc[piece];
     double *s = malloc(2 * most * sizeof(double));
-    if (!s) {
-        PyErr_NoMemory();
-        goto done;
-    }
+    if (!s)
+        return -1;
     double *t = s + most;
     Py_ssize_t w = 1;
     out[0] = params[0];
@@ -521,10 +522,10 @@ static PyObject *place(PyObject *self, PyObject *args)
                                       : cum[i0] + (cum[i1] - cum[i0]) * (double)j / (double)k;
             const double *x = s;
             if (by_measure) {
-                interp(s, k - 1, measure + i0, cum + i0, i1 - i0 + 1, t);
+                ck_interp(s, k - 1, measure + i0, cum + i0, i1 - i0 + 1, t);
                 x = t;
             }
-            interp(x, k - 1, cum + i0, params + i0, i1 - i0 + 1, s == x ? t : s);
+            ck_interp(x, k - 1, cum + i0, params + i0, i1 - i0 + 1, s == x ? t : s);
             const double *u = s == x ? t : s;
             for (int64_t j = 0; j < k - 1; j++) {
                 if (u[j] > out[w - 1] && w < size)
@@ -535,40 +536,39 @@ static PyObject *place(PyObject *self, PyObject *args)
             out[w++] = params[i1];
     }
     free(s);
-    result = PyLong_FromSsize_t(w);
-done:
-    release(&b);
+    return w;
+}
+
+/* place(params, cum, measure, cut, alloc, out) -> count (see ck_place) */
+static PyObject *place(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t pieces, size;
+    PyObject *result = NULL;
+    const double *params = ck_arg(&b, args, 0, F64, 0, NULL);
+    const double *cum = params ? ck_arg(&b, args, 1, F64, 0, NULL) : NULL;
+    const double *measure = cum ? ck_arg(&b, args, 2, F64, 0, NULL) : NULL;
+    const int64_t *cut = measure ? ck_arg(&b, args, 3, I64, 0, NULL) : NULL;
+    const int64_t *alloc = cut ? ck_arg(&b, args, 4, I64, 0, &pieces) : NULL;
+    double *out = alloc ? ck_arg(&b, args, 5, F64, 1, &size) : NULL;
+    if (out) {
+        Py_ssize_t count = ck_place(params, cum, measure, cut, alloc, pieces, out, size);
+        result = count < 0 ? PyErr_NoMemory() : PyLong_FromSsize_t(count);
+    }
+    ck_release(&b);
     return result;
 }
 
 /* ---------------------------------------------------------------- splines */
 
-/* de_boor(knots, coef, u, out, degree): points of the spline (knots, coef (n, dim), degree) at u into
- * out (len(u), dim); outside the knots the end pieces are extended. */
-static PyObject *de_boor(PyObject *self, PyObject *args)
+/* Points of the spline (knots (nk), coef (n, dim), degree) at u (nu) into out (nu, dim); outside the knots
+ * the end pieces are extended. 0 on success, -1 if out of memory. */
+int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_t n, Py_ssize_t dim,
+               const double *u, Py_ssize_t nu, double *out, long degree)
 {
-    Buffers b = {.n = 0};
-    Py_ssize_t nk, ncoef, nu, nout;
-    PyObject *result = NULL;
-    const double *knots = arg(&b, args, 0, F64, 0, &nk);
-    const double *coef = knots ? arg(&b, args, 1, F64, 0, &ncoef) : NULL;
-    const double *u = coef ? arg(&b, args, 2, F64, 0, &nu) : NULL;
-    double *out = u ? arg(&b, args, 3, F64, 1, &nout) : NULL;
-    if (!out)
-        goto done;
-    long degree = PyTuple_GET_SIZE(args) > 4 ? PyLong_AsLong(PyTuple_GET_ITEM(args, 4)) : -1;
-    if (degree == -1 && PyErr_Occurred())
-        goto done;
-    Py_ssize_t dim = b.v[1].ndim == 2 ? b.v[1].shape[1] : 0;
-    Py_ssize_t n = dim ? ncoef / dim : 0;
-    if (degree < 0 || dim < 1 || n < degree + 1 || nk != n + degree + 1 || nout != nu * dim) {
-        PyErr_SetString(PyExc_ValueError, "de_boor: inconsistent knots, coefficients or output");
-        goto done;
-    }
     double *d = malloc((degree + 1) * dim * sizeof(double));
     if (!d) {
-        PyErr_NoMemory();
-        goto done;
+        return -1;
     }
     for (Py_ssize_t m = 0; m < nu; m++) {
         double x = u[m];
@@ -601,10 +601,39 @@ static PyObject *de_boor(PyObject *self, PyObject *args)
             out[m * dim + c] = d[degree * dim + c];
     }
     free(d);
+    return 0;
+}
+
+/* de_boor(knots, coef, u, out, degree): points of the spline (knots, coef (n, dim), degree) at u into
+ * out (len(u), dim); outside the knots the end pieces are extended. */
+static PyObject *de_boor(PyObject *self, PyObject *args)
+{
+    Buffers b = {.n = 0};
+    Py_ssize_t nk, ncoef, nu, nout;
+    PyObject *result = NULL;
+    const double *knots = ck_arg(&b, args, 0, F64, 0, &nk);
+    const double *coef = knots ? ck_arg(&b, args, 1, F64, 0, &ncoef) : NULL;
+    const double *u = coef ? ck_arg(&b, args, 2, F64, 0, &nu) : NULL;
+    double *out = u ? ck_arg(&b, args, 3, F64, 1, &nout) : NULL;
+    if (!out)
+        goto done;
+    long degree = PyTuple_GET_SIZE(args) > 4 ? PyLong_AsLong(PyTuple_GET_ITEM(args, 4)) : -1;
+    if (degree == -1 && PyErr_Occurred())
+        goto done;
+    Py_ssize_t dim = b.v[1].ndim == 2 ? b.v[1].shape[1] : 0;
+    Py_ssize_t n = dim ? ncoef / dim : 0;
+    if (degree < 0 || dim < 1 || n < degree + 1 || nk != n + degree + 1 || nout != nu * dim) {
+        PyErr_SetString(PyExc_ValueError, "de_boor: inconsistent knots, coefficients or output");
+        goto done;
+    }
+    if (ck_de_boor(knots, nk, coef, n, dim, u, nu, out, degree) < 0) {
+        PyErr_NoMemory();
+        goto done;
+    }
     Py_INCREF(Py_None);
     result = Py_None;
 done:
-    release(&b);
+    ck_release(&b);
     return result;
 }
 
@@ -618,6 +647,8 @@ static PyMethodDef methods[] = {
     {"interp_sorted", interp_sorted, METH_VARARGS, "np.interp for sorted x, by one forward sweep."},
     {"place", place, METH_VARARGS, "Parameters at equal steps of a measure, piece by piece."},
     {"de_boor", de_boor, METH_VARARGS, "Spline points by de Boor's algorithm."},
+    {"evaluate_edges", ck_evaluate_edges, METH_VARARGS, "Points of many edges' curves from a geometry table."},
+    {"refine_edges", ck_refine_edges, METH_VARARGS, "Target-mode grids of many edges in one call."},
     {NULL, NULL, 0, NULL},
 };
 

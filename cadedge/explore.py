@@ -31,6 +31,8 @@ STRAIGHT = 1e-13
 #: Gains below this share of the largest coordinate count as straight too: the points themselves are
 #: only that exact, so a small edge far from the origin shows rounding noise that never shrinks.
 NOISE = 16 * np.finfo(float).eps
+#: Most samples one exploration takes.
+MAX_SAMPLES = 400_000
 
 
 @dataclass
@@ -74,7 +76,7 @@ def root_params(curve, a: float, b: float) -> np.ndarray:
     return np.linspace(a, b, ROOTS + 1)
 
 
-def explore(ev, a: float, b: float, tol: float, *, max_samples: int = 400_000) -> Exploration:
+def explore(ev, a: float, b: float, tol: float, *, max_samples: int = MAX_SAMPLES) -> Exploration:
     """Sample the curve until the estimated remaining deficit is at most ``tol`` of its length.
 
     ``ev`` is the counting :class:`~cadedge.curves.Evaluator`. The work is bounded: triples narrower

@@ -47,8 +47,11 @@ class Polyline:
     @property
     def spacing(self) -> tuple[float, float]:
         """Lengths of the first and last segments: the point spacing a mesher should use at the ends."""
-        seg = self.segment_lengths
-        return (float(seg[0]), float(seg[-1])) if len(seg) else (0.0, 0.0)
+        p = self.points
+        if len(p) < 2:
+            return (0.0, 0.0)
+        first, last = row_norms(p[[1, -1]] - p[[0, -2]])  # the two end segments only, as segment_lengths
+        return (float(first), float(last))
 
 
 @dataclass

@@ -1,9 +1,10 @@
-"""numpy-facing wrappers of the refiner's compiled inner loops (``cadedge/_kernels.c``).
+"""numpy-facing wrappers of the refiner's compiled inner loops (``cadedge/_kernels.c``, ``cadedge/_batch.c``).
 
 A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
-dominated. They are plain C compiled when the package is installed, so a new process loads them in
-about a millisecond and never compiles anything. Each wrapper allocates the outputs and passes
-C-contiguous arrays of the right type; the C side checks them.
+dominated; :func:`refine_edges` runs the whole target mode of many edges in one call. They are plain C
+compiled when the package is installed, so a new process loads them in about a millisecond and never
+compiles anything. Each wrapper allocates the outputs and passes C-contiguous arrays of the right
+type; the C side checks them.
 """
 
 from __future__ import annotations
@@ -87,3 +88,26 @@ def de_boor(knots: np.ndarray, coef: np.ndarray, degree: int, u: np.ndarray) -> 
     out = np.empty((len(u), coef.shape[1]))
     _kernels.de_boor(_f64(knots), coef, _f64(u), out, int(degree))
     return out
+
+
+def evaluate_edges(kind: np.ndarray, gofs: np.ndarray, ints: np.ndarray, gdata: np.ndarray, edge: np.ndarray,
+                   u: np.ndarray) -> np.ndarray:
+    """Points (len(u), 3) of the geometry table's edges ``edge[i]`` at ``u[i]`` (see ``cadedge/_batch.c``)."""
+    u = _f64(u).ravel()
+    out = np.empty((len(u), 3))
+    _kernels.evaluate_edges(kind, gofs, ints, gdata, np.ascontiguousarray(edge, dtype=np.int64), u, out)
+    return out
+
+
+def refine_edges(kind: np.ndarray, gofs: np.ndarray, ints: np.ndarray, gdata: np.ndarray, hofs: np.ndarray,
+                 hdata: np.ndarray, domain: np.ndarray, ald: np.ndarray, exact: np.ndarray, first: np.ndarray,
+                 last: np.ndarray, settings: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Target-mode grids of every edge of the geometry table in one call (see ``cadedge/_batch.c``):
+    (status, offsets, params, points (n, 3), estimate, raw_estimate, evaluations)."""
+    raw = _kernels.refine_edges(kind, gofs, ints, gdata, hofs, _f64(hdata), _f64(domain), _f64(ald), _f64(exact),
+                                _f64(first), _f64(last), _f64(settings))
+    status, offsets, params, points, estimate, raw_estimate, evaluations = raw
+    return (np.frombuffer(status, dtype=np.int64), np.frombuffer(offsets, dtype=np.int64),
+            np.frombuffer(params, dtype=float), np.frombuffer(points, dtype=float).reshape(-1, 3),
+            np.frombuffer(estimate, dtype=float), np.frombuffer(raw_estimate, dtype=float),
+            np.frombuffer(evaluations, dtype=np.int64))

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .grid import Polyline
+from .grid import Polyline, row_norms
 
 SCHEMA = "cadedge.edgegrid/1"
 
@@ -56,12 +56,16 @@ class ShapeEdgeGrid(Polyline):
 
 def vertex_spacings(edges: list[ShapeEdgeGrid]) -> dict[int, float]:
     """Vertex id -> shortest end segment among the non-degenerate edges meeting there (the contract's
-    ``vertices[].spacing``: the spacing a surface mesher should use at that vertex)."""
+    ``vertices[].spacing``: the spacing a surface mesher should use at that vertex). The end segments of
+    all edges are measured in one batch (``ShapeEdgeGrid.spacing`` per edge, the same values)."""
+    live = [e for e in edges if not e.degenerate and len(e.points) >= 2]
+    if not live:
+        return {}
+    ends = np.array([(e.points[0], e.points[1], e.points[-2], e.points[-1]) for e in live], dtype=float)
+    lengths = row_norms((ends[:, [1, 3]] - ends[:, [0, 2]]).reshape(-1, 3)).reshape(-1, 2).tolist()
     spacing: dict[int, float] = {}
-    for e in edges:
-        if e.degenerate or len(e.points) < 2:
-            continue
-        for vid, h in zip(e.vertices, e.spacing):
+    for e, hs in zip(live, lengths):
+        for vid, h in zip(e.vertices, hs):
             spacing[vid] = min(spacing.get(vid, h), h)
     return spacing
 

@@ -20,7 +20,8 @@ from cadedge.cli.batch import BatchBar
 pytest.importorskip("distributed")
 
 from conftest import CORPUS, FIXTURES
-SLOW = [CORPUS / "gumyr__build123d__M6-1x12-countersunk-screw.step", CORPUS / "live-clones__gmsh__Kurbelwelle.stp"]
+#: Inputs slow enough (reading and refining about a second each) that both workers are busy with them at once.
+SLOW = [CORPUS / "LLNL__axom_data__boxed_sphere.step", CORPUS / "live-clones__gmsh__917_fusee.stp"]
 
 
 def one_line(text: str) -> str:

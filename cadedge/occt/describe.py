@@ -20,7 +20,7 @@ from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
 from ..errors import GeometryError
 from .loading import count as _count
 from .reader import load_shape
-from .topology import Topology
+from .topology import Topology, curve_type_name
 
 
 @dataclass
@@ -61,14 +61,24 @@ class ShapeDescription:
         return max((e.tolerance for e in self.edges), default=0.0)
 
 
-def edge_length(topology: Topology, i: int) -> float:
-    """OCCT's length of edge ``i`` (0-based); 0 for a degenerate edge."""
-    if topology.is_degenerate(i):
-        return 0.0
+def describe_edge(topology: Topology, i: int) -> EdgeDescription:
+    """Edge ``i`` (0-based) as ``cadedge info`` lists it, from one adaptor: its curve type and OCCT's
+    length (0 for a degenerate edge)."""
+    edge = topology.edges[i]
     try:
-        return float(GCPnts_AbscissaPoint.Length_s(BRepAdaptor_Curve(topology.edges[i])))
+        adaptor = BRepAdaptor_Curve(edge)
+        kind = curve_type_name(adaptor.GetType())
+    except Standard_Failure as exc:
+        raise GeometryError(f"edge {i + 1}: OCCT cannot adapt its curve: {exc}") from exc
+    degenerate = topology.is_degenerate(i)
+    try:
+        length = 0.0 if degenerate else float(GCPnts_AbscissaPoint.Length_s(adaptor))
     except Standard_Failure as exc:
         raise GeometryError(f"edge {i + 1}: OCCT cannot measure its length: {exc}") from exc
+    return EdgeDescription(id=i + 1, curve=kind, degenerate=degenerate, closed=topology.is_closed(i),
+                           seam=topology.is_seam(i), vertices=topology.edge_vertices[i],
+                           faces=list(topology.edge_faces[i]), tolerance=float(BRep_Tool.Tolerance_s(edge)),
+                           length=length)
 
 
 def describe_shape(source: Any, *, allow_partial: bool = False) -> ShapeDescription:
@@ -76,11 +86,7 @@ def describe_shape(source: Any, *, allow_partial: bool = False) -> ShapeDescript
     and describe its edges."""
     loaded = load_shape(source, allow_partial=allow_partial)
     topo = Topology(loaded.shape)
-    edges = [EdgeDescription(id=i + 1, curve=topo.curve_type(i), degenerate=topo.is_degenerate(i),
-                             closed=topo.is_closed(i), seam=topo.is_seam(i), vertices=topo.edge_vertices[i],
-                             faces=list(topo.edge_faces[i]), tolerance=float(BRep_Tool.Tolerance_s(edge)),
-                             length=edge_length(topo, i))
-             for i, edge in enumerate(topo.edges)]
+    edges = [describe_edge(topo, i) for i in range(len(topo.edges))]
     return ShapeDescription(source=loaded.source, units=loaded.units, edges=edges, vertices=len(topo.vertices),
                             faces=len(topo.faces), shells=_count(loaded.shape, TopAbs_SHELL),
                             solids=_count(loaded.shape, TopAbs_SOLID), warnings=list(loaded.warnings))

@@ -49,6 +49,16 @@ class EdgeCurve:
             raise GeometryError(f"{self._name()}: OCCT cannot adapt its curve: {exc}") from exc
         self.fast = fast_evaluator(self.adaptor, self.domain)
 
+    @classmethod
+    def from_parts(cls, edge: TopoDS_Edge, edge_id: int | None, adaptor: BRepAdaptor_Curve,
+                   domain: tuple[float, float], kind, fast) -> "EdgeCurve":
+        """The curve of a FORWARD ``edge`` whose adaptor, domain, type and checked fast evaluator were
+        already made (by :class:`cadedge.occt.edgetable.EdgeTable`), without building them again."""
+        curve = cls.__new__(cls)
+        curve.edge, curve.edge_id, curve.adaptor, curve.domain, curve.kind, curve.fast = (
+            edge, edge_id, adaptor, domain, kind, fast)
+        return curve
+
     def _name(self) -> str:
         return f"edge {self.edge_id}" if self.edge_id is not None else "edge"
 

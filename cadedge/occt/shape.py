@@ -1,9 +1,13 @@
 """``refine_shape``: edge grids for every edge of a B-rep shape, anchored on its vertices.
 
-Each non-degenerate edge is refined as a black box (:class:`~cadedge.occt.edgecurve.EdgeCurve`) by
-:func:`cadedge.refine_curve` in target mode. Its first and last points are then replaced by the B-rep
-vertex points, so an edge's ends are bit-identical in every edge sharing the vertex (downstream
-meshers match nodes exactly). Degenerate edges are flagged, not refined. With ``max_growth`` the end
+Each non-degenerate edge is refined in target mode. Lines, circles, ellipses, B-splines and Bezier
+curves are read once into flat arrays (:class:`~cadedge.occt.edgetable.EdgeTable`) and refined a chunk
+of edges per compiled call (``cadedge/_batch.c``), with the same results as the per-edge path; every
+other edge, any edge that path cannot finish alike (it would add a note) and every run with
+``min_length``, ``max_length`` or ``max_growth`` takes the per-edge path: a black box
+(:class:`~cadedge.occt.edgecurve.EdgeCurve`) refined by :func:`cadedge.refine_curve`. Either way the
+grid's first and last points are then replaced by the B-rep vertex points, so an edge's ends are
+bit-identical in every edge sharing the vertex (downstream meshers match nodes exactly). Degenerate edges are flagged, not refined. With ``max_growth`` the end
 segments meeting at a vertex are graded (see :mod:`cadedge.occt.vertexgrowth`).
 """
 
@@ -23,6 +27,7 @@ from ..options import refine_options
 from ..refine import refine_curve
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
 from .edgecurve import EdgeCurve
+from .edgetable import EdgeTable, TableCurves, refine_table
 from .localald import check_ald_for, edge_targets
 from .reader import load_shape
 from .topology import Topology, curve_type_name
@@ -32,10 +37,8 @@ Progress = Callable[[int, int], None]
 #: Most segments in the grids of one model (about 100 MB of points and parameters, far more as JSON):
 #: a target that needs more is refused with a clear error instead of exhausting memory.
 MAX_MODEL_SEGMENTS = 5_000_000
-
-
-def _point(vertex) -> np.ndarray:
-    return np.array(BRep_Tool.Pnt_s(vertex).Coord(), dtype=float)
+#: Edges refined per compiled call: between calls the segment count is checked against the limit above.
+CHUNK = 256
 
 
 def _anchor(points: np.ndarray, first: np.ndarray, last: np.ndarray, estimate: float) -> tuple[np.ndarray, float]:
@@ -89,6 +92,34 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
                          evaluations=grid.evaluations, **common)
 
 
+def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: list[np.ndarray],
+                 topo: Topology) -> tuple[np.ndarray, ...]:
+    """Grids of the table's ``rows`` in one compiled call, anchored on their vertices."""
+    ends = [topo.edge_vertices[i] for i in table.rows[rows]]
+    first = np.array([vpoints[v1 - 1] for v1, _ in ends]).reshape(-1, 3)
+    last = np.array([vpoints[v2 - 1] for _, v2 in ends]).reshape(-1, 3)
+    return refine_table(table, rows, targets[table.rows[rows]], first, last)
+
+
+def _table_edge(topo: Topology, i: int, kind, k: int, chunk: tuple, ald: float,
+                notes: list[str]) -> ShapeEdgeGrid | None:
+    """Edge ``i``'s grid from row ``k`` of a compiled chunk, or None where the per-edge path must refine it."""
+    _, status, offsets, params, points, estimate, raw_estimate, evaluations = chunk
+    if status[k]:
+        return None
+    edge = topo.edges[i]
+    v1, v2 = topo.edge_vertices[i]
+    lo, hi = offsets[k], offsets[k + 1]
+    tolerance = float(BRep_Tool.Tolerance_s(edge))
+    if estimate[k] > ald and raw_estimate[k] <= ald:
+        notes.append(f"edge {i + 1}: ald {estimate[k]:.3g} after snapping the ends to the vertices "
+                     f"(vertices lie off the curve by up to {tolerance:.3g})")
+    return ShapeEdgeGrid(id=i + 1, vertices=(v1, v2), degenerate=False, closed=v1 == v2,
+                         faces=list(topo.edge_faces[i]), tolerance=tolerance, curve=curve_type_name(kind),
+                         params=params[lo:hi], points=points[lo:hi], ald_estimate=float(estimate[k]),
+                         evaluations=int(evaluations[k]))
+
+
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
                  max_length: float | None = None, max_growth: float | None = None,
                  ald_for: Mapping[Any, float] | None = None,
@@ -117,22 +148,36 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
         targets, local_records, notes = edge_targets(local, topo, opts["ald"])
     except InputError as exc:
         raise InputError(f"{loaded.source}: {exc}") from exc
-    vpoints = [_point(v) for v in topo.vertices]
-    edges: list[ShapeEdgeGrid] = []
-    curves: dict[int, EdgeCurve] = {}  # one adaptor per edge, kept for grading and later splitting
+    vpoints = list(np.array([BRep_Tool.Pnt_s(v).Coord() for v in topo.vertices], dtype=float).reshape(-1, 3))
     total = len(topo.edges)
+    batched = opts["min_length"] is None and opts["max_length"] is None and opts["max_growth"] is None
+    table = EdgeTable(topo.edges, [i for i in range(total) if not topo.is_degenerate(i)] if batched else [])
+    row_of = {i: r for r, i in enumerate(table.rows)}
+    edges: list[ShapeEdgeGrid] = []
+    curves: dict[int, EdgeCurve] = {}  # built by the per-edge path; the table's are built on demand
     segments = 0
+    done = 0  # table rows refined so far
+    chunk: tuple[np.ndarray, ...] = ()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CadedgeWarning)  # collected per edge in notes instead
         for i in range(total):
-            edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
-            edges.append(_refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes, curves))
+            r = row_of.get(i)
+            if r is not None and r >= done:  # refine the next rows of the table in one compiled call
+                start, done = r, min(r + CHUNK, len(table))
+                chunk = (start, *_refine_rows(table, slice(start, done), targets, vpoints, topo))
+            grid = (_table_edge(topo, i, table.kinds[r], r - chunk[0], chunk, targets[i], notes)
+                    if r is not None else None)
+            if grid is None:
+                edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
+                grid = _refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes, curves)
+            edges.append(grid)
             segments += len(edges[-1].params) - 1
             if segments > MAX_MODEL_SEGMENTS:
                 raise InputError(f"{loaded.source}: the grids would exceed {MAX_MODEL_SEGMENTS:,} segments "
                                  f"(reached after {i + 1} of {total} edges); use a larger ald")
             if progress is not None:
                 progress(i + 1, total)
+    curves = TableCurves(table, [i + 1 for i in table.rows], curves, topo.edges)
     if opts["max_growth"] is not None:
         try:
             edges, graded = grade_vertices(edges, curves, opts["max_growth"])

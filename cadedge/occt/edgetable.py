@@ -1,0 +1,233 @@
+"""The geometry of many edges read once into flat arrays, for refining them all in one compiled call.
+
+Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve is read through its
+``BRepAdaptor_Curve`` (which applies the edge's location) into :class:`EdgeTable`'s arrays, with the
+fewest OCP calls: no numpy work per edge. The table's evaluation (``cadedge/_batch.c``, the same formulas
+as :mod:`cadedge.occt.fasteval`) is then checked against ``BRepAdaptor_Curve.Value`` at
+``fasteval.CHECK_POINTS`` parameters of every edge in one batch; an edge that disagrees by more than
+``fasteval.RTOL`` of its size, or that OCCT cannot read, is left out and refined by the per-edge path
+(:class:`cadedge.occt.edgecurve.EdgeCurve`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+from OCP.BRepAdaptor import BRepAdaptor_Curve
+from OCP.GCPnts import GCPnts_AbscissaPoint
+from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
+                         GeomAbs_Line)
+from OCP.Standard import Standard_Failure
+
+from .. import explore, kernels, target
+from .edgecurve import CONIC_ROOTS, LENGTH_TOL, SPAN_ROOTS, EdgeCurve
+from .fasteval import CHECK_POINTS, RTOL
+
+LINE, CONIC, SPLINE = 0, 1, 2
+
+
+def _spline_rows(curve, periodic_copy: bool) -> tuple[int, list[float], int, int]:
+    """(degree, period + knots + coefficients, number of knots, dim) of a B-spline or Bezier curve."""
+    n = curve.NbPoles()
+    degree = curve.Degree()
+    rational = curve.IsRational()
+    period = math.nan
+    if periodic_copy:  # a B-spline
+        if curve.IsPeriodic():
+            period = float(curve.Period())
+            curve = curve.Copy()
+            curve.SetNotPeriodic()  # the same geometry over one period with clamped knots
+            n = curve.NbPoles()
+        seq = curve.KnotSequence()
+        knots = [seq.Value(i) for i in range(1, n + degree + 2)]
+    else:  # a Bezier curve
+        knots = [0.0] * (degree + 1) + [1.0] * (degree + 1)
+    row = [period] + knots
+    if rational:
+        for i in range(1, n + 1):
+            x, y, z = curve.Pole(i).Coord()
+            w = curve.Weight(i)
+            row += (x * w, y * w, z * w, w)
+    else:
+        for i in range(1, n + 1):
+            row += curve.Pole(i).Coord()
+    return degree, row, len(knots), 4 if rational else 3
+
+
+class EdgeTable:
+    """Flat geometry of the edges ``rows`` (indices into the caller's edge list) that passed the check.
+
+    ``kind``, ``gofs``, ``ints`` and ``gdata`` are the geometry table of ``cadedge/_batch.c``; ``domain``
+    (n, 2), ``exact`` (n, each edge's length or NaN), ``hofs``/``hdata`` (the knots a periodic spline's
+    exploration starts from) go with them. ``adaptors[k]`` and ``kinds[k]`` belong to row ``k``.
+    """
+
+    def __init__(self, edges: list, indices: list[int]):
+        kind, gofs, ints, data, domain, hint_ofs, hints = [], [0], [], [], [], [0], []
+        rows, adaptors, kinds, lengths = [], [], [], []
+        for i in indices:
+            try:
+                ad = BRepAdaptor_Curve(edges[i])
+                if not ad.Is3DCurve():
+                    continue
+                a, b = ad.FirstParameter(), ad.LastParameter()
+                t = ad.GetType()
+                hint = ()
+                length = math.nan
+                if t == GeomAbs_Line:
+                    lin = ad.Line()
+                    k, row, extra = LINE, [*lin.Location().Coord(), *lin.Direction().Coord()], (0, 0, 0)
+                elif t == GeomAbs_Circle or t == GeomAbs_Ellipse:
+                    c = ad.Circle() if t == GeomAbs_Circle else ad.Ellipse()
+                    pos = c.Position()
+                    rx, ry = (c.Radius(),) * 2 if t == GeomAbs_Circle else (c.MajorRadius(), c.MinorRadius())
+                    k, row, extra = CONIC, [*pos.Location().Coord(), *pos.XDirection().Coord(),
+                                            *pos.YDirection().Coord(), rx, ry], (0, 0, 0)
+                    if t == GeomAbs_Circle:
+                        length = float(rx * (b - a))
+                elif t == GeomAbs_BSplineCurve or t == GeomAbs_BezierCurve:
+                    spline = t == GeomAbs_BSplineCurve
+                    curve = ad.BSpline() if spline else ad.Bezier()
+                    degree, row, nk, dim = _spline_rows(curve, spline)
+                    k, extra = SPLINE, (degree, nk, dim)
+                    if spline and curve.IsPeriodic():
+                        hint = _periodic_knots(curve, a, b)
+                else:
+                    continue
+                if t != GeomAbs_Line and t != GeomAbs_Circle:
+                    length = float(GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL))
+            except Standard_Failure:
+                continue  # the per-edge path reports what OCCT cannot do
+            rows.append(i)
+            adaptors.append(ad)
+            kinds.append(t)
+            kind.append(k)
+            ints.append(extra)
+            data += row
+            gofs.append(len(data))
+            domain.append((a, b))
+            hints += hint
+            hint_ofs.append(len(hints))
+            lengths.append(length)
+        self.rows, self.adaptors, self.kinds = rows, adaptors, kinds
+        self.kind = np.array(kind, dtype=np.int64)
+        self.gofs = np.array(gofs, dtype=np.int64)
+        self.ints = np.array(ints, dtype=np.int64).reshape(-1, 3)
+        self.gdata = np.array(data, dtype=float)
+        self.domain = np.array(domain, dtype=float).reshape(-1, 2)
+        self.hofs = np.array(hint_ofs, dtype=np.int64)
+        self.hdata = np.array(hints, dtype=float)
+        self.exact = np.array(lengths, dtype=float)
+        self._check()
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def evaluate(self, row: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Points (len(u), 3) of the edges of table rows ``row`` (grouped, any order) at ``u``."""
+        return kernels.evaluate_edges(self.kind, self.gofs, self.ints, self.gdata, row, u)
+
+    def _check(self) -> None:
+        """Drop the rows whose evaluation differs from OCCT's (as ``fasteval.fast_evaluator`` does), and
+        set line lengths from the evaluated ends (as ``EdgeCurve.exact_length``)."""
+        n = len(self.rows)
+        if not n:
+            return
+        a, b = self.domain[:, 0], self.domain[:, 1]
+        u = np.linspace(a, b, CHECK_POINTS, axis=1)
+        u[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]  # off the knots, as fast_evaluator
+        flat = u.ravel()
+        got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
+        ref = np.empty_like(got)
+        values = flat.tolist()
+        ok = np.ones(n, dtype=bool)
+        for r, ad in enumerate(self.adaptors):
+            value = ad.Value
+            try:
+                ref[r] = [value(x).Coord() for x in values[r * CHECK_POINTS:(r + 1) * CHECK_POINTS]]
+            except Standard_Failure:
+                ok[r] = False
+                ref[r] = got[r]
+        size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
+        size = np.maximum(size, math.ulp(1.0))
+        ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
+        lines = np.flatnonzero(self.kind == LINE)
+        for r in lines.tolist():  # the same expression as EdgeCurve.exact_length
+            self.exact[r] = float(np.linalg.norm(np.diff(got[r, [0, -1]], axis=0)))
+        if not ok.all():
+            self._keep(np.flatnonzero(ok))
+
+    def _keep(self, keep: np.ndarray) -> None:
+        """Only the rows ``keep`` (increasing)."""
+        gofs, hofs = self.gofs, self.hofs
+        self.gdata = np.concatenate([self.gdata[gofs[r]:gofs[r + 1]] for r in keep]) if len(keep) else self.gdata[:0]
+        self.gofs = np.concatenate([[0], np.cumsum(np.diff(gofs)[keep])]).astype(np.int64)
+        self.hdata = np.concatenate([self.hdata[hofs[r]:hofs[r + 1]] for r in keep]) if len(keep) else self.hdata[:0]
+        self.hofs = np.concatenate([[0], np.cumsum(np.diff(hofs)[keep])]).astype(np.int64)
+        self.kind, self.ints, self.domain, self.exact = (x[keep] for x in (self.kind, self.ints, self.domain, self.exact))
+        self.rows = [self.rows[r] for r in keep]
+        self.adaptors = [self.adaptors[r] for r in keep]
+        self.kinds = [self.kinds[r] for r in keep]
+
+
+def _periodic_knots(bs, a: float, b: float) -> list[float]:
+    """The distinct knots in [a, b] over all periods, with a and b (as ``EdgeCurve._knots``)."""
+    from ..grid import unique_sorted
+
+    k = np.array([bs.Knot(i) for i in range(1, bs.NbKnots() + 1)], dtype=float)
+    per = float(bs.Period())
+    shifts = np.arange(math.floor((a - k[-1]) / per), math.ceil((b - k[0]) / per) + 1) * per
+    k = unique_sorted((k[None, :] + shifts[:, None]).ravel())
+    tol = 1e-9 * (b - a)
+    return [a, *k[(k > a + tol) & (k < b - tol)].tolist(), b]
+
+
+class TableCurves(Mapping):
+    """Edge id -> :class:`EdgeCurve`, built on first use: from the table (sharing its adaptor and
+    evaluating through it) or given ready-made (edges refined by the per-edge path)."""
+
+    def __init__(self, table: EdgeTable, ids: list[int], ready: dict[int, EdgeCurve], edges: list):
+        self._table, self._edges = table, edges
+        self._row = {eid: r for r, eid in enumerate(ids)}
+        self._ready = dict(ready)
+
+    def __getitem__(self, eid: int) -> EdgeCurve:
+        curve = self._ready.get(eid)
+        if curve is None:
+            r = self._row[eid]  # KeyError for an id with no curve
+            t = self._table
+            rows = np.full(1, r, dtype=np.int64)
+            curve = EdgeCurve.from_parts(self._edges[t.rows[r]], eid, t.adaptors[r], tuple(t.domain[r].tolist()),
+                                         t.kinds[r], lambda u: t.evaluate(np.broadcast_to(rows, len(u)), u))
+            self._ready[eid] = curve
+        return curve
+
+    def __iter__(self):
+        return iter(sorted({*self._ready, *self._row}))
+
+    def __len__(self) -> int:
+        return len({*self._ready, *self._row})
+
+
+
+def _settings() -> np.ndarray:
+    """The constants of target mode and the exploration, in the order ``cadedge/_batch.c`` reads them."""
+    return np.array([target.EXPLORE_SHARE, target.MARGIN, target.EXACT_MARGIN, target.AGREEMENT, explore.STRAIGHT,
+                     explore.ASYMPTOTIC_RATIO, explore.NOISE, target.MAX_TRIALS, explore.MAX_SAMPLES, CONIC_ROOTS,
+                     SPAN_ROOTS], dtype=float)
+
+
+SETTINGS = _settings()
+
+
+def refine_table(table: EdgeTable, rows: slice, ald: np.ndarray, first: np.ndarray,
+                 last: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Target-mode grids of the table's ``rows`` (a slice with a stop) with per-row ``ald`` and vertex points
+    ``first`` and ``last`` (len(rows), 3) that the grids end on: see :func:`cadedge.kernels.refine_edges`."""
+    g0, g1 = table.gofs[rows.start], table.gofs[rows.stop]
+    h0, h1 = table.hofs[rows.start], table.hofs[rows.stop]
+    return kernels.refine_edges(table.kind[rows], table.gofs[rows.start:rows.stop + 1] - g0, table.ints[rows],
+                                table.gdata[g0:g1], table.hofs[rows.start:rows.stop + 1] - h0, table.hdata[h0:h1],
+                                table.domain[rows], ald, table.exact[rows], first, last, SETTINGS)

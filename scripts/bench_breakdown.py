@@ -1,0 +1,96 @@
+"""Where ``refine_shape``'s time goes, per phase, against one OCCT pass at the tuned angle.
+
+    python scripts/bench_breakdown.py [--eps 1e-3] [--repeats 7] [--file PATH ...]
+
+For each model (default: the corpus's two largest, ``917_fusee`` and ``boxed_sphere``), OCCT's angle is
+tuned as ``scripts/bench.py`` does; then, interleaved ``--repeats`` times so that a load on the machine
+falls on all alike, and reported as medians:
+
+- **OCCT**: one ``GCPnts_TangentialDeflection`` pass at that angle over every non-degenerate edge
+  (adaptors included), as *OCCT s* in ``scripts/bench.py``;
+- **refine_shape**: the whole call on the loaded shape, as *cadedge s* there;
+- its phases, each run again on its own: **topology** (``Topology``), **edge table** (reading every edge's
+  geometry, its length and the check against OCCT, ``EdgeTable``), of which **check** and **lengths** are
+  also timed alone, and **compiled refine** (``refine_table`` on all rows); **rest** is the whole call
+  minus topology, table and compiled refine (the shape's tolerance scan on loading, vertex points, the
+  per-edge grid objects, vertex spacings).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+from OCP.BRepAdaptor import BRepAdaptor_Curve
+from OCP.GCPnts import GCPnts_AbscissaPoint, GCPnts_TangentialDeflection
+
+import bench
+from corpus_path import require_corpus
+
+from cadedge.occt.edgecurve import LENGTH_TOL
+from cadedge.occt.edgetable import EdgeTable, refine_table
+from cadedge.occt.shape import refine_shape
+from cadedge.occt.topology import Topology
+
+LARGEST = ("live-clones__gmsh__917_fusee.stp", "LLNL__axom_data__boxed_sphere.step")
+PHASES = ("OCCT", "refine_shape", "topology", "edge table", "check", "lengths", "compiled refine")
+
+
+def breakdown(path: Path, eps: float, repeats: int) -> tuple[int, dict[str, float]]:
+    model = bench.Model(path)
+    angle = bench.run_occt(model, eps)["angle"]
+    shape = model.loaded.shape
+    refine_shape(shape, ald=eps)  # untimed: what a first call loads
+    times: dict[str, list[float]] = {k: [] for k in PHASES}
+
+    def timed(name, fn):
+        t0 = time.perf_counter()
+        out = fn()
+        times[name].append(time.perf_counter() - t0)
+        return out
+
+    def occt():
+        for edge in model.edges:
+            td = GCPnts_TangentialDeflection(BRepAdaptor_Curve(edge), angle, bench.HUGE, 2)
+            for k in range(1, td.NbPoints() + 1):
+                td.Value(k)
+
+    for _ in range(repeats):
+        timed("OCCT", occt)
+        timed("refine_shape", lambda: refine_shape(shape, ald=eps))
+        topo = timed("topology", lambda: Topology(shape))
+        rows = [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)]
+        table = timed("edge table", lambda: EdgeTable(topo.edges, rows))
+        timed("check", table._check)
+        timed("lengths", lambda: [GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL)
+                                  for ad, (a, b) in zip(table.adaptors, table.domain.tolist())])
+        n = len(table)
+        ends = np.zeros((n, 3))
+        timed("compiled refine", lambda: refine_table(table, slice(0, n), np.full(n, eps), ends, ends))
+    med = {k: statistics.median(v) for k, v in times.items()}
+    med["rest"] = med["refine_shape"] - med["topology"] - med["edge table"] - med["compiled refine"]
+    return len(model.edges), med
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--eps", type=float, default=1e-3)
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--file", nargs="+", type=Path, help="these STEP files instead of the two largest corpus models")
+    args = ap.parse_args()
+    paths = args.file or [require_corpus() / name for name in LARGEST]
+    print("| model | phase | ms | us/edge | x OCCT pass |")
+    print("|---|---|---:|---:|---:|")
+    for path in paths:
+        edges, med = breakdown(path, args.eps, args.repeats)
+        for name, seconds in med.items():
+            label = f"{path.name} ({edges} edges)" if name == "OCCT" else ""
+            print(f"| {label} | {name} | {seconds * 1e3:.1f} | {seconds / edges * 1e6:.1f} | "
+                  f"{seconds / med['OCCT']:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
