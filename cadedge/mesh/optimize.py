@@ -12,6 +12,9 @@ on the same cylinders and boxes. Each face gets a few passes of:
 - a local search (:func:`climb_nodes`): nodes of triangles under :data:`CLIMB_BELOW` degrees move to the
   best of 24 trial positions around them, the one that raises their worst angle most.
 
+Only nodes within two rings of a triangle under 40 degrees move (and are projected, the costly part on
+B-spline faces); the rest of a face is left as gmsh made it.
+
 Working in 3-D rather than in the surface's parameters treats nodes beside a seam like any other (gmsh's
 own ``Laplace2D`` and ``Relocate2D`` left the worst triangles of a cylinder, beside its seam, in place).
 Nodes on curves and points (every edge grid node) never move, so neighbours stay conforming. A face
@@ -45,11 +48,27 @@ def _normals(x: np.ndarray, tri: np.ndarray) -> np.ndarray:
     return np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
 
 
+def _group_min(values: np.ndarray, keys: np.ndarray, n: int) -> np.ndarray:
+    """Smallest of ``values`` per key in ``0..n-1`` (``inf`` for a key without any); a sort and
+    ``np.minimum.reduceat`` (``np.minimum.at`` is many times slower)."""
+    out = np.full(n, np.inf)
+    if not len(keys):
+        return out
+    order = np.argsort(keys, kind="stable")
+    k = keys[order]
+    starts = np.flatnonzero(np.concatenate([[True], k[1:] != k[:-1]]))
+    out[k[starts]] = np.minimum.reduceat(values[order], starts)
+    return out
+
+
+def _group_max(values: np.ndarray, keys: np.ndarray, n: int) -> np.ndarray:
+    """Largest of ``values`` per key (``-inf`` for a key without any)."""
+    return -_group_min(-values, keys, n)
+
+
 def _node_min(values: np.ndarray, tri: np.ndarray, n: int) -> np.ndarray:
     """Smallest value over each node's triangles (``inf`` for a node without any)."""
-    out = np.full(n, np.inf)
-    np.minimum.at(out, tri.ravel(), np.repeat(values, 3))
-    return out
+    return _group_min(np.repeat(values, 3), tri.ravel(), n)
 
 
 def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
@@ -141,14 +160,13 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
         good = gain > 1e-6
         if not good.any():
             break
-        best = np.zeros(len(tri))
-        np.maximum.at(best, t1[good], gain[good])
-        np.maximum.at(best, t2[good], gain[good])
+        g = np.flatnonzero(good)
+        best = np.maximum(_group_max(np.concatenate([gain[g], gain[g]]), np.concatenate([t1[g], t2[g]]),
+                                     len(tri)), 0.0)
         pick = good & (gain >= best[t1]) & (gain >= best[t2])
-        first = np.full(len(tri), -1)  # ties: one swap per triangle, the first edge found
-        idx = np.flatnonzero(pick)
-        np.maximum.at(first, t1[idx], -idx)
-        np.maximum.at(first, t2[idx], -idx)
+        idx = np.flatnonzero(pick)  # ties: one swap per triangle, the first edge found
+        first = _group_max(np.concatenate([-idx, -idx]).astype(float), np.concatenate([t1[idx], t2[idx]]),
+                           len(tri))
         pick[idx] = (first[t1[idx]] == -idx) & (first[t2[idx]] == -idx)
         tri[t1[pick]] = new1[pick]
         tri[t2[pick]] = new2[pick]
@@ -168,9 +186,7 @@ def _incident_min(x: np.ndarray, tri: np.ndarray, node: np.ndarray, slot: np.nda
         cos = np.einsum("ij,ij->i", a, b)
         ang_k = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), cos))
         ang = ang_k if k == 0 else np.minimum(ang, ang_k)
-    out = np.full(n, np.inf)
-    np.minimum.at(out, node, ang)
-    return out
+    return _group_min(ang, node, n)
 
 
 def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
@@ -203,14 +219,10 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         if not want.any():
             break
         go = want
-        nrm = np.zeros((n, 3))
-        np.add.at(nrm, tri.ravel(), np.repeat(_normals(x, tri), 3, axis=0))
-        length = np.zeros(n)
-        cnt = np.zeros(n)
-        seg = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1)
-        np.add.at(length, e.ravel(), np.repeat(seg, 2))
-        np.add.at(cnt, e.ravel(), 2)
-        h = length / np.maximum(cnt, 1)
+        tn = np.repeat(_normals(x, tri), 3, axis=0)
+        nrm = np.column_stack([np.bincount(tri.ravel(), weights=tn[:, k], minlength=n) for k in range(3)])
+        seg = np.repeat(np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1), 2)
+        h = np.bincount(e.ravel(), weights=seg, minlength=n) / np.maximum(np.bincount(e.ravel(), minlength=n), 1)
         nn = nrm / np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
         ref = np.where(np.abs(nn[:, :1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
         u = np.cross(nn, ref)
@@ -250,6 +262,16 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
             params = np.full((len(mov_idx), puv.shape[1]), np.nan)
         params[where[ok]] = puv[np.searchsorted(moved, ok)]
     return x, params
+
+
+def _near_bad(x: np.ndarray, tri: np.ndarray, movable: np.ndarray) -> np.ndarray:
+    """The movable nodes within two rings of a triangle under :data:`CLIMB_BELOW` degrees: the only ones
+    worth moving (and projecting onto the surface, the costly part on B-spline faces)."""
+    near = np.zeros(len(x), dtype=bool)
+    near[tri[triangle_angles(x, tri).min(axis=1) < CLIMB_BELOW].ravel()] = True
+    for _ in range(2):
+        near[tri[near[tri].any(axis=1)].ravel()] = True
+    return near & movable
 
 
 def _project_on(surface: int):
@@ -302,10 +324,16 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     project = _project_on(surface)
     for _ in range(passes):
         tri = flip_edges(x, tri, fixed)
+        active = _near_bad(x, tri, movable)
+        if not active.any():
+            break
+        pos = np.searchsorted(mov, np.flatnonzero(active))  # active nodes' rows among all movable ones
         for mover in (smooth_nodes, climb_nodes):
-            x, params = mover(x, tri, movable, project)
+            x, params = mover(x, tri, active, project)
             if params is not None:
-                uv = params if uv is None else np.where(np.isnan(params[:, :1]), uv, params)
+                if uv is None:
+                    uv = np.full((len(mov), params.shape[1]), np.nan)
+                uv[pos] = np.where(np.isnan(params[:, :1]), uv[pos], params)
     if triangle_angles(x, tri).min() < triangle_angles(x0, tri0).min():
         return False
     if target is not None and brep_area > 0:
