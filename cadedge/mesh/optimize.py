@@ -289,11 +289,14 @@ def _area(x: np.ndarray, tri: np.ndarray) -> float:
 
 
 def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = None,
-                passes: int = PASSES) -> bool:
+                passes: int = PASSES, deadline: float | None = None) -> bool:
     """Improve one meshed gmsh surface: ``passes`` times edge swaps (:func:`flip_edges`, never a curve
     segment) then smoothing of its interior nodes (:func:`smooth_nodes`). The result replaces the face's
     mesh only if its smallest angle does not fall and its area deficit (against ``brep_area``) stays within
-    ``target`` or does not grow. Returns whether the face's mesh changed."""
+    ``target`` or does not grow. No pass or move starts after ``deadline`` (``time.time()``). Returns
+    whether the face's mesh changed."""
+    import time
+
     import gmsh
 
     from .gmsh_model import surface_curve_uses
@@ -322,13 +325,20 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     mov = np.flatnonzero(movable)
     x, tri, uv = x0, tri0, None
     project = _project_on(surface)
+    def late() -> bool:
+        return deadline is not None and time.time() > deadline
+
     for _ in range(passes):
+        if late():
+            break
         tri = flip_edges(x, tri, fixed)
         active = _near_bad(x, tri, movable)
         if not active.any():
             break
         pos = np.searchsorted(mov, np.flatnonzero(active))  # active nodes' rows among all movable ones
         for mover in (smooth_nodes, climb_nodes):
+            if late():
+                break
             x, params = mover(x, tri, active, project)
             if params is not None:
                 if uv is None:
@@ -370,6 +380,6 @@ def after_generate(ctx) -> None:
             break  # out of the job's time: the faces keep gmsh's triangles
         f = face_of.get(s, s)
         area = float(areas[f - 1]) if 1 <= f <= len(areas) else 0.0
-        if smooth_face(s, brep_area=area, target=target):
+        if smooth_face(s, brep_area=area, target=target, deadline=ctx.job.deadline):
             kept.append(f)
     ctx.smoothed = kept
