@@ -70,6 +70,11 @@ INTERIOR_SHARE = 0.6
 #: gmsh does not refine triangles standing on a long boundary segment, so a fillet between two straight
 #: 40 mm edges is otherwise spanned by triangles across its whole arc (4% area lost).
 CURVATURE_RATIO = 2.0
+#: The same for straight edges (a line across a curved face, a cylinder's seam): their ALD leaves them one
+#: segment, and a cylinder's 6 mm seam segments beside 3 mm interior triangles gave 24-degree triangles
+#: (38 once split to the interior size, as gmsh alone gets). Curved edges keep 2: their ALD spacing is
+#: already near the size, and splitting circles too cost the bracket 30% more triangles.
+STRAIGHT_RATIO = 1.0
 #: A face meshed again aims at this share of the target (the deficit does not fall exactly as ``h**2``).
 AIM = 0.7
 
@@ -122,7 +127,7 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
     nodes only added, so both faces of an edge still share its nodes):
 
     - its face is curved across it: longer than ``ratio`` times the face's curvature size there (see
-      :func:`per_circle`);
+      :func:`per_circle`; :data:`STRAIGHT_RATIO` times on a straight edge);
     - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
       ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
       loses nothing to the cylinder, all to a planar cap), summed over the face's boundary, must stay
@@ -166,6 +171,7 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
         except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
             continue
         chord = e.segment_lengths
+        edge_ratio = min(ratio, STRAIGHT_RATIO) if e.curve == "Line" else ratio
         pieces = np.ones(len(chord), dtype=int)
         for f, normals, curv in probed:
             tangential = sagitta - np.sum(sagitta * normals, axis=1)[:, None] * normals
@@ -173,7 +179,7 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
             allowed = budget[f - 1] * chord / max(perimeter[f - 1], 1e-300)
             with np.errstate(divide="ignore", invalid="ignore"):
                 k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
-                k_curv = np.where(curv > 0, np.ceil(chord * curv / (ratio * h_factor[f - 1])), 1)
+                k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
             pieces = np.maximum(pieces, np.nan_to_num(np.maximum(k_area, k_curv), nan=1).astype(int))
         if not np.any(pieces > 1):
             continue
@@ -294,7 +300,7 @@ DISAGREE_FLOOR = 0.01
 #: The hooks that carry the surface target into the gmsh job (see :mod:`cadedge.mesh.worker`).
 HOOKS = {"before_generate": ["cadedge.mesh.fidelity:before_generate"],
          "before_face": ["cadedge.mesh.fidelity:before_face"],
-         "after_generate": ["cadedge.mesh.fidelity:after_generate"],
+         "after_generate": ["cadedge.mesh.fidelity:after_generate", "cadedge.mesh.optimize:after_generate"],
          "before_write": ["cadedge.mesh.groups:before_write"],
          "after_mesh": ["cadedge.mesh.fidelity:after_mesh"]}
 

@@ -1,0 +1,108 @@
+"""Split boundary segments that are longer than their face is wide.
+
+A face 40 mm long and 0.02 mm wide (the side of a thin plate, a small chamfer, the walls of a notch) can
+only be filled with slivers while its long edges keep the few segments their ALD needs: every triangle
+spans the face from one long edge to the other. The size field of :mod:`cadedge.mesh.proximity` does not
+see it, since it grows from spacings, not from distances. Here the local width of a face at a boundary
+segment is the distance from the segment's midpoint to the face's other boundary segments, leaving out
+the segment's own edge and the edges that share a B-rep vertex with it (a face that narrows to a corner
+has no width there: the corner's angle forces its triangles, see :mod:`cadedge.mesh.quality`). Segments
+longer than :data:`WIDTH_RATIO` times that width are split into equal parameter steps on their OCCT curve,
+pass after pass: near a tiny edge the splits halve towards it, so the boundary is graded down to the tiny
+edge's length instead of jumping to it. Grid points are kept and edge ends never move.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..shapegrid import ShapeGrid, vertex_spacings
+from ..splitting import insert_points, split_evenly
+from .proximity import TOLERANCE_SHARE, _LazyCurves
+
+#: A segment is split when longer than this many times its face's width at its midpoint: a strip of
+#: width w cut into pieces of 2 w is filled by right triangles of 26.6 degrees (1.5 w: 34 degrees, but a
+#: third more triangles on the thin plate and the faces around it).
+WIDTH_RATIO = 2.0
+#: Splitting halves segments towards a tiny edge each pass; 24 passes cover a ratio of 1.6e7.
+PASSES = 24
+#: The splits may add at most this many times the grid's segments (plus :data:`MIN_BUDGET`): a model with
+#: thousands of sliver faces is left with slivers rather than millions of boundary nodes.
+BUDGET_FACTOR = 20.0
+MIN_BUDGET = 200_000
+#: Point-to-segment distances are computed exactly in blocks of this many pairs.
+_BLOCK = 2_000_000
+
+
+def _segment_distances(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from each point ``p`` (n, 3) to the nearest of the segments ``a``-``b`` (m, 3)."""
+    out = np.full(len(p), np.inf)
+    if not len(a):
+        return out
+    ab = b - a
+    ll = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+    step = max(1, _BLOCK // len(a))
+    for s in range(0, len(p), step):
+        q = p[s:s + step, None, :]
+        t = np.clip(np.einsum("nmk,mk->nm", q - a[None], ab) / ll, 0.0, 1.0)
+        d = np.linalg.norm(q - (a[None] + t[..., None] * ab[None]), axis=2)
+        out[s:s + step] = d.min(axis=1)
+    return out
+
+
+def face_widths(edges: list) -> dict[int, np.ndarray]:
+    """Per edge index, the width at each segment's midpoint: the smallest, over the faces the edge
+    bounds, of the distance to that face's boundary segments on edges sharing no vertex with it
+    (``inf`` where no such edge exists)."""
+    usable = [i for i, e in enumerate(edges) if not e.degenerate and len(e.points) >= 2]
+    by_face: dict[int, list[int]] = {}
+    for i in usable:
+        for f in edges[i].faces:
+            by_face.setdefault(f, []).append(i)
+    width = {i: np.full(len(edges[i].points) - 1, np.inf) for i in usable}
+    for idx in by_face.values():
+        if len(idx) < 2:
+            continue
+        for i in idx:
+            e = edges[i]
+            others = [edges[j] for j in idx if j != i and not set(edges[j].vertices) & set(e.vertices)]
+            if not others:
+                continue
+            a = np.vstack([o.points[:-1] for o in others])
+            b = np.vstack([o.points[1:] for o in others])
+            width[i] = np.minimum(width[i], _segment_distances(0.5 * (e.points[:-1] + e.points[1:]), a, b))
+    return width
+
+
+def fit_to_widths(grid: ShapeGrid, *, ratio: float = WIDTH_RATIO, passes: int = PASSES) -> ShapeGrid:
+    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width."""
+    curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
+    edges = list(grid.edges)
+    budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
+    added = 0
+    for _ in range(passes):
+        width = face_widths(edges)
+        changed = False
+        for i, w in width.items():
+            e = edges[i]
+            if not np.all(np.diff(e.params) > 0):
+                continue
+            seg = e.segment_lengths
+            with np.errstate(invalid="ignore"):
+                pieces = np.where(seg > ratio * w, np.ceil(seg / (ratio * np.maximum(w, 1e-300))), 1)
+            pieces = np.nan_to_num(pieces, nan=1.0, posinf=1.0).astype(np.int64)
+            new = int(np.sum(pieces - 1))
+            if not new or added + new > budget or e.tolerance > TOLERANCE_SHARE * np.min(seg / pieces):
+                continue  # nothing to split, over the budget, or a loose edge (see proximity.py)
+            new_u = split_evenly(e.params, pieces)
+            params, points = insert_points(e.params, e.points, new_u, curves[e.id].evaluate(new_u))
+            edges[i] = dataclasses.replace(e, params=params, points=points)
+            added += new
+            changed = True
+        if not changed:
+            break
+    spacing = vertex_spacings(edges)
+    vertices = [dataclasses.replace(v, spacing=spacing.get(v.id, v.spacing)) for v in grid.vertices]
+    return dataclasses.replace(grid, edges=edges, vertices=vertices)
