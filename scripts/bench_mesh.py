@@ -180,6 +180,8 @@ def main() -> int:
     parser.add_argument("--timeout", type=float, default=300.0, help="cadedge mesh --timeout per run")
     parser.add_argument("--jsonl", type=Path, help="append each run's record here as it finishes")
     parser.add_argument("--table", type=Path, help="print the table of an earlier run's JSON lines and stop")
+    parser.add_argument("--only", nargs="+", metavar="NAME",
+                        help="run only the models whose file name contains one of these strings")
     parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
@@ -192,6 +194,8 @@ def main() -> int:
         return 0
     with tempfile.TemporaryDirectory(prefix="hard-models-") as hard:
         models = [("", p) for p in args.models] if args.models else default_models(Path(hard))
+        if args.only:
+            models = [(g, p) for g, p in models if any(name in p.name for name in args.only)]
         records = []
         for ald in args.ald:
             for mode in args.mode:

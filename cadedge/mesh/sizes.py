@@ -9,8 +9,10 @@ triangles.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
+from typing import Iterator
 
 import gmsh
 import numpy as np
@@ -33,7 +35,7 @@ def node_spacings(edge: ShapeEdgeGrid) -> np.ndarray:
     return h
 
 
-def _vertex_spacing(grid: ShapeGrid) -> dict[int, float]:
+def vertex_sizes(grid: ShapeGrid) -> dict[int, float]:
     """Each vertex's spacing: the grid's own where it has one, else the shortest end segment there."""
     out = vertex_spacings(grid.edges)
     out.update({v.id: float(v.spacing) for v in grid.vertices if v.spacing})
@@ -48,7 +50,7 @@ class SizeField:
         if growth <= 0:
             raise InputError(f"growth must be positive, got {growth}")
         pts, hs = [], []
-        vsp = _vertex_spacing(grid)
+        vsp = vertex_sizes(grid)
         for v in grid.vertices:
             if v.id in vsp:
                 pts.append(np.asarray(v.point, dtype=float)[None])
@@ -122,13 +124,16 @@ def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField) -> N
 
     Each curve gets the graded size ``field`` at its grid parameters and at extra parameters splitting
     long segments, so a long straight edge between fine vertices is graded rather than uniformly fine.
+    Curves no grid maps to (unmatched edges) get ``field`` at points sampled on gmsh's own curve, so they
+    are graded from their neighbours too rather than meshed at the largest size.
     Each vertex gets its spacing as its point size (kept in the model for exports and for meshers that
     read point sizes; gmsh's interpolation of point sizes along curves is off, see
     :func:`configure_gmsh_sizes`).
     """
-    for vid, h in _vertex_spacing(grid).items():
+    for vid, h in vertex_sizes(grid).items():
         if h > 0 and vid in emap.vertices:
             gmsh.model.mesh.setSize([(0, emap.vertices[vid])], float(h))
+    sized = set()
     for e in grid.edges:
         if e.degenerate or e.id not in emap.edges or len(e.points) < 2:
             continue
@@ -139,6 +144,45 @@ def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField) -> N
         if gparams[-1] < gparams[0]:
             gparams, sizes = gparams[::-1], sizes[::-1]
         gmsh.model.mesh.setSizeAtParametricPoints(1, m.tag, gparams.tolist(), sizes.tolist())
+        sized.add(m.tag)
+    for tag in emap.unmatched_curves:
+        if tag not in sized and tag not in emap.degenerate_curves:
+            _size_own_curve(tag, field)
+
+
+#: Points sampled on a curve without a grid to size it from the field (sizes are linear in between).
+_OWN_CURVE_SAMPLES = 65
+
+
+def _size_own_curve(tag: int, field: SizeField) -> None:
+    """Sizes from ``field`` at evenly spaced parameters of gmsh curve ``tag`` (one no grid maps to)."""
+    try:
+        lo, hi = (float(b[0]) for b in gmsh.model.getParametrizationBounds(1, tag))
+        u = np.linspace(lo, hi, _OWN_CURVE_SAMPLES)
+        x = np.asarray(gmsh.model.getValue(1, tag, u.tolist()), dtype=float).reshape(-1, 3)
+    except Exception:  # gmsh raises a bare Exception on a curve it cannot evaluate: leave it to the field
+        return
+    if len(x) == len(u) and np.all(np.isfinite(x)):
+        gmsh.model.mesh.setSizeAtParametricPoints(1, tag, u.tolist(), field(x).tolist())
+
+
+@contextlib.contextmanager
+def curves_from_spacings() -> Iterator[None]:
+    """Mesh curves from the spacing sizes alone: surface curvature sizing is off inside the block.
+
+    gmsh sizes a curve by the largest curvature of the surfaces around it as well as its own
+    (``Mesh.MeshSizeFromCurvature``, switched on for face interiors by the surface target). Near a
+    cone's apex or a sphere's pole that curvature grows without bound, so the seam running into it was
+    split down to the minimum size (368 segments where the grid has 7), and gmsh then failed or hung
+    meshing the face on it. The edge grids already meet the ALD along the curves, so in sizes mode
+    curves follow them; faces still get the curvature sizes.
+    """
+    before = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature")
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    try:
+        yield
+    finally:
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", before)
 
 
 def _threshold(lines: list[str], n: int, target: str, size: float, max_size: float, growth: float) -> int:
@@ -179,7 +223,7 @@ def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAU
              "Mesh.MeshSizeFromCurvature = 0; Mesh.MeshSizeFromPoints = 0; Mesh.MeshSizeExtendFromBoundary = 0;",
              f"Mesh.MeshSizeMax = {field.max_size!r};"]
     fields, n = [], 1
-    for vid, h in sorted(_vertex_spacing(grid).items()):
+    for vid, h in sorted(vertex_sizes(grid).items()):
         if h > 0:
             fields.append(_threshold(lines, n, f"PointsList = {{{vid}}}", h, field.max_size, growth))
             n += 2
