@@ -1,9 +1,11 @@
-"""Sizes mode (``--mode sizes``: gmsh meshes the curves from our sizes), on real shapes through real gmsh."""
+"""Sizes mode (``--mode sizes``: gmsh meshes the curves from our sizes) and the ``.geo`` spacing export,
+on real shapes through real gmsh."""
 
 from __future__ import annotations
 
 import copy
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -15,6 +17,7 @@ pytest.importorskip("trimesh")
 import cadedge  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
 from cadedge.mesh.generate import STRATEGIES  # noqa: E402
+from cadedge.mesh.spacing_geo import CLASS_RATIO, size_classes  # noqa: E402
 
 ALD = 1e-2
 PROBE = {"after_mesh": ["mesh_probes:curve_segments"]}
@@ -54,3 +57,65 @@ def test_sizes_mode_sizes_an_unmatched_curve_from_its_neighbours():
     probe = result.extras["mesh_probes:curve_segments"]
     segments = [probe["segments"][t] for t in probe["unmatched_curves"] if probe["segments"][t]]
     assert len(segments) == 1 and segments[0] >= 0.5 * (len(e.points) - 1), (segments, len(e.points) - 1)
+
+
+def test_size_classes_round_down_within_the_class_ratio():
+    sizes = {1: 0.1, 2: 0.14, 3: 0.15, 4: 1.0, 5: 7.3}
+    classes = size_classes(sizes, 0.1)
+    assert sorted(i for ids in classes.values() for i in ids) == list(sizes)
+    for h, ids in classes.items():
+        assert all(h <= sizes[i] * (1 + 1e-12) and sizes[i] < h * CLASS_RATIO for i in ids)
+    assert classes[0.1] == [1, 2]
+
+
+def _mesh_geo(path):
+    """Open the ``.geo`` as ``gmsh part.geo -2`` would; (curve segment lengths by curve, meshed surfaces)."""
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        gmsh.model.mesh.generate(2)
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        x = dict(zip(np.asarray(tags).tolist(), np.asarray(coords).reshape(-1, 3)))
+        lengths = {}
+        for _, c in gmsh.model.getEntities(1):
+            seg = np.asarray(gmsh.model.mesh.getElementsByType(1, c)[1]).reshape(-1, 2)
+            lengths[c] = np.array([np.linalg.norm(x[a] - x[b]) for a, b in seg.tolist()])
+        surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        meshed = [s for s in surfaces if len(gmsh.model.mesh.getElementsByType(2, s)[0])]
+        return lengths, surfaces, meshed
+    finally:
+        gmsh.finalize()
+
+
+def test_geo_export_grades_a_long_edge_between_fine_vertices(tmp_path):
+    """A 100-long bar with 0.1 chamfers at both ends: its long edges run between fine vertices. The
+    ``.geo`` sizes them fine at the ends and coarse in the middle, not fine all along."""
+    bar = cq.Workplane().box(100, 10, 10).edges("|Y or |Z").edges("<X or >X").chamfer(0.1).val().wrapped
+    out = tmp_path / "bar.geo"
+    result = mesh_shape(bar, ald=ALD, output=out)
+    text = out.read_text()
+    assert "Geometry.OCCAutoFix = 0;" in text
+    lengths, surfaces, meshed = _mesh_geo(out)
+    assert meshed == surfaces
+    long_edges = [e.id for e in result.grid.edges if np.sum(e.segment_lengths) > 90]
+    assert long_edges
+    for c in long_edges:
+        seg = lengths[c]
+        assert seg.min() < 0.5 and seg.max() > 10 * seg.min(), (c, seg.min(), seg.max())
+        assert len(seg) < 100, (c, len(seg))  # uniformly fine (0.5 or less) would be 200 and more
+
+
+def test_geo_export_has_a_few_fields_per_size_class_not_per_edge(tmp_path):
+    """One Distance field per size class for vertices and for curves (a ``Min`` over a few Thresholds):
+    gmsh evaluates the background field at every point it places, and hundreds of fields took minutes."""
+    plate = cq.Workplane().box(60, 60, 2).faces(">Z").workplane().rarray(10, 10, 5, 5).hole(2.0).val().wrapped
+    out = tmp_path / "plate.geo"
+    result = mesh_shape(plate, ald=ALD, output=out)
+    text = out.read_text()
+    distances = re.findall(r"Field\[\d+\] = Distance", text)
+    assert len(result.grid.edges) > 80 and 2 <= len(distances) <= 12, len(distances)
+    listed = [int(i) for block in re.findall(r"CurvesList = \{([^}]*)\}", text) for i in block.split(",")]
+    assert sorted(listed) == sorted(e.id for e in result.grid.edges if not e.degenerate)
+    _, surfaces, meshed = _mesh_geo(out)
+    assert meshed == surfaces

@@ -1,4 +1,5 @@
-"""Mesh sizes from edge-grid spacings: a graded size field, gmsh size settings and a ``.geo`` export.
+"""Mesh sizes from edge-grid spacings: a graded size field and gmsh size settings (the ``.geo`` export
+is :mod:`cadedge.mesh.spacing_geo`).
 
 Every grid point carries a local spacing (the mean of its neighbouring segment lengths; at a vertex the
 vertex spacing). The size anywhere is ``min_i (h_i + growth * |x - p_i|)`` over the nearest grid points,
@@ -10,15 +11,12 @@ triangles.
 from __future__ import annotations
 
 import contextlib
-import os
-from pathlib import Path
 from typing import Iterator
 
 import gmsh
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..atomic import atomic_path
 from ..errors import InputError
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, vertex_spacings
 from . import DEFAULT_GROWTH
@@ -183,59 +181,3 @@ def curves_from_spacings() -> Iterator[None]:
         yield
     finally:
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", before)
-
-
-def _threshold(lines: list[str], n: int, target: str, size: float, max_size: float, growth: float) -> int:
-    """Append a Distance field to ``target`` and a Threshold growing from ``size``; returns the Threshold's id."""
-    lines += [f"Field[{n}] = Distance; Field[{n}].{target};",
-              f"Field[{n + 1}] = Threshold; Field[{n + 1}].InField = {n}; Field[{n + 1}].SizeMin = {size!r}; "
-              f"Field[{n + 1}].SizeMax = {max_size!r}; Field[{n + 1}].DistMin = 0; "
-              f"Field[{n + 1}].DistMax = {max(max_size - size, 0.0) / growth!r};"]
-    return n + 1
-
-
-def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAULT_GROWTH,
-              max_size: float | None = None) -> Path:
-    """Write a gmsh ``.geo`` carrying our spacings, plus the shape as ``<stem>.brep`` beside it.
-
-    The ``.geo`` merges the BREP (gmsh's tags are then cadedge's ids: MapShapes order) and sizes the mesh
-    with Distance/Threshold fields growing by ``growth`` away from each vertex (from its spacing) and from
-    each curve (from its median spacing). The ``.geo`` language has no sizes at parametric points, so along
-    a curve this approximates the grid; :func:`apply_spacing_sizes` gives gmsh the exact per-point sizes
-    through the API. Point sizes are not used: gmsh would interpolate them along curves, making a straight
-    edge between two fine vertices fine all along.
-    """
-    from OCP.BRepTools import BRepTools
-
-    target = Path(path)
-    if grid.shape is None:
-        raise InputError(f"{grid.source}: the shape grid carries no OCCT shape to export")
-    field = SizeField(grid, growth=growth, max_size=max_size)
-    brep = target.with_suffix(".brep")
-    with atomic_path(brep) as tmp:
-        if not BRepTools.Write_s(grid.shape, str(tmp)):
-            raise InputError(f"{brep}: OCCT could not write the BREP")
-    lines = [f"// cadedge spacing export of {grid.source} (options {grid.options})",
-             'SetFactory("OpenCASCADE");',
-             "Geometry.OCCFixDegenerated = 0; Geometry.OCCFixSmallEdges = 0; Geometry.OCCFixSmallFaces = 0;",
-             "Geometry.OCCSewFaces = 0; Geometry.OCCMakeSolids = 0; Geometry.OCCImportLabels = 0;",
-             f'Merge "{brep.name}";',
-             "Mesh.MeshSizeFromCurvature = 0; Mesh.MeshSizeFromPoints = 0; Mesh.MeshSizeExtendFromBoundary = 0;",
-             f"Mesh.MeshSizeMax = {field.max_size!r};"]
-    fields, n = [], 1
-    for vid, h in sorted(vertex_sizes(grid).items()):
-        if h > 0:
-            fields.append(_threshold(lines, n, f"PointsList = {{{vid}}}", h, field.max_size, growth))
-            n += 2
-    for e in grid.edges:
-        if not e.degenerate and len(e.points) >= 2:
-            h = float(np.median(node_spacings(e)))
-            fields.append(_threshold(lines, n, f"CurvesList = {{{e.id}}}; Field[{n}].Sampling = "
-                                               f"{max(len(e.points), 2)}", h, field.max_size, growth))
-            n += 2
-    if fields:
-        lines += [f"Field[{n}] = Min; Field[{n}].FieldsList = {{{', '.join(map(str, fields))}}};",
-                  f"Background Field = {n};"]
-    with atomic_path(target) as tmp:
-        tmp.write_text("\n".join(lines) + "\n")
-    return target
