@@ -119,3 +119,16 @@ def test_geo_export_has_a_few_fields_per_size_class_not_per_edge(tmp_path):
     assert sorted(listed) == sorted(e.id for e in result.grid.edges if not e.degenerate)
     _, surfaces, meshed = _mesh_geo(out)
     assert meshed == surfaces
+
+
+def test_curves_from_spacings_sets_and_restores_gmsh_options():
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.sizes import INTEGRATION_PRECISION, curves_from_spacings
+
+    with gmsh_session():
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 20)
+        with curves_from_spacings():
+            assert gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") == 0
+            assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == INTEGRATION_PRECISION
+        assert gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") == 20
+        assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == 1e-9

@@ -164,9 +164,17 @@ def _size_own_curve(tag: int, field: SizeField) -> None:
         gmsh.model.mesh.setSizeAtParametricPoints(1, tag, u.tolist(), field(x).tolist())
 
 
+#: ``Mesh.LcIntegrationPrecision`` for meshing curves from sizes (gmsh's default: 1e-9). gmsh integrates
+#: the size along each curve to place its nodes; at 1e-9 it evaluates the size field hundreds of
+#: thousands of times per curve. At this precision the curve meshes of 917_fusee are the same (8074
+#: segments, sizes mode at ALD 1e-2) for 0.3 s of CPU instead of 3.2 s.
+INTEGRATION_PRECISION = 1e-5
+
+
 @contextlib.contextmanager
 def curves_from_spacings() -> Iterator[None]:
-    """Mesh curves from the spacing sizes alone: surface curvature sizing is off inside the block.
+    """Mesh curves from the spacing sizes alone: surface curvature sizing is off inside the block, and
+    the size integration along curves is :data:`INTEGRATION_PRECISION`.
 
     gmsh sizes a curve by the largest curvature of the surfaces around it as well as its own
     (``Mesh.MeshSizeFromCurvature``, switched on for face interiors by the surface target). Near a
@@ -175,9 +183,12 @@ def curves_from_spacings() -> Iterator[None]:
     meshing the face on it. The edge grids already meet the ALD along the curves, so in sizes mode
     curves follow them; faces still get the curvature sizes.
     """
-    before = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature")
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    options = {"Mesh.MeshSizeFromCurvature": 0, "Mesh.LcIntegrationPrecision": INTEGRATION_PRECISION}
+    before = {name: gmsh.option.getNumber(name) for name in options}
+    for name, value in options.items():
+        gmsh.option.setNumber(name, value)
     try:
         yield
     finally:
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", before)
+        for name, value in before.items():
+            gmsh.option.setNumber(name, value)

@@ -11,7 +11,7 @@ the cost of the export is the cost of that field, times the number of evaluation
   least ``1 / CLASS_RATIO`` of it.
 - **Fewer evaluations.** gmsh integrates the size along each curve to place its nodes, to a relative
   precision of 1e-9 by default (``Mesh.LcIntegrationPrecision``), evaluating the field hundreds of
-  thousands of times per curve. At :data:`INTEGRATION_PRECISION` the curve meshes are the same (on
+  thousands of times per curve. At :data:`~cadedge.mesh.sizes.INTEGRATION_PRECISION` the curve meshes are the same (on
   917_fusee one curve of 723 gets one segment more) for a tenth of the time.
 
 The sizes stay graded the way :class:`~cadedge.mesh.sizes.SizeField` grades them: near a vertex the
@@ -34,7 +34,7 @@ from ..atomic import atomic_path
 from ..errors import InputError
 from ..shapegrid import ShapeGrid
 from . import DEFAULT_GROWTH
-from .sizes import SizeField, node_spacings, vertex_sizes
+from .sizes import INTEGRATION_PRECISION, SizeField, node_spacings, vertex_sizes
 
 #: Spacings are rounded down to ``base * CLASS_RATIO**k``: a size class per factor of sqrt(2).
 CLASS_RATIO = math.sqrt(2.0)
@@ -42,8 +42,6 @@ CLASS_RATIO = math.sqrt(2.0)
 #: class size on the longest curve of the class (the distance is then off by at most one class size,
 #: the size by ``growth`` times that), within these bounds.
 MIN_SAMPLING, MAX_SAMPLING = 20, 2000
-#: ``Mesh.LcIntegrationPrecision`` written to the ``.geo`` (gmsh's default: 1e-9).
-INTEGRATION_PRECISION = 1e-5
 
 #: gmsh's import of the BREP, as cadedge's own: no healing, sewing or fixing, so the entities (and their
 #: tags, which are cadedge's ids) are the B-rep's exactly.
