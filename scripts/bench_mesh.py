@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import resource
 import subprocess
 import sys
 import tempfile
@@ -82,6 +83,7 @@ def geo(path: Path, ald: float, timeout: float) -> dict:
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         mesh_shape(path, ald=ald, output=Path(tmp) / "part.geo")
+        cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         try:
             done = subprocess.run([sys.executable, exe, "part.geo", "-2", "-o", "part.msh"], cwd=tmp,
                                   capture_output=True, text=True, timeout=timeout)
@@ -90,8 +92,10 @@ def geo(path: Path, ald: float, timeout: float) -> dict:
                        seconds=time.perf_counter() - t0)
             return rec
         errors = [ln for ln in done.stdout.splitlines() + done.stderr.splitlines() if "Error" in ln]
+        cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)  # gmsh's own CPU time: the machine may be loaded
         rec.update(exit=done.returncode, written=(Path(tmp) / "part.msh").exists(), error="; ".join(errors[:2]),
-                   seconds=time.perf_counter() - t0)
+                   seconds=time.perf_counter() - t0,
+                   gmsh_cpu=cpu1.ru_utime + cpu1.ru_stime - cpu0.ru_utime - cpu0.ru_stime)
         if rec["written"]:
             rec.update(_msh_faces(Path(tmp) / "part.msh"))
     return rec

@@ -15,7 +15,7 @@ the caller, and ``timeout`` bounds the whole job. Every face is meshed on its ow
 strategies before it is given up. The result carries the triangles, the faces that still failed (with
 gmsh's reason; the rest is meshed) and :class:`~cadedge.mesh.check.MeshCheck`; nothing meshed means no
 output file. ``output`` may be ``.msh``, ``.stl`` or ``.vtk``
-(the mesh) or ``.geo`` (the spacing export, see :func:`~cadedge.mesh.sizes.write_geo`; no meshing).
+(the mesh) or ``.geo`` (the spacing export, see :func:`~cadedge.mesh.spacing_geo.write_geo`; no meshing).
 """
 
 from __future__ import annotations
@@ -145,7 +145,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     if out is not None and not (out.parent if str(out.parent) else Path(".")).is_dir():
         raise InputError(f"{out}: output folder does not exist")
     from .proximity import fit_to_sizes
-    from .sizes import SizeField, write_geo
+    from .sizes import SizeField
+    from .spacing_geo import write_geo
 
     t0 = time.perf_counter()
     grid = _grid_of(source, ald, min_length, max_length, max_growth, allow_partial)

@@ -26,6 +26,7 @@ size fields, physical groups and per-face measurements plug in without touching 
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import os
 import pickle
@@ -174,7 +175,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     from .generate import boundary_multiplicity, mesh_faces, read_mesh
     from .gmsh_model import gmsh_session, map_entities
     from .impose import impose_edge_grids
-    from .sizes import apply_spacing_sizes, configure_gmsh_sizes
+    from .sizes import apply_spacing_sizes, configure_gmsh_sizes, curves_from_spacings
 
     say = progress or (lambda line: None)
     notes: list[str] = []
@@ -201,7 +202,8 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         _hooks(ctx, "before_generate")
         say("curves")
         try:
-            gmsh.model.mesh.generate(1)
+            with curves_from_spacings() if job.mode == "sizes" else contextlib.nullcontext():
+                gmsh.model.mesh.generate(1)
         except Exception as exc:  # gmsh's bare Exception: the faces on the curves it missed fail below
             notes.append(f"gmsh's curve meshing reported: {exc}")
         ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)]

@@ -1,0 +1,13 @@
+"""Measurements taken inside the gmsh child process by the mesh tests (hooks of cadedge.mesh.worker)."""
+
+from __future__ import annotations
+
+
+def curve_segments(ctx) -> dict:
+    """``after_mesh`` hook: line elements on every gmsh curve, the curve of each matched edge, and the
+    curves no edge maps to."""
+    import gmsh
+
+    return {"segments": {t: len(gmsh.model.mesh.getElementsByType(1, t)[0]) for _, t in gmsh.model.getEntities(1)},
+            "curve_of_edge": {eid: m.tag for eid, m in ctx.emap.edges.items()},
+            "unmatched_curves": list(ctx.emap.unmatched_curves)}

@@ -1,0 +1,134 @@
+"""Sizes mode (``--mode sizes``: gmsh meshes the curves from our sizes) and the ``.geo`` spacing export,
+on real shapes through real gmsh."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import re
+
+import numpy as np
+import pytest
+
+gmsh = pytest.importorskip("gmsh")
+cq = pytest.importorskip("cadquery")
+pytest.importorskip("trimesh")
+
+import cadedge  # noqa: E402
+from cadedge.mesh import mesh_shape  # noqa: E402
+from cadedge.mesh.generate import STRATEGIES  # noqa: E402
+from cadedge.mesh.spacing_geo import CLASS_RATIO, size_classes  # noqa: E402
+
+ALD = 1e-2
+PROBE = {"after_mesh": ["mesh_probes:curve_segments"]}
+
+
+def _segments_per_edge(result) -> dict[int, tuple[int, int]]:
+    """Edge id -> (grid segments, gmsh curve segments) for every matched, non-degenerate edge."""
+    probe = result.extras["mesh_probes:curve_segments"]
+    return {e.id: (len(e.points) - 1, probe["segments"][probe["curve_of_edge"][e.id]])
+            for e in result.grid.edges if not e.degenerate and e.id in probe["curve_of_edge"]}
+
+
+def test_sizes_mode_meshes_a_cone_apex_with_curves_that_follow_the_grid():
+    """gmsh's surface-curvature sizing split the seam running into a cone's apex far below the grid's
+    spacing (3 times its segments here; 52 times on the cone of the hard model ``seams_and_poles``, where
+    gmsh then failed three strategies on that face, for a minute): curves now follow the grids, and every
+    face meshes at the first strategy."""
+    cone = cq.Solid.makeCone(1.5, 0.0, 3.0).wrapped
+    result = mesh_shape(cone, ald=ALD, mode="sizes", hooks=PROBE, timeout=120)
+    assert result.ok, result.problems(verbose=True)
+    assert {f.strategy for f in result.faces} == {STRATEGIES[0].name}
+    assert not [n for n in result.notes if "hung" in n or "crashed" in n]
+    for eid, (grid, ours) in _segments_per_edge(result).items():
+        assert 0.5 * grid <= ours <= 2 * grid + 2, (eid, grid, ours)
+
+
+def test_sizes_mode_sizes_an_unmatched_curve_from_its_neighbours():
+    """A curve no edge grid maps to is graded from the size field on gmsh's own curve, not left at the
+    largest size."""
+    grid = cadedge.refine_shape(cq.Solid.makeCylinder(2.0, 5.0).wrapped, ald=ALD, max_growth=2.0)
+    g = copy.copy(grid)
+    g.edges = list(grid.edges)
+    e = next(e for e in g.edges if e.curve == "Circle" and len(e.faces) == 2)
+    g.edges[e.id - 1] = dataclasses.replace(e, points=e.points + np.array([0.0, 0.0, 0.05]), params=e.params + 0.01)
+    result = mesh_shape(g, mode="sizes", hooks=PROBE, timeout=120)
+    assert result.ok and result.unmatched_edges == [e.id], result.problems(verbose=True)
+    probe = result.extras["mesh_probes:curve_segments"]
+    segments = [probe["segments"][t] for t in probe["unmatched_curves"] if probe["segments"][t]]
+    assert len(segments) == 1 and segments[0] >= 0.5 * (len(e.points) - 1), (segments, len(e.points) - 1)
+
+
+def test_size_classes_round_down_within_the_class_ratio():
+    sizes = {1: 0.1, 2: 0.14, 3: 0.15, 4: 1.0, 5: 7.3}
+    classes = size_classes(sizes, 0.1)
+    assert sorted(i for ids in classes.values() for i in ids) == list(sizes)
+    for h, ids in classes.items():
+        assert all(h <= sizes[i] * (1 + 1e-12) and sizes[i] < h * CLASS_RATIO for i in ids)
+    assert classes[0.1] == [1, 2]
+
+
+def _mesh_geo(path):
+    """Open the ``.geo`` as ``gmsh part.geo -2`` would; (curve segment lengths by curve, meshed surfaces)."""
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        gmsh.model.mesh.generate(2)
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        x = dict(zip(np.asarray(tags).tolist(), np.asarray(coords).reshape(-1, 3)))
+        lengths = {}
+        for _, c in gmsh.model.getEntities(1):
+            seg = np.asarray(gmsh.model.mesh.getElementsByType(1, c)[1]).reshape(-1, 2)
+            lengths[c] = np.array([np.linalg.norm(x[a] - x[b]) for a, b in seg.tolist()])
+        surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        meshed = [s for s in surfaces if len(gmsh.model.mesh.getElementsByType(2, s)[0])]
+        return lengths, surfaces, meshed
+    finally:
+        gmsh.finalize()
+
+
+def test_geo_export_grades_a_long_edge_between_fine_vertices(tmp_path):
+    """A 100-long bar with 0.1 chamfers at both ends: its long edges run between fine vertices. The
+    ``.geo`` sizes them fine at the ends and coarse in the middle, not fine all along."""
+    bar = cq.Workplane().box(100, 10, 10).edges("|Y or |Z").edges("<X or >X").chamfer(0.1).val().wrapped
+    out = tmp_path / "bar.geo"
+    result = mesh_shape(bar, ald=ALD, output=out)
+    text = out.read_text()
+    assert "Geometry.OCCAutoFix = 0;" in text
+    lengths, surfaces, meshed = _mesh_geo(out)
+    assert meshed == surfaces
+    long_edges = [e.id for e in result.grid.edges if np.sum(e.segment_lengths) > 90]
+    assert long_edges
+    for c in long_edges:
+        seg = lengths[c]
+        assert seg.min() < 0.5 and seg.max() > 10 * seg.min(), (c, seg.min(), seg.max())
+        assert len(seg) < 100, (c, len(seg))  # uniformly fine (0.5 or less) would be 200 and more
+
+
+def test_geo_export_has_a_few_fields_per_size_class_not_per_edge(tmp_path):
+    """One Distance field per size class for vertices and for curves (a ``Min`` over a few Thresholds):
+    gmsh evaluates the background field at every point it places, and hundreds of fields took minutes."""
+    plate = cq.Workplane().box(60, 60, 2).faces(">Z").workplane().rarray(10, 10, 5, 5).hole(2.0).val().wrapped
+    out = tmp_path / "plate.geo"
+    result = mesh_shape(plate, ald=ALD, output=out)
+    text = out.read_text()
+    distances = re.findall(r"Field\[\d+\] = Distance", text)
+    assert len(result.grid.edges) > 80 and 2 <= len(distances) <= 12, len(distances)
+    listed = [int(i) for block in re.findall(r"CurvesList = \{([^}]*)\}", text) for i in block.split(",")]
+    assert sorted(listed) == sorted(e.id for e in result.grid.edges if not e.degenerate)
+    _, surfaces, meshed = _mesh_geo(out)
+    assert meshed == surfaces
+
+
+def test_curves_from_spacings_sets_and_restores_gmsh_options():
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.sizes import INTEGRATION_PRECISION, curves_from_spacings
+
+    with gmsh_session():
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 20)
+        with curves_from_spacings():
+            assert gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") == 0
+            assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == INTEGRATION_PRECISION
+        assert gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") == 20
+        assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == 1e-9
