@@ -59,6 +59,27 @@ cq = pytest.importorskip("cadquery")
 from cadedge.mesh import mesh_shape  # noqa: E402
 
 
+
+def test_flip_edges_never_makes_a_diagonal_that_is_already_an_edge():
+    """Near a cone's apex the node across a bad diagonal is often joined to the other already (a fan):
+    swapping there stacked a second pair of triangles on the existing ones, a crack in the mesh."""
+    x = np.array([[0, 0, 0], [4, 0, 0], [2, 0.5, 0], [2, -0.5, 0], [2, 0, 1]], dtype=float)
+    tri = np.array([[0, 1, 2], [1, 0, 3], [3, 2, 4]])
+    flipped = flip_edges(x, tri, set())
+    assert np.array_equal(flipped, tri)
+    assert len({tuple(sorted(t)) for t in flipped}) == len(flipped)
+
+
+def test_a_cone_meshes_watertight_in_both_modes():
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+
+    cone = cq.Solid.makeCone(1.5, 0.0, 3.0).wrapped
+    for mode, ald in (("nodes", 1e-3), ("sizes", 1e-2)):  # both swapped a diagonal into the apex's fan
+        result = mesh_shape(cone, ald=ald, mode=mode, timeout=120)
+        assert result.ok, (mode, result.problems(verbose=True))
+
+
 def _assert_no_slivers(result, eps):
     assert result.ok, result.problems()
     ang = triangle_angles(result.nodes, result.triangles).min(axis=1)

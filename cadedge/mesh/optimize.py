@@ -128,7 +128,7 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
                rounds: int = FLIP_ROUNDS) -> np.ndarray:
     """Swap the diagonal of pairs of triangles wherever that raises the smaller of their two smallest
     angles; edges in ``fixed`` (sorted node-index pairs: the curve segments) are never swapped, nor an edge
-    whose new triangles would turn against the old ones. Each round swaps, for every triangle, at most its
+    whose new triangles would turn against the old ones or whose new diagonal is already an edge. Each round swaps, for every triangle, at most its
     best edge. Returns the new triangles (same count and orientation)."""
     tri = np.array(tri, dtype=np.int64)
     fixed_keys = np.array(sorted(a * (len(x) + 1) + b for a, b in fixed), dtype=np.int64)
@@ -156,6 +156,9 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
         after = np.minimum(triangle_angles(x, new1).min(axis=1), triangle_angles(x, new2).min(axis=1))
         ref = _normals(x, tri[t1]) + _normals(x, tri[t2])
         ok = (np.einsum("ij,ij->i", _normals(x, new1), ref) > 0) & (np.einsum("ij,ij->i", _normals(x, new2), ref) > 0)
+        new_key = np.minimum(pc, pd) * (len(x) + 1) + np.maximum(pc, pd)
+        ok &= ~np.isin(new_key, ks)  # the new diagonal already joins c and d (a fan at an apex): a flip would
+        # stack a second pair of triangles on the existing ones
         gain = np.where(ok & (pc != pd), after - before, 0.0)
         good = gain > 1e-6
         if not good.any():
@@ -168,6 +171,9 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
         first = _group_max(np.concatenate([-idx, -idx]).astype(float), np.concatenate([t1[idx], t2[idx]]),
                            len(tri))
         pick[idx] = (first[t1[idx]] == -idx) & (first[t2[idx]] == -idx)
+        idx = np.flatnonzero(pick)  # two swaps in one round must not make the same new diagonal
+        _, once = np.unique(new_key[idx], return_index=True)
+        pick[np.setdiff1d(idx, idx[once])] = False
         tri[t1[pick]] = new1[pick]
         tri[t2[pick]] = new2[pick]
     return tri
