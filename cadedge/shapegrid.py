@@ -7,7 +7,7 @@ the CLI. Ids are 1-based in ``TopExp::MapShapes`` order (docs/api.md).
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -68,6 +68,13 @@ def vertex_spacings(edges: list[ShapeEdgeGrid]) -> dict[int, float]:
         for vid, h in zip(e.vertices, hs):
             spacing[vid] = min(spacing.get(vid, h), h)
     return spacing
+
+
+def with_edges(grid: "ShapeGrid", edges: list[ShapeEdgeGrid]) -> "ShapeGrid":
+    """A new ``grid`` holding ``edges`` instead of its own, its vertex spacings measured on them."""
+    spacing = vertex_spacings(edges)
+    vertices = [replace(v, spacing=spacing.get(v.id, v.spacing)) for v in grid.vertices]
+    return replace(grid, edges=edges, vertices=vertices)
 
 
 @dataclass

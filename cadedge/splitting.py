@@ -61,6 +61,14 @@ def split_evenly(params: np.ndarray, pieces: np.ndarray) -> np.ndarray:
                            for k, n in enumerate(pieces) if n > 1] or [np.zeros(0)])
 
 
+def split_segments(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
+                   evaluate: Evaluate) -> tuple[np.ndarray, np.ndarray]:
+    """A new grid: segment ``k`` cut into ``pieces[k]`` equal parameter steps, the new points on the
+    curve (``evaluate(u) -> (n, 3)``); the old samples stay as they are."""
+    new_u = split_evenly(params, pieces)
+    return insert_points(params, points, new_u, evaluate(new_u))
+
+
 def point_at_arc(evaluate: Evaluate, u0: float, u1: float, start: np.ndarray, dist: float, *,
                  from_start: bool = True, dense: int = 17) -> tuple[float, np.ndarray, int]:
     """(parameter, point, evaluations) at arc distance ``dist`` from one end of the segment [u0, u1]

@@ -142,7 +142,8 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
     from ..errors import GeometryError
     from ..occt.edgecurve import EdgeCurve
     from ..occt.topology import Topology
-    from ..shapegrid import vertex_spacings
+    from ..shapegrid import with_edges
+    from ..splitting import split_segments
 
     topo = Topology(grid.shape)
     areas = brep_face_areas(grid.shape) if brep_areas is None else np.asarray(brep_areas, dtype=float)
@@ -183,14 +184,9 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
             pieces = np.maximum(pieces, np.nan_to_num(np.maximum(k_area, k_curv), nan=1).astype(int))
         if not np.any(pieces > 1):
             continue
-        new_u = np.concatenate([e.params[k] + (e.params[k + 1] - e.params[k]) * np.arange(1, n) / n
-                                for k, n in enumerate(pieces) if n > 1])
-        at = np.repeat(np.arange(1, len(e.params)), pieces - 1)
-        edges[i] = dataclasses.replace(e, params=np.insert(e.params, at, new_u),
-                                       points=np.insert(e.points, at, curve.evaluate(new_u), axis=0))
-    spacing = vertex_spacings(edges)
-    vertices = [dataclasses.replace(v, spacing=spacing.get(v.id, v.spacing)) for v in grid.vertices]
-    return dataclasses.replace(grid, edges=edges, vertices=vertices)
+        params, points = split_segments(e.params, e.points, pieces, curve.evaluate)
+        edges[i] = dataclasses.replace(e, params=params, points=points)
+    return with_edges(grid, edges)
 
 
 #: Face-wise grading: a boundary segment longer than this many times the size graded from its own face's
@@ -214,7 +210,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
     from ..errors import GeometryError, InputError
     from ..occt.edgecurve import EdgeCurve
     from ..occt.topology import Topology
-    from ..shapegrid import vertex_spacings
+    from ..shapegrid import with_edges
     from .sizes import SizeField
 
     topo = None
@@ -265,9 +261,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
             changed = True
         if not changed:
             break
-    spacing = vertex_spacings(edges)
-    return dataclasses.replace(grid, edges=edges, vertices=[dataclasses.replace(v, spacing=spacing.get(v.id, v.spacing))
-                                                            for v in grid.vertices])
+    return with_edges(grid, edges)
 
 
 def prepare(grid, surface_ald: float) -> tuple[object, dict]:

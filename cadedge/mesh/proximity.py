@@ -16,8 +16,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..shapegrid import ShapeGrid, vertex_spacings
-from ..splitting import insert_points, split_evenly
+from ..shapegrid import ShapeGrid, with_edges
+from ..splitting import split_segments
 
 #: A segment is split when it is longer than this many times the size field at its midpoint.
 RATIO = 3.0
@@ -45,15 +45,12 @@ def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np
             pieces = np.where(seg > ratio * size, np.ceil(seg / np.maximum(size, 1e-300)), 1).astype(int)
             if not np.any(pieces > 1) or e.tolerance > TOLERANCE_SHARE * np.min(seg / pieces):
                 continue  # nothing to split, or a loose edge: new points would stray from its faces
-            new_u = split_evenly(e.params, pieces)
-            params, points = insert_points(e.params, e.points, new_u, curves[e.id].evaluate(new_u))
+            params, points = split_segments(e.params, e.points, pieces, curves[e.id].evaluate)
             edges[i] = dataclasses.replace(e, params=params, points=points)
             changed = True
         if not changed:
             break
-    spacing = vertex_spacings(edges)
-    vertices = [dataclasses.replace(v, spacing=spacing.get(v.id, v.spacing)) for v in grid.vertices]
-    return dataclasses.replace(grid, edges=edges, vertices=vertices)
+    return with_edges(grid, edges)
 
 
 class _LazyCurves(dict):

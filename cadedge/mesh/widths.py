@@ -18,8 +18,8 @@ import dataclasses
 
 import numpy as np
 
-from ..shapegrid import ShapeGrid, vertex_spacings
-from ..splitting import insert_points, split_evenly
+from ..shapegrid import ShapeGrid, with_edges
+from ..splitting import split_segments
 from .proximity import TOLERANCE_SHARE, _LazyCurves
 
 #: A segment is split when longer than this many times its face's width at its midpoint: a strip of
@@ -96,13 +96,10 @@ def fit_to_widths(grid: ShapeGrid, *, ratio: float = WIDTH_RATIO, passes: int = 
             new = int(np.sum(pieces - 1))
             if not new or added + new > budget or e.tolerance > TOLERANCE_SHARE * np.min(seg / pieces):
                 continue  # nothing to split, over the budget, or a loose edge (see proximity.py)
-            new_u = split_evenly(e.params, pieces)
-            params, points = insert_points(e.params, e.points, new_u, curves[e.id].evaluate(new_u))
+            params, points = split_segments(e.params, e.points, pieces, curves[e.id].evaluate)
             edges[i] = dataclasses.replace(e, params=params, points=points)
             added += new
             changed = True
         if not changed:
             break
-    spacing = vertex_spacings(edges)
-    vertices = [dataclasses.replace(v, spacing=spacing.get(v.id, v.spacing)) for v in grid.vertices]
-    return dataclasses.replace(grid, edges=edges, vertices=vertices)
+    return with_edges(grid, edges)
