@@ -107,24 +107,20 @@ def _msh_faces(path: Path) -> dict:
     import numpy as np
 
     from cadedge.mesh.check import check_triangles
+    from cadedge.mesh.generate import read_mesh
 
     gmsh.initialize(readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.open(str(path))
         surfaces = [t for _, t in gmsh.model.getEntities(2)]
-        tris = [np.asarray(gmsh.model.mesh.getElementsByType(2, s)[1], dtype=np.int64).reshape(-1, 3)
-                for s in surfaces]
-        tags, coords, _ = gmsh.model.mesh.getNodes()
+        raw = read_mesh(surfaces)
     finally:
         gmsh.finalize()
-    tags = np.asarray(tags, dtype=np.int64)
-    lookup = np.zeros(int(tags.max()) + 1 if len(tags) else 1, dtype=np.int64)
-    lookup[tags] = np.arange(len(tags))
-    all_tri = lookup[np.vstack(tris)] if tris else np.zeros((0, 3), dtype=np.int64)
-    check = check_triangles(np.asarray(coords, dtype=float).reshape(-1, 3), all_tri)
-    return {"faces": len(surfaces), "meshed": sum(1 for t in tris if len(t)), "min_angle": check.min_angle_deg,
-            "under10": 100 * check.small_angle_share, "triangles": len(all_tri)}
+    check = check_triangles(raw.nodes, raw.triangles)
+    return {"faces": len(surfaces), "meshed": len(np.unique(raw.triangle_surfaces)),
+            "min_angle": check.min_angle_deg, "under10": 100 * check.small_angle_share,
+            "triangles": len(raw.triangles)}
 
 
 def run_isolated(path: Path, ald: float, mode: str, timeout: float) -> dict:

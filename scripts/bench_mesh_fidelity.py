@@ -75,6 +75,8 @@ def gmsh_run(path: Path, per_circle: float, max_size: float) -> dict:
     """gmsh alone on ``path`` with curvature sizes (runs in this process: call it in a child)."""
     import gmsh
 
+    from cadedge.mesh.generate import read_mesh
+
     t0 = time.perf_counter()
     gmsh.initialize(readConfigFiles=False)
     try:
@@ -87,21 +89,12 @@ def gmsh_run(path: Path, per_circle: float, max_size: float) -> dict:
         except Exception:  # gmsh's bare Exception: measure what was meshed; empty faces are counted
             pass
         seconds = time.perf_counter() - t0
-        tags, coords, _ = gmsh.model.mesh.getNodes()
-        tris, owners, areas = [], [], {}
-        for _, s in gmsh.model.getEntities(2):
-            areas[s] = float(gmsh.model.occ.getMass(2, s))
-            t = np.asarray(gmsh.model.mesh.getElementsByType(2, s)[1], dtype=np.int64).reshape(-1, 3)
-            tris.append(t)
-            owners.append(np.full(len(t), s))
+        surfaces = [s for _, s in gmsh.model.getEntities(2)]
+        areas = {s: float(gmsh.model.occ.getMass(2, s)) for s in surfaces}
+        raw = read_mesh(surfaces)
     finally:
         gmsh.finalize()
-    tags = np.asarray(tags, dtype=np.int64)
-    lookup = np.zeros(int(tags.max()) + 1 if len(tags) else 1, dtype=np.int64)
-    lookup[tags] = np.arange(len(tags))
-    tri = lookup[np.vstack(tris)] if tris else np.zeros((0, 3), dtype=np.int64)
-    out = _figures(np.asarray(coords, dtype=float).reshape(-1, 3), tri,
-                   np.concatenate(owners) if owners else np.zeros(0), areas)
+    out = _figures(raw.nodes, raw.triangles, raw.triangle_surfaces, areas)
     out["seconds"] = seconds
     return out
 
