@@ -311,12 +311,12 @@ def gmsh_surface_areas(surfaces: list[int]) -> dict[int, float]:
     """Summed triangle area of each gmsh surface of the current model."""
     import gmsh
 
+    from .generate import node_lookup
+
     tags, coords, _ = gmsh.model.mesh.getNodes()
-    tags = np.asarray(tags, dtype=np.int64)
     if not len(tags):
         return {s: 0.0 for s in surfaces}
-    lookup = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
-    lookup[tags] = np.arange(len(tags))
+    lookup = node_lookup(tags)
     nodes = np.asarray(coords, dtype=float).reshape(-1, 3)
     out = {}
     for s in surfaces:

@@ -418,9 +418,15 @@ class RawMesh:
     triangle_surfaces: np.ndarray
 
     def index_of(self, node_tags: np.ndarray) -> np.ndarray:
-        lookup = np.full(int(self.tags.max()) + 1 if len(self.tags) else 1, -1, dtype=np.int64)
-        lookup[self.tags] = np.arange(len(self.tags))
-        return lookup[np.asarray(node_tags, dtype=np.int64)]
+        return node_lookup(self.tags)[np.asarray(node_tags, dtype=np.int64)]
+
+
+def node_lookup(tags: np.ndarray) -> np.ndarray:
+    """gmsh node tag -> row of ``tags`` (-1 for tags not among them), as an array indexed by tag."""
+    tags = np.asarray(tags, dtype=np.int64)
+    lookup = np.full(int(tags.max()) + 1 if len(tags) else 1, -1, dtype=np.int64)
+    lookup[tags] = np.arange(len(tags))
+    return lookup
 
 
 def read_mesh(surfaces: list[int]) -> RawMesh:

@@ -305,6 +305,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
 
     import gmsh
 
+    from .generate import node_lookup
     from .gmsh_model import surface_curve_uses
 
     el_tags, tri_tags = gmsh.model.mesh.getElementsByType(2, surface)
@@ -312,8 +313,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
         return False
     tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
     tags = np.asarray(tags, dtype=np.int64)
-    lookup = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
-    lookup[tags] = np.arange(len(tags))
+    lookup = node_lookup(tags)
     tri_tags = np.asarray(tri_tags, dtype=np.int64)
     if tri_tags.max() >= len(lookup) or (lookup[tri_tags] < 0).any():
         return False

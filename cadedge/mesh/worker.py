@@ -157,11 +157,11 @@ def _face_triangles(surface: int) -> np.ndarray:
     """The triangles of one gmsh surface as corner coordinates, shape (m, 3, 3)."""
     import gmsh
 
+    from .generate import node_lookup
+
     _, tri = gmsh.model.mesh.getElementsByType(2, surface)
     tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
-    tags = np.asarray(tags, dtype=np.int64)
-    lookup = np.full(int(tags.max()) + 1 if len(tags) else 1, -1, dtype=np.int64)
-    lookup[tags] = np.arange(len(tags))
+    lookup = node_lookup(tags)
     return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[np.asarray(tri, dtype=np.int64)]].reshape(-1, 3, 3)
 
 
