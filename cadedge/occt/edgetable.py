@@ -2,7 +2,8 @@
 
 Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve is read through its
 ``BRepAdaptor_Curve`` (which applies the edge's location) into :class:`EdgeTable`'s arrays, with the
-fewest OCP calls: no numpy work per edge. The table's evaluation (``cadedge/_batch.c``, the same formulas
+fewest OCP calls: the adaptor's curve handles are written by OCCT in one call and parsed
+(:mod:`cadedge.occt.curvedump`), so a spline costs no call per knot or pole; no numpy work per edge. The table's evaluation (``cadedge/_batch.c``, the same formulas
 as :mod:`cadedge.occt.fasteval`) is then checked against ``BRepAdaptor_Curve.Value`` at
 ``fasteval.CHECK_POINTS`` parameters of every edge in one batch; an edge that disagrees by more than
 ``fasteval.RTOL`` of its size, or that OCCT cannot read, is left out and refined by the per-edge path
@@ -17,43 +18,17 @@ from collections.abc import Mapping
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint
+from OCP.Geom import Geom_Circle, Geom_Ellipse, Geom_Line
 from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
                          GeomAbs_Line)
 from OCP.Standard import Standard_Failure
 
 from .. import explore, kernels, target
+from .curvedump import CIRCLE as CIRCLE_CURVE, ELLIPSE as ELLIPSE_CURVE, LINE as LINE_CURVE, CurveSet
 from .edgecurve import CONIC_ROOTS, LENGTH_TOL, SPAN_ROOTS, EdgeCurve
 from .fasteval import CHECK_POINTS, RTOL
 
 LINE, CONIC, SPLINE = 0, 1, 2
-
-
-def _spline_rows(curve, periodic_copy: bool) -> tuple[int, list[float], int, int]:
-    """(degree, period + knots + coefficients, number of knots, dim) of a B-spline or Bezier curve."""
-    n = curve.NbPoles()
-    degree = curve.Degree()
-    rational = curve.IsRational()
-    period = math.nan
-    if periodic_copy:  # a B-spline
-        if curve.IsPeriodic():
-            period = float(curve.Period())
-            curve = curve.Copy()
-            curve.SetNotPeriodic()  # the same geometry over one period with clamped knots
-            n = curve.NbPoles()
-        seq = curve.KnotSequence()
-        knots = [seq.Value(i) for i in range(1, n + degree + 2)]
-    else:  # a Bezier curve
-        knots = [0.0] * (degree + 1) + [1.0] * (degree + 1)
-    row = [period] + knots
-    if rational:
-        for i in range(1, n + 1):
-            x, y, z = curve.Pole(i).Coord()
-            w = curve.Weight(i)
-            row += (x * w, y * w, z * w, w)
-    else:
-        for i in range(1, n + 1):
-            row += curve.Pole(i).Coord()
-    return degree, row, len(knots), 4 if rational else 3
 
 
 class EdgeTable:
@@ -65,8 +40,9 @@ class EdgeTable:
     """
 
     def __init__(self, edges: list, indices: list[int]):
-        kind, gofs, ints, data, domain, hint_ofs, hints = [], [0], [], [], [], [0], []
-        rows, adaptors, kinds, lengths = [], [], [], []
+        rows, adaptors, kinds, lengths, domain, ids, splines = [], [], [], [], [], [], {}
+        curves = CurveSet()
+        add = curves.add
         for i in indices:
             try:
                 ad = BRepAdaptor_Curve(edges[i])
@@ -74,43 +50,66 @@ class EdgeTable:
                     continue
                 a, b = ad.FirstParameter(), ad.LastParameter()
                 t = ad.GetType()
-                hint = ()
                 length = math.nan
                 if t == GeomAbs_Line:
-                    lin = ad.Line()
-                    k, row, extra = LINE, [*lin.Location().Coord(), *lin.Direction().Coord()], (0, 0, 0)
-                elif t == GeomAbs_Circle or t == GeomAbs_Ellipse:
-                    c = ad.Circle() if t == GeomAbs_Circle else ad.Ellipse()
-                    pos = c.Position()
-                    rx, ry = (c.Radius(),) * 2 if t == GeomAbs_Circle else (c.MajorRadius(), c.MinorRadius())
-                    k, row, extra = CONIC, [*pos.Location().Coord(), *pos.XDirection().Coord(),
-                                            *pos.YDirection().Coord(), rx, ry], (0, 0, 0)
-                    if t == GeomAbs_Circle:
-                        length = float(rx * (b - a))
+                    curve = Geom_Line(ad.Line())
+                elif t == GeomAbs_Circle:
+                    curve = Geom_Circle(ad.Circle())
+                elif t == GeomAbs_Ellipse:
+                    curve = Geom_Ellipse(ad.Ellipse())
                 elif t == GeomAbs_BSplineCurve or t == GeomAbs_BezierCurve:
-                    spline = t == GeomAbs_BSplineCurve
-                    curve = ad.BSpline() if spline else ad.Bezier()
-                    degree, row, nk, dim = _spline_rows(curve, spline)
-                    k, extra = SPLINE, (degree, nk, dim)
-                    if spline and curve.IsPeriodic():
-                        hint = _periodic_knots(curve, a, b)
+                    curve = ad.BSpline() if t == GeomAbs_BSplineCurve else ad.Bezier()
                 else:
                     continue
                 if t != GeomAbs_Line and t != GeomAbs_Circle:
                     length = float(GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL))
+                index = add(curve)
             except Standard_Failure:
                 continue  # the per-edge path reports what OCCT cannot do
+            if t == GeomAbs_BSplineCurve:
+                splines[index] = curve
             rows.append(i)
             adaptors.append(ad)
             kinds.append(t)
-            kind.append(k)
-            ints.append(extra)
-            data += row
-            gofs.append(len(data))
+            ids.append(index)
             domain.append((a, b))
+            lengths.append(length)
+        parsed = curves.curves()
+        kind, gofs, ints, data, hint_ofs, hints = [], [0], [], [], [0], []
+        periodic = {}  # curve index -> (period, the same curve made non-periodic)
+        for index, curve in splines.items():
+            if parsed[index - 1].periodic:
+                flat = curve.Copy()
+                flat.SetNotPeriodic()  # the same geometry over one period with clamped knots
+                periodic[index] = float(curve.Period()), flat
+        if periodic:
+            flats = CurveSet()
+            for _, flat in periodic.values():
+                flats.add(flat)
+            for index, row in zip(periodic, flats.curves()):
+                parsed[index - 1] = row
+        for r, (index, (a, b)) in enumerate(zip(ids, domain)):
+            c = parsed[index - 1]
+            hint: list[float] = []
+            if c.kind == LINE_CURVE or c.kind == CIRCLE_CURVE or c.kind == ELLIPSE_CURVE:
+                kind.append(LINE if c.kind == LINE_CURVE else CONIC)
+                ints.append((0, 0, 0))
+                data += c.numbers
+                if c.kind == CIRCLE_CURVE:
+                    lengths[r] = float(c.numbers[-1] * (b - a))
+            else:
+                period = math.nan
+                if index in periodic:
+                    period = periodic[index][0]
+                    hint = _periodic_knots(splines[index], a, b)
+                kind.append(SPLINE)
+                ints.append((c.degree, len(c.knots), 4 if c.rational else 3))
+                data.append(period)
+                data += c.knots
+                data += c.numbers
+            gofs.append(len(data))
             hints += hint
             hint_ofs.append(len(hints))
-            lengths.append(length)
         self.rows, self.adaptors, self.kinds = rows, adaptors, kinds
         self.kind = np.array(kind, dtype=np.int64)
         self.gofs = np.array(gofs, dtype=np.int64)
