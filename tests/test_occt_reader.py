@@ -15,7 +15,7 @@ from OCP.TopAbs import TopAbs_COMPOUND, TopAbs_SOLID  # noqa: E402
 from OCP.TopoDS import TopoDS_Shape  # noqa: E402
 
 from cadedge.errors import InputError  # noqa: E402
-from cadedge.occt.reader import LoadedShape, load_shape  # noqa: E402
+from cadedge.occt.reader import LoadedShape, _diagonal_at_least, load_shape  # noqa: E402
 from conftest import CORPUS, FIXTURE_FILES, FIXTURES, corpus_params  # noqa: E402
 
 EMPTY_STEP = """ISO-10303-21;
@@ -195,3 +195,12 @@ def test_quiet_occt_restores_the_printers():
             assert Message.DefaultMessenger_s().Printers().Size() == 0
         assert Message.DefaultMessenger_s().Printers().Size() == 0
     assert Message.DefaultMessenger_s().Printers().Size() == before
+
+
+@pytest.mark.parametrize("path", FIXTURE_FILES + corpus_params(), ids=lambda p: p.name)
+def test_the_vertex_sample_bounds_the_box_diagonal_from_below(path):
+    """The box is skipped only where the sampled bound already rules the warning out; the bound must
+    never exceed the box it stands for (else a loose tolerance could go unreported)."""
+    shape = load_shape(path).shape
+    for samples in (2, 32, 10_000):
+        assert _diagonal_at_least(shape, 0.0, samples) <= _diag(shape)

@@ -10,6 +10,7 @@ path as given) and the reason; so does a file that OCCT transfers only in part, 
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,7 @@ from typing import Any
 from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepBndLib import BRepBndLib
-from OCP.TopAbs import TopAbs_EDGE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS_Compound, TopoDS_Shape
 
@@ -49,6 +50,8 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
         tol = BRep_Tool.Tolerance_s(TopoDS.Edge_s(edges.FindKey(i)))
         if tol > worst:
             worst, worst_id = tol, i
+    if worst <= 1e-5 * _diagonal_at_least(shape, worst):
+        return []  # neither test below can fire: skip the bounding box (OCCT boxes every face's surface)
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)
     if box.IsVoid():
@@ -61,6 +64,29 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
     decl = f", declared uncertainty {declared:.3g} {units}" if declared is not None else ""
     return [f"loose tolerance: edge {worst_id} has tolerance {worst:.3g} {units}, {worst / diag:.2g} of the "
             f"model size {diag:.4g} {units}{decl}; vertices may lie off their curves"]
+
+
+def _diagonal_at_least(shape: TopoDS_Shape, worst: float, samples: int = 32) -> float:
+    """A lower bound on the diagonal of ``BRepBndLib``'s box of ``shape``, from ``samples`` of its vertices.
+
+    A vertex lies within its tolerance of its edges' ends, which lie within the edge tolerance (at most
+    ``worst``) of the faces' surfaces that the box contains: so the vertices' own box, shrunk by those
+    tolerances, lies inside it.
+    """
+    vertices = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_VERTEX, vertices)
+    n = vertices.Extent()
+    if n == 0:
+        return 0.0
+    lo, hi, slack = [math.inf] * 3, [-math.inf] * 3, 0.0
+    for i in sorted({1 + (k * (n - 1)) // max(samples - 1, 1) for k in range(min(samples, n))}):
+        v = TopoDS.Vertex_s(vertices.FindKey(i))
+        p = BRep_Tool.Pnt_s(v).Coord()
+        lo = [min(a, b) for a, b in zip(lo, p)]
+        hi = [max(a, b) for a, b in zip(hi, p)]
+        slack = max(slack, BRep_Tool.Tolerance_s(v))
+    diag = math.dist(lo, hi)
+    return max(diag - 2 * math.sqrt(3) * (slack + worst), 0.0)
 
 
 def _compound(shapes: list[TopoDS_Shape]) -> TopoDS_Shape:
