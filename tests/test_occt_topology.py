@@ -136,3 +136,56 @@ def test_edge_with_only_a_curve_on_surface():
     assert np.allclose(np.hypot(pts[:, 0], pts[:, 1]), radius)
     # a helix on the cylinder: the pcurve's direction (1, 1) / sqrt 2 gives height u / sqrt 2
     assert np.allclose(pts[:, 2], np.linspace(0.0, 6.0, 11) / math.sqrt(2) * 1.0)
+
+
+def _free_edge_then(shape):
+    """A compound of a loose edge followed by ``shape``: MapShapes lists that edge first, the ancestor
+    map (faces first) last, so Topology must take the edge order from MapShapes."""
+    from OCP.BRep import BRep_Builder
+    from OCP.gp import gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    comp, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(comp)
+    builder.Add(comp, BRepBuilderAPI_MakeEdge(gp_Pnt(0, 0, 0), gp_Pnt(1, 2, 3)).Edge())
+    builder.Add(comp, shape)
+    return comp
+
+
+@pytest.mark.parametrize("path", sorted(FIXTURES.glob("*.step")) + corpus_params() + ["free edge first"],
+                         ids=lambda p: getattr(p, "name", p))
+def test_edges_faces_and_ends_as_mapshapes_and_topexp_give_them(path):
+    shape = _free_edge_then(load_shape(FIXTURES / "bracket.step").shape) if path == "free edge first" \
+        else load_shape(path).shape
+    t = Topology(shape)
+    maps = {}
+    for kind in (TopAbs_EDGE, TopAbs_VERTEX, TopAbs_FACE):
+        maps[kind] = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(shape, kind, maps[kind])
+    assert maps[TopAbs_EDGE].Extent() == len(t.edges)
+    for i, edge in enumerate(t.edges):
+        assert maps[TopAbs_EDGE].FindKey(i + 1).IsSame(edge) and edge.Orientation() == 0  # FORWARD
+        ends = (maps[TopAbs_VERTEX].FindIndex(TopExp.FirstVertex_s(edge)),
+                maps[TopAbs_VERTEX].FindIndex(TopExp.LastVertex_s(edge)))
+        assert t.edge_vertices[i] == ends
+        for fid in t.edge_faces[i]:
+            face = maps[TopAbs_FACE].FindKey(fid)
+            edges = TopTools_IndexedMapOfShape()
+            TopExp.MapShapes_s(face, TopAbs_EDGE, edges)
+            assert edges.Contains(edge)
+    if path == "free edge first":
+        assert t.edge_faces[0] == [] and all(t.edge_faces[1:])
+
+
+def test_an_edge_without_vertices_is_a_geometry_error():
+    from OCP.BRep import BRep_Builder
+    from OCP.Geom import Geom_Line
+    from OCP.gp import gp_Dir, gp_Pnt
+    from OCP.TopoDS import TopoDS_Edge
+
+    from cadedge.errors import GeometryError
+
+    edge = TopoDS_Edge()
+    BRep_Builder().MakeEdge(edge, Geom_Line(gp_Pnt(0, 0, 0), gp_Dir(1, 0, 0)), 1e-7)
+    with pytest.raises(GeometryError, match="edge 1 has no vertex at one end"):
+        Topology(edge)

@@ -13,7 +13,7 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
-from OCP.TopExp import TopExp
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
 
 from ..errors import GeometryError
@@ -71,28 +71,38 @@ class Topology:
         if shape is None or shape.IsNull():
             raise GeometryError("null shape: nothing to take the topology of")
         self.shape = shape
-        emap, vmap, fmap = (_indexed(shape, k) for k in (TopAbs_EDGE, TopAbs_VERTEX, TopAbs_FACE))
-        self.edges: list[TopoDS_Edge] = [forward(TopoDS.Edge_s(emap.FindKey(i)))
-                                         for i in range(1, emap.Extent() + 1)]
-        self.vertices: list[TopoDS_Vertex] = [TopoDS.Vertex_s(vmap.FindKey(i)) for i in range(1, vmap.Extent() + 1)]
-        self.faces: list[TopoDS_Face] = [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
+        vmap, fmap = (_indexed(shape, k) for k in (TopAbs_VERTEX, TopAbs_FACE))
         ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
         TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
+        # The map holds every edge; with none outside a face its keys come in MapShapes order (both walk
+        # the faces depth first), so it serves as the edge map and its lists are found by index.
+        if TopExp_Explorer(shape, TopAbs_EDGE, TopAbs_FACE).More():
+            emap = _indexed(shape, TopAbs_EDGE)
+            key, faces_of = emap.FindKey, lambda i, edge: ancestors.FindFromKey(edge)
+        else:
+            key, faces_of = ancestors.FindKey, lambda i, edge: ancestors.FindFromIndex(i)
+        to_edge, face_id, vertex_id, ends = TopoDS.Edge_s, fmap.FindIndex, vmap.FindIndex, TopExp.Vertices_s
+        self.edges: list[TopoDS_Edge] = []
+        self.vertices: list[TopoDS_Vertex] = [TopoDS.Vertex_s(vmap.FindKey(i)) for i in range(1, vmap.Extent() + 1)]
+        self.faces: list[TopoDS_Face] = [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
         self.edge_faces: list[list[int]] = []
         self.edge_vertices: list[tuple[int, int]] = []
         self._seam: list[bool] | None = None  # computed on first use: refining does not need it
-        for i, edge in enumerate(self.edges):
+        first, last = TopoDS_Vertex(), TopoDS_Vertex()  # filled by TopExp::Vertices for each edge
+        for i in range(1, ancestors.Extent() + 1):
+            edge = to_edge(key(i).Oriented(TopAbs_FORWARD))
+            self.edges.append(edge)
             ids: list[int] = []
-            if ancestors.Contains(edge):
-                for face in _shapes(ancestors.FindFromKey(edge)):
-                    fid = fmap.FindIndex(face)
-                    if fid not in ids:
-                        ids.append(fid)
+            for face in _shapes(faces_of(i, edge)):
+                fid = face_id(face)
+                if fid not in ids:
+                    ids.append(fid)
             self.edge_faces.append(ids)
-            first, last = TopExp.FirstVertex_s(edge), TopExp.LastVertex_s(edge)
-            if first.IsNull() or last.IsNull():
-                raise GeometryError(f"edge {i + 1} has no vertex at one end; cannot anchor its grid")
-            self.edge_vertices.append((vmap.FindIndex(first), vmap.FindIndex(last)))
+            ends(edge, first, last)
+            v1, v2 = vertex_id(first), vertex_id(last)
+            if not v1 or not v2:  # a null vertex is in no map
+                raise GeometryError(f"edge {i} has no vertex at one end; cannot anchor its grid")
+            self.edge_vertices.append((v1, v2))
 
     def curve_type(self, i: int) -> str:
         """OCCT's curve type name of edge ``i`` (0-based), e.g. "Line", "BSplineCurve".
