@@ -3,13 +3,13 @@
  * refine_shape used to run, per edge, a few hundred Python-level steps (the exploration's levels, the
  * node search, the equidistribution trials, each a handful of numpy calls on short arrays) that cost
  * 30-60x one OCCT pass. Here the same steps run in C over every edge whose curve is a line, circle,
- * ellipse, B-spline or Bezier curve, evaluated from its definition (cadedge/occt/geomtable.py reads the
+ * ellipse, B-spline or Bezier curve, evaluated from its definition (cadedge/occt/edgetable.py reads the
  * geometry and checks it against OCCT). The arithmetic follows the Python path operation by operation,
  * numpy's pairwise summation included, so the grids are the same; an edge this path cannot finish as the
  * Python path would (a zero-length curve, the sampling cap, a missed target: all cases that add a note)
  * is reported back and refined by the Python path.
  *
- * Geometry table (cadedge/occt/geomtable.py): kind[e] (LINE, CONIC, SPLINE), its data at gdata[gofs[e]:]:
+ * Geometry table (cadedge/occt/edgetable.py): kind[e] (LINE, CONIC, SPLINE), its data at gdata[gofs[e]:]:
  *   line:   location (3), direction (3)                     point = loc + u dir
  *   conic:  location, x, y (3 each), rx, ry                 point = loc + rx cos(u) x + ry sin(u) y
  *   spline: period (NaN if none), knots (nk), coefficients ((nk - degree - 1) x dim), dim 3 or 4 (rational,
@@ -818,5 +818,147 @@ PyObject *ck_refine_edges(PyObject *self, PyObject *args)
 done:
     free(status), free(offsets), free(evaluations), free(estimate), free(raw), free(r.params.d), free(r.points.d);
     ck_release(&b);
+    return result;
+}
+
+/* ---------------------------------------------------------------- OCCT's binary curves */
+
+/* Little-endian reads from OCCT's BinTools stream (which fixes that byte order on every machine). */
+static uint64_t le(const unsigned char *p, int size)
+{
+    uint64_t v = 0;
+    for (int k = size - 1; k >= 0; k--)
+        v = (v << 8) | p[k];
+    return v;
+}
+
+static double le_double(const unsigned char *p)
+{
+    uint64_t bits = le(p, 8);
+    double x;
+    memcpy(&x, &bits, 8);
+    return x;
+}
+
+enum { BT_LINE = 1, BT_CIRCLE = 2, BT_ELLIPSE = 3, BT_BEZIER = 6, BT_BSPLINE = 7 };
+
+/* parse_curves(data, start, count) -> (meta, offsets, numbers), bytearrays of int64, int64, float64
+ * The count curves that BinTools_CurveSet::Write put in data from byte start (lines, circles, ellipses,
+ * Bezier and B-spline curves; see BinTools_CurveSet.cxx), as rows of the geometry table above:
+ * meta[c] = (table kind, degree, knots, dim, periodic, BinTools type); curve c's data is
+ * numbers[offsets[c]:offsets[c + 1]]: a line's location and direction; a conic's location, X and Y
+ * directions and radii (a circle's twice); a spline's period slot (NaN), its knots each repeated by its
+ * multiplicity, and its poles, homogeneous (x w, y w, z w, w) when rational. */
+PyObject *ck_parse_curves(PyObject *self, PyObject *args)
+{
+    Py_buffer buf;
+    Py_ssize_t start, count;
+    if (!PyArg_ParseTuple(args, "y*nn", &buf, &start, &count))
+        return NULL;
+    const unsigned char *d = buf.buf;
+    Py_ssize_t size = buf.len, pos = start;
+    PyObject *result = NULL;
+    int64_t *meta = calloc(6 * count + 1, sizeof(int64_t)), *offsets = calloc(count + 1, sizeof(int64_t));
+    Vec out = {0};
+    if (!meta || !offsets) {
+        PyErr_NoMemory();
+        goto done;
+    }
+#define NEED(k) if (pos + (k) > size) goto truncated
+    for (Py_ssize_t c = 0; c < count; c++) {
+        int64_t *m = meta + 6 * c;
+        NEED(1);
+        int type = d[pos++];
+        m[5] = type;
+        if (type == BT_LINE) {
+            NEED(48);
+            double v[6];
+            for (int k = 0; k < 6; k++)
+                v[k] = le_double(d + pos + 8 * k);
+            pos += 48;
+            m[0] = LINE;
+            if (push(&out, v, 6))
+                goto nomem;
+        } else if (type == BT_CIRCLE || type == BT_ELLIPSE) {
+            int radii = type == BT_CIRCLE ? 1 : 2;
+            NEED(96 + 8 * radii);
+            double v[11]; /* location, (axis skipped), X direction, Y direction, radii */
+            for (int k = 0; k < 3; k++)
+                v[k] = le_double(d + pos + 8 * k);
+            for (int k = 3; k < 9; k++)
+                v[k] = le_double(d + pos + 8 * (k + 3));
+            v[9] = le_double(d + pos + 96);
+            v[10] = radii == 2 ? le_double(d + pos + 104) : v[9];
+            pos += 96 + 8 * radii;
+            m[0] = CONIC;
+            if (push(&out, v, 11))
+                goto nomem;
+        } else if (type == BT_BEZIER || type == BT_BSPLINE) {
+            int spline = type == BT_BSPLINE;
+            NEED(spline ? 12 : 3);
+            int rational = d[pos++] != 0;
+            m[4] = spline ? d[pos++] != 0 : 0;
+            long degree = (long)le(d + pos, 2);
+            pos += 2;
+            Py_ssize_t n = degree + 1, nk = 0;
+            if (spline) {
+                n = (int32_t)le(d + pos, 4), nk = (int32_t)le(d + pos + 4, 4);
+                pos += 8;
+            }
+            if (n < 1 || nk < 0)
+                goto truncated;
+            Py_ssize_t dim = rational ? 4 : 3;
+            NEED(n * 8 * dim + nk * 12);
+            double nan = NAN;
+            if (push(&out, &nan, 1))
+                goto nomem;
+            Py_ssize_t knots = 0;
+            if (spline) {
+                const unsigned char *kp = d + pos + n * 8 * dim;
+                for (Py_ssize_t k = 0; k < nk; k++) {
+                    double knot = le_double(kp + 12 * k);
+                    int32_t mult = (int32_t)le(kp + 12 * k + 8, 4);
+                    for (int32_t j = 0; j < mult; j++)
+                        if (push(&out, &knot, 1))
+                            goto nomem;
+                    knots += mult > 0 ? mult : 0;
+                }
+            } else {
+                double ends[2] = {0.0, 1.0};
+                for (int e = 0; e < 2; e++)
+                    for (Py_ssize_t j = 0; j <= degree; j++)
+                        if (push(&out, ends + e, 1))
+                            goto nomem;
+                knots = 2 * (degree + 1);
+            }
+            for (Py_ssize_t i = 0; i < n; i++) {
+                double v[4];
+                for (int k = 0; k < dim; k++)
+                    v[k] = le_double(d + pos + 8 * (dim * i + k));
+                if (rational)
+                    v[0] *= v[3], v[1] *= v[3], v[2] *= v[3];
+                if (push(&out, v, dim))
+                    goto nomem;
+            }
+            pos += n * 8 * dim + nk * 12;
+            m[0] = SPLINE, m[1] = degree, m[2] = knots, m[3] = dim;
+        } else {
+            PyErr_Format(PyExc_ValueError, "parse_curves: curve %zd has type %d, not one the table reads", c, type);
+            goto done;
+        }
+        offsets[c + 1] = out.n;
+    }
+#undef NEED
+    result = Py_BuildValue("(NNNn)", as_bytes(meta, 6 * count * 8), as_bytes(offsets, (count + 1) * 8),
+                           as_bytes(out.d, out.n * 8), pos);
+    goto done;
+truncated:
+    PyErr_SetString(PyExc_ValueError, "parse_curves: the curve stream ends inside a curve");
+    goto done;
+nomem:
+    PyErr_NoMemory();
+done:
+    free(meta), free(offsets), free(out.d);
+    PyBuffer_Release(&buf);
     return result;
 }

@@ -649,6 +649,7 @@ static PyMethodDef methods[] = {
     {"de_boor", de_boor, METH_VARARGS, "Spline points by de Boor's algorithm."},
     {"evaluate_edges", ck_evaluate_edges, METH_VARARGS, "Points of many edges' curves from a geometry table."},
     {"refine_edges", ck_refine_edges, METH_VARARGS, "Target-mode grids of many edges in one call."},
+    {"parse_curves", ck_parse_curves, METH_VARARGS, "Curves written by OCCT's BinTools_CurveSet as geometry table rows."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -64,5 +64,6 @@ int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_
 /* cadedge/_batch.c's functions, registered by cadedge/_kernels.c's module. */
 PyObject *ck_evaluate_edges(PyObject *self, PyObject *args);
 PyObject *ck_refine_edges(PyObject *self, PyObject *args);
+PyObject *ck_parse_curves(PyObject *self, PyObject *args);
 
 #endif

@@ -111,3 +111,11 @@ def refine_edges(kind: np.ndarray, gofs: np.ndarray, ints: np.ndarray, gdata: np
             np.frombuffer(params, dtype=float), np.frombuffer(points, dtype=float).reshape(-1, 3),
             np.frombuffer(estimate, dtype=float), np.frombuffer(raw_estimate, dtype=float),
             np.frombuffer(evaluations, dtype=np.int64))
+
+
+def parse_curves(data: bytes, start: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The ``count`` curves OCCT's ``BinTools_CurveSet`` wrote in ``data`` from byte ``start``, as geometry
+    table rows (see ``cadedge/_batch.c``): (meta (count, 6), offsets (count + 1), numbers, end byte)."""
+    meta, offsets, numbers, end = _kernels.parse_curves(data, start, count)
+    return (np.frombuffer(meta, dtype=np.int64).reshape(-1, 6), np.frombuffer(offsets, dtype=np.int64),
+            np.frombuffer(numbers, dtype=float), end)

@@ -3,6 +3,9 @@ at a time: every type the edge table reads, rational and periodic splines, and a
 
 from __future__ import annotations
 
+import io
+import math
+
 import numpy as np
 import pytest
 
@@ -13,7 +16,9 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge  # noqa: E402
 from OCP.Geom import Geom_Circle, Geom_Ellipse, Geom_Line  # noqa: E402
 from OCP.GeomAbs import GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Line  # noqa: E402
 
-from cadedge.occt.curvedump import BEZIER, BSPLINE, CIRCLE, ELLIPSE, LINE, CurveSet  # noqa: E402
+from cadedge.kernels import parse_curves  # noqa: E402
+from cadedge.occt.curvedump import (BEZIER, BSPLINE, CIRCLE, DEGREE, DIM, ELLIPSE, KNOTS, LINE, PERIODIC,  # noqa: E402
+                                    TYPE, CurveSet)
 from cadedge.occt.edgetable import EdgeTable  # noqa: E402
 from test_fasteval import _edges, _rational_periodic  # noqa: E402
 
@@ -53,23 +58,37 @@ def test_parsed_curve_equals_the_numbers_read_one_call_at_a_time(name):
     handle = _handle(ad)
     curves = CurveSet()
     assert curves.add(handle) == 1
-    (got,) = curves.curves()
+    got = curves.curves()
+    assert got.meta.shape == (1, 6) and got.offsets[0] == 0
+    meta, row = got.meta[0].tolist(), got.numbers[got.offsets[0]:got.offsets[1]].tolist()
     t = ad.GetType()
     if t == GeomAbs_Line:
         lin = ad.Line()
-        assert got.kind == LINE and got.numbers == [*lin.Location().Coord(), *lin.Direction().Coord()]
+        assert meta[TYPE] == LINE and row == [*lin.Location().Coord(), *lin.Direction().Coord()]
     elif t in (GeomAbs_BSplineCurve, GeomAbs_BezierCurve):
-        assert got.kind == (BSPLINE if t == GeomAbs_BSplineCurve else BEZIER)
-        assert got.degree == handle.Degree() and got.rational == handle.IsRational()
-        assert got.periodic == (t == GeomAbs_BSplineCurve and handle.IsPeriodic())
-        assert (got.knots, got.numbers) == _by_calls(handle)
+        assert meta[TYPE] == (BSPLINE if t == GeomAbs_BSplineCurve else BEZIER)
+        knots, poles = _by_calls(handle)
+        assert meta[DEGREE] == handle.Degree() and meta[DIM] == (4 if handle.IsRational() else 3)
+        assert meta[PERIODIC] == (t == GeomAbs_BSplineCurve and handle.IsPeriodic())
+        assert math.isnan(row[0]) and row[1:] == knots + poles and meta[KNOTS] == len(knots)
     else:
         conic = ad.Circle() if t == GeomAbs_Circle else ad.Ellipse()
         pos = conic.Position()
         radii = [conic.Radius()] * 2 if t == GeomAbs_Circle else [conic.MajorRadius(), conic.MinorRadius()]
-        assert got.kind == (CIRCLE if t == GeomAbs_Circle else ELLIPSE)
-        assert got.numbers == [*pos.Location().Coord(), *pos.XDirection().Coord(), *pos.YDirection().Coord(),
-                               *radii]
+        assert meta[TYPE] == (CIRCLE if t == GeomAbs_Circle else ELLIPSE)
+        assert row == [*pos.Location().Coord(), *pos.XDirection().Coord(), *pos.YDirection().Coord(), *radii]
+
+
+def test_a_truncated_stream_is_an_error_not_a_read_past_its_end():
+    curves = CurveSet()
+    curves.add(BRepAdaptor_Curve(_edges()["spline"]).BSpline())
+    buf = io.BytesIO()
+    curves._set.Write(buf)
+    data = buf.getvalue()
+    start = data.index(b"\n") + 1
+    for cut in (start + 1, start + 13, len(data) - 1):
+        with pytest.raises(ValueError, match="ends inside a curve"):
+            parse_curves(data[:cut], start, 1)
 
 
 def test_a_shared_curve_is_written_once_and_both_edges_are_refined_from_it():

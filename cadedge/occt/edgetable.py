@@ -24,7 +24,7 @@ from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circ
 from OCP.Standard import Standard_Failure
 
 from .. import explore, kernels, target
-from .curvedump import CIRCLE as CIRCLE_CURVE, ELLIPSE as ELLIPSE_CURVE, LINE as LINE_CURVE, CurveSet
+from .curvedump import CIRCLE, DEGREE, DIM, KIND, KNOTS, PERIODIC, TYPE, CurveSet
 from .edgecurve import CONIC_ROOTS, LENGTH_TOL, SPAN_ROOTS, EdgeCurve
 from .fasteval import CHECK_POINTS, RTOL
 
@@ -61,7 +61,7 @@ class EdgeTable:
                     curve = ad.BSpline() if t == GeomAbs_BSplineCurve else ad.Bezier()
                 else:
                     continue
-                if t != GeomAbs_Line and t != GeomAbs_Circle:
+                if t != GeomAbs_Line and t != GeomAbs_Circle:  # (a line's and a circle's are set below)
                     length = float(GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL))
                 index = add(curve)
             except Standard_Failure:
@@ -75,50 +75,48 @@ class EdgeTable:
             domain.append((a, b))
             lengths.append(length)
         parsed = curves.curves()
-        kind, gofs, ints, data, hint_ofs, hints = [], [0], [], [], [0], []
+        meta, numbers = parsed.meta, parsed.numbers
+        begin, end = parsed.offsets[:-1].copy(), parsed.offsets[1:].copy()
         periodic = {}  # curve index -> (period, the same curve made non-periodic)
         for index, curve in splines.items():
-            if parsed[index - 1].periodic:
+            if meta[index - 1, PERIODIC]:
                 flat = curve.Copy()
                 flat.SetNotPeriodic()  # the same geometry over one period with clamped knots
                 periodic[index] = float(curve.Period()), flat
-        if periodic:
+        if periodic:  # their rows come from the non-periodic copies
             flats = CurveSet()
             for _, flat in periodic.values():
                 flats.add(flat)
-            for index, row in zip(periodic, flats.curves()):
-                parsed[index - 1] = row
-        for r, (index, (a, b)) in enumerate(zip(ids, domain)):
-            c = parsed[index - 1]
-            hint: list[float] = []
-            if c.kind == LINE_CURVE or c.kind == CIRCLE_CURVE or c.kind == ELLIPSE_CURVE:
-                kind.append(LINE if c.kind == LINE_CURVE else CONIC)
-                ints.append((0, 0, 0))
-                data += c.numbers
-                if c.kind == CIRCLE_CURVE:
-                    lengths[r] = float(c.numbers[-1] * (b - a))
-            else:
-                period = math.nan
-                if index in periodic:
-                    period = periodic[index][0]
-                    hint = _periodic_knots(splines[index], a, b)
-                kind.append(SPLINE)
-                ints.append((c.degree, len(c.knots), 4 if c.rational else 3))
-                data.append(period)
-                data += c.knots
-                data += c.numbers
-            gofs.append(len(data))
-            hints += hint
-            hint_ofs.append(len(hints))
+            more = flats.curves()
+            at = np.array(list(periodic), dtype=np.int64) - 1
+            meta = meta.copy()
+            meta[at] = more.meta
+            begin[at], end[at] = more.offsets[:-1] + len(numbers), more.offsets[1:] + len(numbers)
+            numbers = np.concatenate([numbers, more.numbers])
+        c = np.array(ids, dtype=np.int64) - 1
+        size = end[c] - begin[c]
+        gofs = np.zeros(len(c) + 1, dtype=np.int64)
+        np.cumsum(size, out=gofs[1:])
+        gdata = numbers[np.repeat(begin[c] - gofs[:-1], size) + np.arange(gofs[-1])]
+        hint_sizes, hints = np.zeros(len(c), dtype=np.int64), []
+        for r, index in enumerate(ids) if periodic else ():
+            if index in periodic:
+                gdata[gofs[r]] = periodic[index][0]  # the period slot of the row
+                hint = _periodic_knots(splines[index], *domain[r])
+                hints += hint
+                hint_sizes[r] = len(hint)
         self.rows, self.adaptors, self.kinds = rows, adaptors, kinds
-        self.kind = np.array(kind, dtype=np.int64)
-        self.gofs = np.array(gofs, dtype=np.int64)
-        self.ints = np.array(ints, dtype=np.int64).reshape(-1, 3)
-        self.gdata = np.array(data, dtype=float)
+        self.kind = meta[c, KIND].copy()
+        self.gofs = gofs
+        self.ints = meta[c][:, [DEGREE, KNOTS, DIM]].copy()
+        self.gdata = gdata
         self.domain = np.array(domain, dtype=float).reshape(-1, 2)
-        self.hofs = np.array(hint_ofs, dtype=np.int64)
+        self.hofs = np.zeros(len(c) + 1, dtype=np.int64)
+        np.cumsum(hint_sizes, out=self.hofs[1:])
         self.hdata = np.array(hints, dtype=float)
         self.exact = np.array(lengths, dtype=float)
+        circles = np.flatnonzero(meta[c, TYPE] == CIRCLE)  # closed form, as EdgeCurve.exact_length
+        self.exact[circles] = gdata[gofs[circles] + 9] * (self.domain[circles, 1] - self.domain[circles, 0])
         self._check()
 
     def __len__(self) -> int:
