@@ -43,14 +43,9 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
     A large edge tolerance means vertices and pcurves may lie far off the 3-D curves (healed or
     badly exported models): the grids are still made, but downstream meshes may not close up.
     """
-    edges = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_EDGE, edges)
-    worst, worst_id = 0.0, 0
-    for i in range(1, edges.Extent() + 1):
-        tol = BRep_Tool.Tolerance_s(TopoDS.Edge_s(edges.FindKey(i)))
-        if tol > worst:
-            worst, worst_id = tol, i
-    if worst <= 1e-5 * _diagonal_at_least(shape, worst):
+    worst = BRep_Tool.MaxTolerance_s(shape, TopAbs_EDGE)
+    file_test = declared is not None and worst > TOL_REL_DECLARED * declared
+    if worst <= (1e-5 if file_test else TOL_REL_MODEL) * _diagonal_at_least(shape, worst):
         return []  # neither test below can fire: skip the bounding box (OCCT boxes every face's surface)
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)
@@ -61,6 +56,10 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
     too_big_for_file = declared is not None and worst > TOL_REL_DECLARED * declared and worst > 1e-5 * diag
     if not (too_big_for_model or too_big_for_file):
         return []
+    edges = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(shape, TopAbs_EDGE, edges)
+    worst_id = next(i for i in range(1, edges.Extent() + 1)
+                    if BRep_Tool.Tolerance_s(TopoDS.Edge_s(edges.FindKey(i))) == worst)
     decl = f", declared uncertainty {declared:.3g} {units}" if declared is not None else ""
     return [f"loose tolerance: edge {worst_id} has tolerance {worst:.3g} {units}, {worst / diag:.2g} of the "
             f"model size {diag:.4g} {units}{decl}; vertices may lie off their curves"]
