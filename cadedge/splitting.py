@@ -15,21 +15,27 @@ falls). The pieces:
   distance, by two sweeps), so sizes grow geometrically away from small segments; then any pair still
   out of bounds is fixed by splitting the longer segment.
 
+- :func:`regrade` re-places target mode's nodes along such a size field (fewer points than splitting
+  would add, the target kept), then hands what is left to :func:`limit_growth`.
+
 Callers: refine_curve and target mode (``max_growth`` within an edge), :mod:`cadedge.occt.vertexgrowth`
 (``max_growth`` across vertices) and :mod:`cadedge.mesh.proximity` (segments longer than the mesh size).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 import numpy as np
 
-from .grid import row_norms
+from .grid import polyline_length, row_norms, unique_sorted
+from .placement import equidistribute
 
 Evaluate = Callable[[np.ndarray], np.ndarray]
 
-GRADED_PASSES = 12
+#: Most re-placements along a graded size field in :func:`regrade`.
+GRADING_PASSES = 4
 MAX_PASSES = 400
 BISECTION_STEPS = 24
 
@@ -193,3 +199,87 @@ def limit_growth(ev: Evaluate, params: np.ndarray, points: np.ndarray, max_growt
     notes = [] if worst <= g * (1 + 1e-9) else [
         f"max_growth {g:g} not met everywhere: worst ratio of adjacent segments is {worst:.3g}"]
     return u, p, notes
+
+
+def evaluate_new(ev, u: np.ndarray, params: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points at ``params``, evaluating only those not already among the samples ``u``."""
+    idx = np.clip(np.searchsorted(u, params), 0, len(u) - 1)
+    known = u[idx] == params
+    out = np.empty((len(params), 3))
+    out[known] = points[idx[known]]
+    if (~known).any():
+        out[~known] = ev(params[~known])
+    return out
+
+
+def _graded(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarray, growth: float,
+            total: float, limit: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Re-place the grid so neighbouring segments differ by at most ``growth``, keeping the target.
+
+    The size field h(s) = min over segments j of (l_j + alpha * arc distance to j), alpha just under
+    growth - 1, is never above the grid's own sizes; nodes at equal steps of the integral of ds / h
+    then have sizes that follow h, so neighbours differ by about 1 + alpha. Both running minima are
+    prefix minima over the dense samples, so this is linear in their number.
+    """
+    u, cum = ex.params, ex.cumulative
+    alpha = 0.75 * (growth - 1.0)
+    s_nodes = np.interp(params, u, cum)
+    seg = row_norms(np.diff(points, axis=0))
+    seg_of = np.clip(np.searchsorted(s_nodes, cum, side="right") - 1, 0, len(seg) - 1)
+    h = seg[seg_of].copy()
+    # forward: segments ending at or before s; backward: segments starting at or after s
+    ends, starts = s_nodes[1:], s_nodes[:-1]
+    fwd_key = np.minimum.accumulate(seg - alpha * ends)
+    k = np.searchsorted(ends, cum, side="right") - 1
+    has = k >= 0
+    h[has] = np.minimum(h[has], fwd_key[k[has]] + alpha * cum[has])
+    bwd_key = np.minimum.accumulate((seg + alpha * starts)[::-1])[::-1]
+    k = np.searchsorted(starts, cum, side="left")
+    has = k < len(seg)
+    h[has] = np.minimum(h[has], bwd_key[k[has]] - alpha * cum[has])
+    h = np.maximum(h, 1e-300)
+    inv = 1.0 / h
+    measure = np.concatenate([[0.0], np.cumsum(0.5 * (inv[:-1] + inv[1:]) * np.diff(cum))])
+    count = max(int(math.ceil(measure[-1] - 1e-9)), len(corner_idx) + 1)
+    for _ in range(6):
+        new = equidistribute(u, cum, measure, count, corner_idx)
+        pts = evaluate_new(ev, u, new, ex.points)
+        if total - polyline_length(pts) <= limit:
+            return new, pts
+        count = int(math.ceil(count * 1.1)) + 1
+    return None
+
+
+def _sharp_nodes(points: np.ndarray, ald: float) -> np.ndarray:
+    """Interior node indices whose polyline turns much more sharply than a smooth grid at ``ald`` would.
+
+    A chord missing a share ``ald`` of a circular arc turns by about sqrt(24 ald) at each node;
+    features (cusps, corners, narrow bumps) turn far more, and a re-placement must keep them.
+    """
+    d = np.diff(points, axis=0)
+    n = np.linalg.norm(d, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos = np.einsum("ij,ij->i", d[:-1], d[1:]) / (n[:-1] * n[1:])
+    turn = np.arccos(np.clip(np.nan_to_num(cos, nan=1.0), -1.0, 1.0))
+    return 1 + np.flatnonzero(turn > max(0.5, 3.0 * math.sqrt(24.0 * ald)))
+
+
+def regrade(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarray, growth: float, ald: float,
+            total: float, limit: float) -> tuple[np.ndarray, np.ndarray]:
+    """A new grid for target mode's ``max_growth``: the nodes re-placed along a graded size field
+    (:func:`_graded`) on the exploration ``ex``, keeping its corners (``corner_idx``) and the sharp nodes,
+    its deficit against ``total`` within ``limit``; then :func:`limit_growth` for what is left."""
+    keep = _sharp_nodes(points, ald)
+    if len(keep):  # make the sharp nodes samples (if they are not) and pin them like corners
+        ex = ex.with_samples(params[keep], points[keep])
+        corner_idx = unique_sorted(np.concatenate([np.searchsorted(ex.params, ex.corners),
+                                               np.searchsorted(ex.params, params[keep])])).astype(int)
+    for _ in range(GRADING_PASSES):  # each pass smooths the sizes of the one before
+        graded = _graded(ev, ex, corner_idx, params, points, growth, total, limit)
+        if graded is None:
+            break
+        params, points = graded
+        if worst_growth(points) <= growth:
+            return params, points
+    params, points, _ = limit_growth(ev, params, points, growth)
+    return params, points
