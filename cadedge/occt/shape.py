@@ -56,7 +56,7 @@ def _anchor(points: np.ndarray, first: np.ndarray, last: np.ndarray, estimate: f
     return pts, max(1.0 - new / total, 0.0)
 
 
-def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, opts: dict[str, Any],
+def _refine_edge(topo: Topology, i: int, vpoints: np.ndarray, src: str, opts: dict[str, Any],
                  notes: list[str], curves: dict[int, EdgeCurve]) -> ShapeEdgeGrid:
     eid = i + 1
     edge = topo.edges[i]
@@ -92,13 +92,15 @@ def _refine_edge(topo: Topology, i: int, vpoints: list[np.ndarray], src: str, op
                          evaluations=grid.evaluations, **common)
 
 
-def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: list[np.ndarray],
-                 topo: Topology) -> tuple[np.ndarray, ...]:
-    """Grids of the table's ``rows`` in one compiled call, anchored on their vertices."""
-    ends = [topo.edge_vertices[i] for i in table.rows[rows]]
-    first = np.array([vpoints[v1 - 1] for v1, _ in ends]).reshape(-1, 3)
-    last = np.array([vpoints[v2 - 1] for _, v2 in ends]).reshape(-1, 3)
-    return refine_table(table, rows, targets[table.rows[rows]], first, last)
+def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np.ndarray,
+                 topo: Topology) -> tuple:
+    """Grids of the table's ``rows`` in one compiled call, anchored on their vertices: (status, offsets,
+    params, points, estimate, raw_estimate, evaluations), the per-row ones as lists."""
+    ends = np.array([topo.edge_vertices[i] for i in table.rows[rows]], dtype=np.int64).reshape(-1, 2) - 1
+    status, offsets, params, points, estimate, raw, evaluations = refine_table(
+        table, rows, targets[table.rows[rows]], vpoints[ends[:, 0]], vpoints[ends[:, 1]])
+    return (status.tolist(), offsets.tolist(), params, points, estimate.tolist(), raw.tolist(),
+            evaluations.tolist())
 
 
 def _table_edge(topo: Topology, i: int, kind, k: int, chunk: tuple, ald: float,
@@ -116,8 +118,8 @@ def _table_edge(topo: Topology, i: int, kind, k: int, chunk: tuple, ald: float,
                      f"(vertices lie off the curve by up to {tolerance:.3g})")
     return ShapeEdgeGrid(id=i + 1, vertices=(v1, v2), degenerate=False, closed=v1 == v2,
                          faces=list(topo.edge_faces[i]), tolerance=tolerance, curve=curve_type_name(kind),
-                         params=params[lo:hi], points=points[lo:hi], ald_estimate=float(estimate[k]),
-                         evaluations=int(evaluations[k]))
+                         params=params[lo:hi], points=points[lo:hi], ald_estimate=estimate[k],
+                         evaluations=evaluations[k])
 
 
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
@@ -148,7 +150,7 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
         targets, local_records, notes = edge_targets(local, topo, opts["ald"])
     except InputError as exc:
         raise InputError(f"{loaded.source}: {exc}") from exc
-    vpoints = list(np.array([BRep_Tool.Pnt_s(v).Coord() for v in topo.vertices], dtype=float).reshape(-1, 3))
+    vpoints = np.array([BRep_Tool.Pnt_s(v).Coord() for v in topo.vertices], dtype=float).reshape(-1, 3)
     total = len(topo.edges)
     batched = opts["min_length"] is None and opts["max_length"] is None and opts["max_growth"] is None
     table = EdgeTable(topo.edges, [i for i in range(total) if not topo.is_degenerate(i)] if batched else [])
