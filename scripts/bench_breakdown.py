@@ -1,10 +1,12 @@
 """Where ``refine_shape``'s time goes, per phase, against one OCCT pass at the tuned angle.
 
-    python scripts/bench_breakdown.py [--eps 1e-3] [--repeats 7] [--file PATH ...]
+    python scripts/bench_breakdown.py [--eps 1e-3] [--repeats 7] [--cpu] [--all | --file PATH ...]
 
-For each model (default: the corpus's two largest, ``917_fusee`` and ``boxed_sphere``), OCCT's angle is
-tuned as ``scripts/bench.py`` does; then, interleaved ``--repeats`` times so that a load on the machine
-falls on all alike, and reported as medians:
+For each model (default: the corpus's two largest, ``917_fusee`` and ``boxed_sphere``; ``--all``: every
+corpus model, with a total), OCCT's angle is tuned as ``scripts/bench.py`` does; then, interleaved
+``--repeats`` times so that a load on the machine falls on all alike, and reported as medians of wall
+time, or with ``--cpu`` of the process's CPU time (``time.process_time``: on a machine shared with other
+jobs, wall time mostly measures the wait for a core):
 
 - **OCCT**: one ``GCPnts_TangentialDeflection`` pass at that angle over every non-degenerate edge
   (adaptors included), as *OCCT s* in ``scripts/bench.py``;
@@ -28,6 +30,7 @@ from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint, GCPnts_TangentialDeflection
 
 import bench
+import corpus_path
 from corpus_path import require_corpus
 
 from cadedge.occt.edgecurve import LENGTH_TOL
@@ -39,7 +42,7 @@ LARGEST = ("live-clones__gmsh__917_fusee.stp", "LLNL__axom_data__boxed_sphere.st
 PHASES = ("OCCT", "refine_shape", "topology", "edge table", "check", "lengths", "compiled refine")
 
 
-def breakdown(path: Path, eps: float, repeats: int) -> tuple[int, dict[str, float]]:
+def breakdown(path: Path, eps: float, repeats: int, clock=time.perf_counter) -> tuple[int, dict[str, float]]:
     model = bench.Model(path)
     angle = bench.run_occt(model, eps)["angle"]
     shape = model.loaded.shape
@@ -47,9 +50,9 @@ def breakdown(path: Path, eps: float, repeats: int) -> tuple[int, dict[str, floa
     times: dict[str, list[float]] = {k: [] for k in PHASES}
 
     def timed(name, fn):
-        t0 = time.perf_counter()
+        t0 = clock()
         out = fn()
-        times[name].append(time.perf_counter() - t0)
+        times[name].append(clock() - t0)
         return out
 
     def occt():
@@ -79,17 +82,28 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--eps", type=float, default=1e-3)
     ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--file", nargs="+", type=Path, help="these STEP files instead of the two largest corpus models")
+    ap.add_argument("--cpu", action="store_true", help="CPU time of the process instead of wall time")
+    which = ap.add_mutually_exclusive_group()
+    which.add_argument("--all", action="store_true", help="every corpus model, and the totals")
+    which.add_argument("--file", nargs="+", type=Path, help="these STEP files instead of the two largest corpus models")
     args = ap.parse_args()
-    paths = args.file or [require_corpus() / name for name in LARGEST]
-    print("| model | phase | ms | us/edge | x OCCT pass |")
+    paths = args.file or (corpus_path.step_files(require_corpus()) if args.all
+                          else [require_corpus() / name for name in LARGEST])
+    clock = time.process_time if args.cpu else time.perf_counter
+    print(f"| model | phase | ms ({'CPU' if args.cpu else 'wall'}) | us/edge | x OCCT pass |")
     print("|---|---|---:|---:|---:|")
+    totals: dict[str, float] = {}
     for path in paths:
-        edges, med = breakdown(path, args.eps, args.repeats)
+        edges, med = breakdown(path, args.eps, args.repeats, clock)
         for name, seconds in med.items():
+            totals[name] = totals.get(name, 0.0) + seconds
             label = f"{path.name} ({edges} edges)" if name == "OCCT" else ""
             print(f"| {label} | {name} | {seconds * 1e3:.1f} | {seconds / edges * 1e6:.1f} | "
-                  f"{seconds / med['OCCT']:.2f} |")
+                  f"{seconds / med['OCCT']:.2f} |", flush=True)
+    if len(paths) > 1:
+        for name, seconds in totals.items():
+            print(f"| {'**total**' if name == 'OCCT' else ''} | {name} | {seconds * 1e3:.1f} | | "
+                  f"{seconds / totals['OCCT']:.2f} |")
 
 
 if __name__ == "__main__":
