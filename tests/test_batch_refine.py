@@ -101,3 +101,26 @@ def test_table_curves_evaluate_like_edge_curves():
         assert np.array_equal(curve.evaluate(e.params)[1:-1], e.points[1:-1])
         assert curve.domain == (e.params[0], e.params[-1])
     assert sorted(grid.curves) == [e.id for e in grid.edges if not e.degenerate]
+
+
+def test_an_edge_whose_table_evaluation_disagrees_with_occt_is_left_to_the_per_edge_path(monkeypatch):
+    """The check against OCCT's points drops a row that evaluates off the curve (here: moved by 1e-6 of
+    the model), and keeps the rest; refine_shape then gives that edge the per-edge path's grid."""
+    from cadedge.occt.topology import Topology
+
+    path = next(p for p in FIXTURE_FILES if p.name == "bracket.step")
+    shape = load_shape(path).shape
+    topo = Topology(shape)
+    rows = [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)]
+    evaluate = EdgeTable.evaluate
+
+    def off_on_row_two(self, row, u):
+        out = evaluate(self, row, u)
+        return out + np.where(np.asarray(row)[:, None] == 2, 1e-4, 0.0)
+
+    with monkeypatch.context() as m:
+        m.setattr(EdgeTable, "evaluate", off_on_row_two)
+        table = EdgeTable(topo.edges, rows)
+        assert table.rows == rows[:2] + rows[3:]
+        batched = refine_shape(shape, ald=1e-3)
+    _same(batched, _per_edge(monkeypatch, shape, ald=1e-3))

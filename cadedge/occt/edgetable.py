@@ -2,12 +2,13 @@
 
 Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve is read through its
 ``BRepAdaptor_Curve`` (which applies the edge's location) into :class:`EdgeTable`'s arrays, with the
-fewest OCP calls: the adaptor's curve handles are written by OCCT in one call and parsed
-(:mod:`cadedge.occt.curvedump`), so a spline costs no call per knot or pole; no numpy work per edge. The table's evaluation (``cadedge/_batch.c``, the same formulas
-as :mod:`cadedge.occt.fasteval`) is then checked against ``BRepAdaptor_Curve.Value`` at
-``fasteval.CHECK_POINTS`` parameters of every edge in one batch; an edge that disagrees by more than
-``fasteval.RTOL`` of its size, or that OCCT cannot read, is left out and refined by the per-edge path
-(:class:`cadedge.occt.edgecurve.EdgeCurve`).
+fewest OCP calls: the adaptors' curve handles are written by OCCT in one call and parsed in C
+(:mod:`cadedge.occt.curvedump`), so a spline costs no call per knot or pole, and no numpy work is done
+per edge. The table's evaluation (``cadedge/_batch.c``, the same formulas as
+:mod:`cadedge.occt.fasteval`) is then checked against OCCT's own (``BRepAdaptor_Curve.D0``, the point
+``Value`` returns) at ``fasteval.CHECK_POINTS`` parameters of every edge in one batch; an edge that
+disagrees by more than ``fasteval.RTOL`` of its size, or that OCCT cannot read, is left out and refined
+by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint
 from OCP.Geom import Geom_Circle, Geom_Ellipse, Geom_Line
+from OCP.gp import gp_Pnt
 from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
                          GeomAbs_Line)
 from OCP.Standard import Standard_Failure
@@ -137,16 +139,22 @@ class EdgeTable:
         u[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]  # off the knots, as fast_evaluator
         flat = u.ravel()
         got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
-        ref = np.empty_like(got)
         values = flat.tolist()
         ok = np.ones(n, dtype=bool)
+        rows: list[tuple[float, float, float]] = []
+        point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
+        coord = point.Coord
         for r, ad in enumerate(self.adaptors):
-            value = ad.Value
+            d0 = ad.D0
             try:
-                ref[r] = [value(x).Coord() for x in values[r * CHECK_POINTS:(r + 1) * CHECK_POINTS]]
+                for x in values[r * CHECK_POINTS:(r + 1) * CHECK_POINTS]:
+                    d0(x, point)
+                    rows.append(coord())
             except Standard_Failure:
                 ok[r] = False
-                ref[r] = got[r]
+                del rows[r * CHECK_POINTS:]
+                rows += got[r].tolist()
+        ref = np.array(rows, dtype=float).reshape(n, CHECK_POINTS, 3)
         size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
         size = np.maximum(size, math.ulp(1.0))
         ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
