@@ -271,14 +271,19 @@ static Py_ssize_t cover(const double *p, Py_ssize_t n, const double *cum, double
 
 /* Move interior nodes (not on fixed samples) to the sample between their neighbours that maximises
  * the two chords; odd positions then even ones, until nothing moves or sweeps runs out. */
-static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps, const uint8_t *fixed)
+static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps, const uint8_t *fixed,
+                   uint8_t *dirty)
 {
+    /* A node is scanned again only after a neighbour moved: between the same neighbours the scan finds the
+     * same best sample, which the node already holds or did not beat, so skipping it changes nothing. */
+    memset(dirty, 1, count);
     for (int sweep = 0; sweep < sweeps; sweep++) {
         int moved = 0;
         for (int parity = 1; parity >= 0; parity--) {
             for (Py_ssize_t k = 1; k < count - 1; k++) {
-                if (k % 2 != parity || fixed[nodes[k]])
+                if (k % 2 != parity || fixed[nodes[k]] || !dirty[k])
                     continue;
+                dirty[k] = 0;
                 int64_t lo = nodes[k - 1], hi = nodes[k + 1];
                 double best = -1.0;
                 int64_t at = -1;
@@ -293,6 +298,7 @@ static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps
                 if (best > current * (1.0 + 1e-15)) {
                     nodes[k] = at;
                     moved = 1;
+                    dirty[k - 1] = dirty[k + 1] = 1;
                 }
             }
         }
@@ -308,6 +314,7 @@ typedef struct {
     const int64_t *stops;
     const uint8_t *fixed;
     int64_t *buf;
+    uint8_t *dirty;
 } Cover;
 
 /* Greedy cover under cap, polished, into nodes: returns the count; *miss gets the deficit. */
@@ -316,7 +323,7 @@ static Py_ssize_t plan(const Cover *c, double cap, int64_t *nodes, double *miss)
     Py_ssize_t count = cover(c->p, c->n, c->cum, cap, c->min_length, c->max_length, c->stops, c->buf);
     memcpy(nodes, c->buf, count * sizeof(int64_t));
     if (count > 2)
-        polish(c->p, nodes, count, 4, c->fixed);
+        polish(c->p, nodes, count, 4, c->fixed, c->dirty);
     *miss = c->cum[c->n - 1] - chords(c->p, nodes, count);
     return count;
 }
@@ -327,10 +334,13 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
                      int64_t *out, double budget, double min_length, double max_length)
 {
     int64_t *work = malloc(3 * n * sizeof(int64_t));
-    if (!work)
+    uint8_t *dirty = malloc(n);
+    if (!work || !dirty) {
+        free(work), free(dirty);
         return -1;
+    }
     int64_t *buf = work, *tmp = work + n, *best = out;
-    Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf};
+    Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf, dirty};
     double total = cum[n - 1], miss;
     Py_ssize_t best_count = plan(&c, dmax(budget, 0.0), best, &miss);
     if (miss > budget) { /* the per-segment cap equal to the whole budget is too loose: bisect it down */
@@ -372,13 +382,13 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
         if (!found)
             break;
         if (fewer_count > 2)
-            polish(p, fewer, fewer_count, 8, fixed);
+            polish(p, fewer, fewer_count, 8, fixed, dirty);
         if (total - chords(p, fewer, fewer_count) > budget)
             break;
         memcpy(best, fewer, fewer_count * sizeof(int64_t));
         best_count = fewer_count;
     }
-    free(work);
+    free(work), free(dirty);
     return best_count;
 }
 
