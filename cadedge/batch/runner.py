@@ -155,7 +155,7 @@ def _start_fork_server() -> None:
     each spawning a fresh interpreter that imports distributed, OCP and cadedge (1-2 s per worker and
     per restart, paid on the cores the tasks need). Started before this process imports dask, the
     server's imports run beside the client's import of distributed and the scheduler's start (on
-    two cores, about a second less before the first file). dask's own choice of preloaded modules
+    two idle cores, up to about 0.7 s less before the first file). dask's own choice of preloaded modules
     comes too late to apply. A module that fails to import there is skipped by multiprocessing and
     imported by the task as usual. Nothing changes if the server is already running (a second batch
     in the same process).
@@ -178,8 +178,8 @@ def _start_fork_server() -> None:
         return
     try:
         forkserver.ensure_running()
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    finally:  # a handler installed outside Python reads back as None
+        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
 
 
 def _close_half_started_clusters() -> None:
