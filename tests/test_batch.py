@@ -184,10 +184,13 @@ def test_rerun_skips_finished_retries_failed_redoes_changed(tmp_path, scheduler)
     first = run_batch([tmp_path / "in"], out, ald=ALD, scheduler=scheduler)
     assert len(first.ok) == 3 and [Path(r.input).name for r in first.failed] == ["bad.step"]
     assert first.failed[0].error and "bad.step" in first.failed[0].error
+    assert list(first.phases) == ["plan", "start", "run", "close"]
+    assert all(s >= 0 for s in first.phases.values()) and sum(first.phases.values()) <= first.seconds
 
     second = run_batch([tmp_path / "in"], out, ald=ALD, scheduler=scheduler)
     assert (len(second.skipped), len(second.skipped_failed), second.results) == (3, 1, [])
     assert not second.all_ok
+    assert list(second.phases) == ["plan"]  # nothing due: no cluster, no scheduler reached
 
     retried = run_batch([tmp_path / "in"], out, ald=ALD, scheduler=scheduler, retry_failed=True)
     assert [Path(r.input).name for r in retried.results] == ["bad.step"] and len(retried.skipped) == 3

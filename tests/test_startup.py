@@ -34,6 +34,9 @@ def test_refine_loads_no_mesher_batch_or_plotting(tmp_path):
                           f"assert main(['refine', {path!r}, '--ald', '1e-3', '-o', {str(out)!r}]) == 0")
     assert not {"cadedge.mesh", "cadedge.batch", "gmsh", "dask", "matplotlib", "scipy"} & mods
     assert out.exists()
+    # the JSON writer alone: no other format's module, nor meshio
+    assert "cadedge.exporters.json" in mods
+    assert not {"cadedge.exporters.csv", "cadedge.exporters.vtp", "cadedge.exporters._meshio", "meshio"} & mods
 
 
 def test_every_public_name_resolves():

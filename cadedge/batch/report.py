@@ -37,7 +37,10 @@ class BatchProgress:
 @dataclass
 class BatchReport:
     """What a batch did. ``results`` are the inputs processed now; ``skipped`` the inputs finished
-    in an earlier run; ``skipped_failed`` the inputs that failed earlier and were not retried."""
+    in an earlier run; ``skipped_failed`` the inputs that failed earlier and were not retried.
+    ``seconds`` is the whole call; ``phases`` splits it: ``plan`` (inputs and index), ``start`` (cluster
+    started or scheduler reached), ``run`` (from then to the last outcome recorded), ``close`` (cluster
+    closed); ``start``, ``run`` and ``close`` only when something was due."""
 
     outdir: Path
     index: Path
@@ -45,6 +48,7 @@ class BatchReport:
     skipped: list[str] = field(default_factory=list)
     skipped_failed: list[FileResult] = field(default_factory=list)
     seconds: float = 0.0
+    phases: dict[str, float] = field(default_factory=dict)
 
     @property
     def ok(self) -> list[FileResult]:

@@ -118,8 +118,15 @@ def run_batch(inputs: Iterable[str | os.PathLike], outdir: str | os.PathLike, *,
 
         if progress is not None:
             progress(snapshot(None))
+        clock = time.perf_counter()
+        report.phases["plan"] = clock - t0
         if todo:
             with connect(workers=workers, scheduler=scheduler) as client:
+                report.phases["start"] = time.perf_counter() - clock
+                clock = time.perf_counter()
                 run_jobs(client, todo, task or refine_task, options, timeout=timeout, on_outcome=record)
+                report.phases["run"] = time.perf_counter() - clock
+                clock = time.perf_counter()
+            report.phases["close"] = time.perf_counter() - clock
     report.seconds = time.perf_counter() - t0
     return report

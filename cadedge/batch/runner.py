@@ -1,8 +1,9 @@
 """Running batch tasks on dask.distributed: cluster or client set-up, submission, timeouts, crashes.
 
-Tasks are submitted no faster than the cluster has threads, so a submitted task starts at once and
-the scheduler never holds thousands of keys. A task's clock starts when the scheduler first reports
-it processing on a worker. Failures are isolated per input:
+Tasks are submitted no faster than the cluster has threads, so a submitted task starts at once (one
+waiting on a worker behind another would share its fate if that worker died, and its clock would run)
+and the scheduler never holds thousands of keys. A task's clock starts when the scheduler first
+reports it processing on a worker. Failures are isolated per input:
 
 - the task raises: failed with the exception's type and message;
 - the worker process dies (OCCT crash, kill, out of memory): dask's ``KilledWorker``; our own
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import multiprocessing
 import os
 import signal
@@ -27,6 +29,9 @@ from typing import Any, Callable, Iterator
 from ..errors import InputError
 
 POLL_SECONDS = 0.2
+#: How long the cluster's thread count is trusted before asking the scheduler again (it is asked at
+#: once after a failure, which may mean a worker left).
+THREADS_SECONDS = 2.0
 RESTART_SECONDS = 30.0
 WORKER_DIED = "worker process died (killed or crashed)"
 #: LocalCluster options for no dashboard. The scheduler always serves HTTP (health, metrics); with
@@ -35,7 +40,8 @@ WORKER_DIED = "worker process died (killed or crashed)"
 NO_DASHBOARD = {"dashboard_address": ":0", "scheduler_kwargs": {"dashboard": False}}
 
 #: What a worker needs before its first file: dask, OCCT (through cadedge's OCCT layer), the task.
-WORKER_PRELOAD = ["distributed", "cadedge.occt.shape", "cadedge.exporters", "cadedge.batch.task"]
+WORKER_PRELOAD = ["distributed", "cadedge.occt.shape", "cadedge.occt.step", "cadedge.exporters.json",
+                  "cadedge.batch.task"]
 
 Task = Callable[[str, str, dict], dict]
 
@@ -74,6 +80,8 @@ def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iter
     hung workers are restarted), no dashboard, no task retries after a worker death, and its logs
     silenced: every failure is reported per input instead.
     """
+    if scheduler is None:
+        _start_fork_server()  # imports OCCT there while this process imports dask and starts the scheduler
     import dask
     from distributed import Client, LocalCluster
 
@@ -92,11 +100,10 @@ def connect(*, workers: int | None = None, scheduler: str | None = None) -> Iter
         return
     config = {"distributed.scheduler.allowed-failures": 0,
               "distributed.scheduler.worker-saturation": 1.0}
-    if "forkserver" in multiprocessing.get_all_start_methods():
+    if _forkserver():
         config["distributed.worker.multiprocessing-method"] = "forkserver"
     # kept for the cluster's whole life: nannies read the start method again when they restart a worker
     with dask.config.set(config):
-        _preload_fork_server()
         with _ctrl_c_deferred() as interrupted:
             try:
                 cluster = LocalCluster(n_workers=workers or default_workers(), threads_per_worker=1,
@@ -137,20 +144,42 @@ def _ctrl_c_deferred() -> Iterator[list[int]]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _preload_fork_server() -> None:
-    """Have the fork server import :data:`WORKER_PRELOAD` once, when the start method is forkserver.
+def _forkserver() -> bool:
+    return "forkserver" in multiprocessing.get_all_start_methods()
+
+
+def _start_fork_server() -> None:
+    """Start multiprocessing's fork server now, importing :data:`WORKER_PRELOAD` there (POSIX only).
 
     Workers then start as forks of a process that already holds OCCT and the refiner, instead of
     each spawning a fresh interpreter that imports distributed, OCP and cadedge (1-2 s per worker and
-    per restart, paid on the cores the tasks need). dask's own choice of preloaded modules is
-    replaced; a module that fails to import there is skipped by multiprocessing and imported by the
-    task as usual. Nothing changes if the server is already running or another method is chosen.
-    """
-    from distributed.utils import get_mp_context
+    per restart, paid on the cores the tasks need). Started before this process imports dask, the
+    server's imports run beside the client's import of distributed and the scheduler's start (on
+    two idle cores, up to about 0.7 s less before the first file). dask's own choice of preloaded modules
+    comes too late to apply. A module that fails to import there is skipped by multiprocessing and
+    imported by the task as usual. Nothing changes if the server is already running (a second batch
+    in the same process).
 
-    context = get_mp_context()
-    if context.get_start_method() == "forkserver":
-        context.set_forkserver_preload(WORKER_PRELOAD)
+    The server, and so every worker forked from it, ignores SIGINT: a Ctrl-C in the terminal reaches
+    the whole process group, and a server or worker interrupted in the middle of its imports or its
+    start printed a traceback of its own (or failed the cluster's start). This process handles the
+    Ctrl-C alone and closes the cluster, which ends the workers.
+    """
+    if not _forkserver():
+        return
+    from multiprocessing import forkserver
+
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(WORKER_PRELOAD)
+    try:  # started with SIGINT ignored, which a new Python keeps: see above
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: no handlers to change
+        forkserver.ensure_running()
+        return
+    try:
+        forkserver.ensure_running()
+    finally:  # a handler installed outside Python reads back as None
+        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
 
 
 def _close_half_started_clusters() -> None:
@@ -201,27 +230,38 @@ def run_jobs(client: Any, jobs: list[Job], task: Task, options: dict[str, Any], 
     """Run ``task(job.input, job.output, options)`` for every job; call ``on_outcome`` as each ends.
 
     ``on_outcome`` runs in this (the client) process, in completion order; it is where the index is
-    written, so the index has a single writer.
+    written, so the index has a single writer. When tasks end, the freed worker threads get their
+    next jobs first; fetching the summaries and recording them follow while those run.
     """
     from distributed import wait
 
     todo = deque(jobs)
     running: dict[Any, _Running] = {}
+    threads, asked = 0, -math.inf
+
+    def top_up(refresh: bool) -> None:
+        nonlocal threads, asked
+        if not todo:
+            return
+        if refresh or monotonic() - asked > THREADS_SECONDS:
+            threads, asked = max(1, sum(client.nthreads().values())), monotonic()
+        while todo and len(running) < threads:
+            job = todo.popleft()
+            future = client.submit(task, job.input, job.output, options, pure=False,
+                                   key=f"cadedge-batch-{uuid.uuid4().hex}")
+            running[future] = _Running(job, monotonic())
+
+    top_up(True)
     while todo or running:
-        if todo:
-            capacity = max(1, sum(client.nthreads().values()))
-            while todo and len(running) < capacity:
-                job = todo.popleft()
-                future = client.submit(task, job.input, job.output, options, pure=False,
-                                       key=f"cadedge-batch-{uuid.uuid4().hex}")
-                running[future] = _Running(job, monotonic())
         try:
             wait(list(running), timeout=POLL_SECONDS, return_when="FIRST_COMPLETED")
         except TimeoutError:
             pass
+        ended = {future: running.pop(future) for future in [f for f in running if f.done()]}
+        # a failure may mean a worker left: ask for the threads again rather than queue on a busy one
+        top_up(any(future.status != "finished" for future in ended))
         now = monotonic()
-        for future in [f for f in running if f.done()]:
-            run = running.pop(future)
+        for future, run in ended.items():
             elapsed = now - (run.started if run.started is not None else run.submitted)
             if future.status == "finished":
                 summary = future.result()
@@ -233,6 +273,7 @@ def run_jobs(client: Any, jobs: list[Job], task: Task, options: dict[str, Any], 
             for future, run in running.items():
                 if run.started is None and future.key in processing:
                     run.started = now
+        timed_out = False
         for future, run in list(running.items()):
             if run.started is not None and now - run.started > timeout and not future.done():
                 del running[future]
@@ -240,3 +281,6 @@ def run_jobs(client: Any, jobs: list[Job], task: Task, options: dict[str, Any], 
                 future.cancel()
                 on_outcome(Outcome(run.job, "failed", None, f"timed out after {timeout:g} s ({what})",
                                    monotonic() - run.started))
+                timed_out = True
+        if timed_out:
+            top_up(True)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import traceback
 from typing import Sequence
 
 from ..errors import CadedgeError
@@ -58,6 +57,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 141
     except CadedgeError as exc:
         if args.debug:
+            import traceback  # only here: every command's start-up would pay for it
+
             traceback.print_exc()
         print(f"cadedge {args.command}: error: {exc}", file=sys.stderr)
         return 2

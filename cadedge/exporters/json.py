@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import math
 from functools import lru_cache
-from importlib import resources
 from typing import Any
 
 import numpy as np
@@ -88,6 +87,8 @@ def to_bytes(grid: ShapeGrid) -> bytes:
 @lru_cache(maxsize=1)
 def schema() -> dict[str, Any]:
     """The shipped JSON Schema (draft 2020-12) of ``cadedge.edgegrid/1``."""
+    from importlib import resources  # only for validation: not on the write path
+
     text = resources.files("cadedge").joinpath("schema", SCHEMA_RESOURCE).read_text(encoding="utf-8")
     return json.loads(text)
 
