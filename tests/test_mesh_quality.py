@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from cadedge.mesh.collapse import collapse_edges
 from cadedge.mesh.optimize import climb_nodes, flip_edges, smooth_nodes
 from cadedge.mesh.quality import triangle_angles
 
@@ -51,6 +52,41 @@ def test_movers_raise_the_worst_angle_and_keep_boundary_nodes(mover):
     assert np.array_equal(out[~inner], bad[~inner])
     moved = ~np.isnan(params[:, 0])
     assert moved.any() and np.allclose(params[moved], out[inner][moved, :2])
+
+
+def _crowded_octagon() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A fixed ring of 8 nodes around two interior nodes 0.3 apart: one node too many in the middle."""
+    k = np.arange(8) * np.pi / 4
+    x = np.vstack([np.column_stack([np.cos(k), np.sin(k), np.zeros(8)]), [[0.15, 0, 0], [-0.15, 0, 0]]])
+    p1, p2 = 8, 9
+    tri = [[p1, j % 8, (j + 1) % 8] for j in (6, 7, 8, 9)] + [[p2, j, j + 1] for j in (2, 3, 4, 5)]
+    tri += [[p1, 2, p2], [p2, 6, p1]]
+    movable = np.zeros(10, dtype=bool)
+    movable[[p1, p2]] = True
+    return x, np.array(tri), movable
+
+
+def test_collapse_removes_a_crowded_node_that_moves_cannot_fix():
+    x, tri, movable = _crowded_octagon()
+    before = triangle_angles(x, tri).min()
+    moved, _ = climb_nodes(x, tri, movable, _plane, iterations=8)
+    assert triangle_angles(moved, tri).min() < 43  # node moves alone stay under 45 degrees
+    out, new_tri, removed, params = collapse_edges(x, tri, movable, _plane)
+    assert removed.sum() == 1 and len(new_tri) == len(tri) - 2
+    assert triangle_angles(out, new_tri).min() > max(before, 44.9)
+    assert np.array_equal(out[:8], x[:8])  # the ring (boundary) never moves
+    normal = np.cross(out[new_tri[:, 1]] - out[new_tri[:, 0]], out[new_tri[:, 2]] - out[new_tri[:, 0]])
+    assert np.all(normal[:, 2] > 0)  # orientation kept, nothing turned over
+    assert not np.isin(np.flatnonzero(removed), new_tri).any()
+    kept = np.flatnonzero(~np.isnan(params[:, 0]))
+    assert np.allclose(params[kept], out[kept, :2])
+
+
+def test_collapse_never_touches_an_edge_with_a_boundary_node():
+    x, tri, movable = _crowded_octagon()
+    movable[9] = False  # one of the two crowded nodes on a curve: nothing may collapse
+    out, new_tri, removed, _ = collapse_edges(x, tri, movable, _plane)
+    assert not removed.any() and np.array_equal(new_tri, tri) and np.array_equal(out, x)
 
 
 gmsh = pytest.importorskip("gmsh")
