@@ -150,3 +150,16 @@ def test_cylinder_angles_match_gmsh_alone():
     assert result.ok, result.problems()
     assert result.report.worst_deficit <= 1e-2
     assert triangle_angles(result.nodes, result.triangles).min() >= 35.0
+
+
+def test_a_cube_beside_a_cylinder_beats_gmsh_alone():
+    """cadquery's red cube and blue cylinder (two solids): gmsh alone, tuned to the same worst-face
+    deficit, reaches 41.1 degrees at 1e-3 (docs/mesh.md). Moves and swaps stopped at 38 (crowded fans at
+    the cube's corners and beside the cylinder's seam); with edge collapses and the local search up to 45
+    degrees cadedge gets 42."""
+    cube = cq.Workplane().box(10, 10, 10, centered=False).translate((-10, 0, 0)).val()
+    cylinder = cq.Workplane().circle(5).extrude(10).translate((10, 5, 0)).val()
+    result = mesh_shape(cq.Compound.makeCompound([cube, cylinder]).wrapped, ald=1e-3)
+    assert result.ok, result.problems()
+    assert result.report.worst_deficit <= 1e-3
+    assert triangle_angles(result.nodes, result.triangles).min() >= 40.0
