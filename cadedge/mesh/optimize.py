@@ -449,9 +449,27 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     return changed
 
 
+def _face_min_angle(surface: int) -> float:
+    """The smallest triangle angle of one meshed gmsh surface (180 for a face without triangles)."""
+    import gmsh
+
+    from .generate import node_lookup
+
+    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
+    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+    if not len(tri) or not len(tags):
+        return 180.0
+    lookup = node_lookup(tags)
+    tri = np.asarray(tri, dtype=np.int64)
+    if tri.max() >= len(lookup) or (lookup[tri] < 0).any():
+        return 180.0
+    return float(triangle_angles(np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri].reshape(-1, 3)).min())
+
+
 def after_generate(ctx) -> None:
-    """Hook (after the area-target pass): improve every meshed face (:func:`smooth_face`) until the job's
-    soft deadline; the faces whose mesh changed land in ``ctx.smoothed``."""
+    """Hook (after the area-target pass): improve every meshed face (:func:`smooth_face`), worst smallest
+    angle first, until the job's soft deadline (on a loaded machine a large model gets part of the
+    faces: the worst go first); the faces whose mesh changed land in ``ctx.smoothed``."""
     import time
 
     import gmsh
@@ -461,14 +479,16 @@ def after_generate(ctx) -> None:
     target = opts.get("surface_ald")
     face_of = ctx.emap.face_of_surface
     kept = []
-    for s, outcome in sorted(ctx.outcomes.items()):
-        if not outcome.ok:
-            continue
+    meshed = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok]
+    worst = {s: _face_min_angle(s) for s in meshed}
+    for s in sorted(meshed, key=lambda s: worst[s]):
+        if worst[s] >= CLIMB_BELOW:
+            break  # this face and the rest have no triangle worth moving
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
             break  # out of the job's time: the faces keep gmsh's triangles
         f = face_of.get(s, s)
         area = float(areas[f - 1]) if 1 <= f <= len(areas) else 0.0
         if smooth_face(s, brep_area=area, target=target, deadline=ctx.job.deadline):
             kept.append(f)
-            outcome.triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
+            ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
     ctx.smoothed = kept
