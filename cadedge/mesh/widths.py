@@ -115,10 +115,15 @@ def fit_to_widths(grid: ShapeGrid, *, ratio: float = WIDTH_RATIO, passes: int = 
 
 
 def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int = CORNER_PASSES,
-                  curves=None) -> ShapeGrid:
+                  curves: dict | None = None) -> ShapeGrid:
     """A copy of ``grid`` in which, at every corner of every face (a B-rep vertex), the face's boundary
     segments that end there are within ``ratio`` of the shortest of them: longer ones are halved (in
-    parameter, on their OCCT curve), pass after pass. Grid points are kept and edge ends never move."""
+    parameter, on their OCCT curve), pass after pass. Grid points are kept and edge ends never move; an
+    edge OCCT cannot evaluate keeps its grid."""
+    from OCP.Standard import Standard_Failure
+
+    from ..errors import GeometryError
+
     curves = curves if curves is not None else (grid.curves if grid.curves is not None else _LazyCurves(grid))
     edges = list(grid.edges)
     for _ in range(passes):
@@ -143,7 +148,10 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
             e = edges[i]
             if not np.any(k > 1) or e.tolerance > TOLERANCE_SHARE * np.min(e.segment_lengths / k):
                 continue
-            params, points = split_segments(e.params, e.points, k, curves[e.id].evaluate)
+            try:
+                params, points = split_segments(e.params, e.points, k, curves[e.id].evaluate)
+            except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
+                continue
             edges[i] = dataclasses.replace(e, params=params, points=points)
             changed = True
         if not changed:
