@@ -25,6 +25,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,7 +55,7 @@ def one(path: Path, ald: float, mode: str, timeout: float) -> dict:
 
     t0 = time.perf_counter()
     rec = {"model": path.name, "ald": ald, "mode": mode}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings(record=True):  # as the CLI: recorded
         try:
             r = mesh_shape(path, ald=ald, mode=mode, output=Path(tmp) / "out.msh", timeout=timeout)
         except CadedgeError as exc:
@@ -139,7 +140,12 @@ def run_isolated(path: Path, ald: float, mode: str, timeout: float) -> dict:
         tail = (done.stderr.strip().splitlines() or [""])[-1][:200]
         return {"model": path.name, "ald": ald, "mode": mode, "exit": None,
                 "escaped": f"caller died with code {done.returncode}: {tail}", "seconds": time.perf_counter() - t0}
-    return json.loads(lines[-1])
+    rec = json.loads(lines[-1])
+    # what reached stderr outside cadedge's own lines (native OCCT or gmsh output, tracebacks): the CLI would
+    # print it too, without the input file's name
+    stray = [ln for ln in done.stderr.splitlines() if ln.strip() and path.name not in ln]
+    rec.update(stray_stderr=len(stray), stray_what=stray[:3])
+    return rec
 
 
 def _fmt(x, spec: str) -> str:
@@ -162,12 +168,14 @@ def table(records: list[dict]) -> list[str]:
     exit2 = sum(1 for r in records if r.get("exit") == 2)
     no_mesh = sum(1 for r in records if not r.get("written"))
     contained = sum(r.get("contained", 0) for r in records)
+    stray = sum(r.get("stray_stderr", 0) for r in records)
     share = 100.0 * meshed / total if total else float("nan")
     out.append("")
     out.append(f"{len(records)} runs: faces meshed {meshed}/{total} ({share:.2f}%); exit 0 in "
                f"{sum(1 for r in records if r.get('exit') == 0)}, exit 1 in "
                f"{sum(1 for r in records if r.get('exit') == 1)}, exit 2 in {exit2}; hangs/crashes contained "
-               f"{contained}, reaching the caller {escaped}; runs without a mesh {no_mesh}")
+               f"{contained}, reaching the caller {escaped}; runs without a mesh {no_mesh}; stderr lines not naming "
+               f"the file {stray}")
     return out
 
 
