@@ -121,3 +121,60 @@ def test_the_hard_timeout_delivers_the_faces_already_meshed(cylinder, tmp_path):
     assert result.check.ok and all(s.watertight for s in result.check.shells)
     assert any("stopped" in n and "delivered" in n for n in result.notes)
     assert result.output == out and trimesh.load(out).is_watertight
+
+
+def _msh_groups(path) -> tuple[dict, dict]:
+    """Physical groups of a .msh file read by gmsh: {(dim, tag): name} and {(dim, tag): element count}."""
+    import gmsh
+
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        names, counts = {}, {}
+        for dim, tag in gmsh.model.getPhysicalGroups():
+            names[(dim, tag)] = gmsh.model.getPhysicalName(dim, tag)
+            counts[(dim, tag)] = sum(len(gmsh.model.mesh.getElements(dim, e)[1][0])
+                                     for e in gmsh.model.getEntitiesForPhysicalGroup(dim, tag))
+        return names, counts
+    finally:
+        gmsh.finalize()
+
+
+def test_a_hard_timeout_mesh_keeps_its_groups_and_names_the_missing_face(cylinder, tmp_path):
+    """A child that loses face 2 and then hangs: the hard timeout delivers faces 1 and 3 in a .msh with the
+    physical groups ``face <id>`` / ``edge <id>`` gmsh's writer gives, and the report names face 2."""
+    out = tmp_path / "c.msh"
+    result = mesh_shape(cylinder, output=out, hooks={"after_generate": ["mesh_faults:lose_a_face_and_hang"]},
+                        timeout=20, face_timeout=100)
+    assert result.error is None and [f.face for f in result.failures] == [FAULT_FACE]
+    assert "not finished: no result within 20 s" in result.failures[0].reason
+    assert set(np.unique(result.triangle_faces)) == {1, 3}
+    assert result.check.ok, result.check.problems  # the missing face's edges are open boundaries, not cracks
+    report = {f.face: f for f in result.report.faces}
+    assert report[FAULT_FACE].status == "failed" and "no result within" in report[FAULT_FACE].note
+    assert report[1].status != "failed" and report[1].triangles > 0
+    assert any(f"face {FAULT_FACE}" in line and "no result within" in line for line in result.problems())
+    names, counts = _msh_groups(out)
+    assert {k: v for k, v in names.items() if k[0] == 2} == {(2, 1): "face 1", (2, 3): "face 3"}
+    assert counts[(2, 1)] + counts[(2, 3)] == len(result.triangles)
+    edges = {e.id for e in cylinder.edges if not e.degenerate}
+    assert {k[1] for k in names if k[0] == 1} == edges
+    assert all(names[(1, e)] == f"edge {e}" and counts[(1, e)] > 0 for e in edges)
+
+
+def test_a_hard_timeout_after_the_re_mesh_delivers_the_final_mesh(cylinder):
+    """A face meshed again finer after its first meshing is delivered again: a child killed before writing
+    hands over the mesh a finished run gives, not the first meshes."""
+    first = mesh_shape(cylinder)
+    done = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"]})
+    assert np.sum(done.triangle_faces == FAULT_FACE) > np.sum(first.triangle_faces == FAULT_FACE)
+    killed = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"],
+                                         "before_write": ["mesh_faults:hang_before_writing"]},
+                        timeout=20, face_timeout=100)
+    assert killed.error is None and not killed.failures
+    assert any("stopped" in n for n in killed.notes)
+    for f in range(1, cylinder.faces + 1):
+        assert np.sum(killed.triangle_faces == f) == np.sum(done.triangle_faces == f)
+    used = np.unique(done.nodes[done.triangles.ravel()], axis=0)
+    assert np.array_equal(np.unique(killed.nodes[killed.triangles.ravel()], axis=0), used)
