@@ -67,6 +67,7 @@ def one(path: Path, ald: float, mode: str, timeout: float) -> dict:
     contained = [n for n in r.notes if "hung" in n or "crashed" in n] + ([r.error] if r.error else [])
     rec.update(exit=0 if r.ok else 1, faces=faces, meshed=faces - len(failed), written=written,
                contained=len(contained), contained_what=contained[:3], error=r.error,
+               hard_timeout=any("was stopped" in n for n in r.notes),
                failures=[f.line() for f in r.failures][:5],
                min_angle=r.check.min_angle_deg if r.check else None,
                under10=100 * r.check.small_angle_share if r.check else None,

@@ -235,7 +235,7 @@ def test_ap242_with_pmi_written_by_xde_meshes_every_face(tmp_path):
         assert (tmp_path / f"{mode}.msh").exists()
 
 
-@pytest.mark.parametrize("name", ["revolved_spline", "bspline_cage"])
+@pytest.mark.parametrize("name", ["revolved_spline", "bspline_cage", "tangent_union"])
 def test_hard_models_mesh_every_face(name):
     pytest.importorskip("cadquery")
     shape = _hard_models().MODELS[name]()
