@@ -6,8 +6,9 @@ tolerances, free edges, seams and degenerate edges, and an AP242 STEP written wi
 annotation curves) through OCCT's XDE writer (``STEPCAFControl_Writer``). A second set, kinds the first
 one lacks: a threaded bolt (helical thread, build123d), fillets and chamfers on a boolean of four
 primitives, a drafted and shelled box, a non-planar sweep, a sphere-cylinder-cone union with tangent
-seams, a knurled cylinder (110 faces), a plate with a sliver slot and a tiny hole, and an XDE assembly
-with one part instanced three times.
+seams, a knurled cylinder (110 faces), a plate with a sliver slot and a tiny hole, an XDE assembly
+with one part instanced three times, a faceted solid (an STL mesh sewn into 228 planar faces) and a
+tube swept along a polyline with round bends.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step for every model
 
@@ -210,6 +211,34 @@ def sliver_hole() -> object:
     return plate.cut(slot).cut(pin).val().wrapped
 
 
+def faceted() -> object:
+    """A sphere fused with a cylinder, triangulated and sewn back as 228 planar triangle faces (a STEP
+    made from an STL mesh): many small faces, thin triangles forced by the facets."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon, BRepBuilderAPI_Sewing
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopLoc import TopLoc_Location
+
+    solid = cq.Solid.makeSphere(10).fuse(cq.Solid.makeCylinder(4, 15, cq.Vector(0, 0, 0)))
+    BRepMesh_IncrementalMesh(solid.wrapped, 1.2, False, 0.6)
+    sew = BRepBuilderAPI_Sewing(1e-6)
+    for face in solid.Faces():
+        loc = TopLoc_Location()
+        tri = BRep_Tool.Triangulation_s(face.wrapped, loc)
+        for i in range(1, tri.NbTriangles() + 1):
+            p = [tri.Node(k).Transformed(loc.Transformation()) for k in tri.Triangle(i).Get()]
+            sew.Add(BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakePolygon(p[0], p[1], p[2], True).Wire(), True).Face())
+    sew.Perform()
+    return sew.SewedShape()
+
+
+def pipe_bends() -> object:
+    """A tube (2.0 / 1.6 radii) swept along a polyline with round transitions: toroidal bends between
+    straight runs."""
+    path = cq.Workplane().polyline([(0, 0, 0), (20, 0, 0), (20, 15, 0), (20, 15, 12), (5, 25, 12)]).val()
+    return cq.Workplane("YZ").circle(2.0).circle(1.6).sweep(cq.Workplane().add(path), transition="round").val().wrapped
+
+
 def write_xde_assembly(path: Path) -> None:
     """A STEP assembly through XDE: a drilled plate and one chamfered bolt placed three times (one shared
     product, three instances under a sub-assembly)."""
@@ -287,7 +316,7 @@ MODELS: dict[str, Callable[[], object]] = {
     "seams_and_poles": seams_and_poles, "assembly": assembly,
     "threaded_bolt": threaded_bolt, "filleted_boolean": filleted_boolean, "shelled_drafted": shelled_drafted,
     "swept_nonplanar": swept_nonplanar, "tangent_union": tangent_union, "knurled": knurled,
-    "sliver_hole": sliver_hole,
+    "sliver_hole": sliver_hole, "faceted": faceted, "pipe_bends": pipe_bends,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
