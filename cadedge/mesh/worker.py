@@ -167,7 +167,8 @@ def _face_triangles(surface: int) -> np.ndarray:
 
 
 def _curve_segments(curve: int) -> np.ndarray:
-    """The segments of one gmsh curve's 1-D mesh as end-point coordinates, shape (k, 2, 3)."""
+    """The segments of one gmsh curve's 1-D mesh as end-point coordinates, shape (k, 2, 3) (none when
+    they reference a node gmsh does not list on the curve or its end points)."""
     import gmsh
 
     from .generate import node_lookup
@@ -177,7 +178,10 @@ def _curve_segments(curve: int) -> np.ndarray:
         return np.zeros((0, 2, 3))
     tags, coords, _ = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
     lookup = node_lookup(tags)
-    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[np.asarray(seg, dtype=np.int64)]].reshape(-1, 2, 3)
+    seg = np.asarray(seg, dtype=np.int64)
+    if seg.max() >= len(lookup) or (lookup[seg] < 0).any():  # a node off the curve and its ends: not ours
+        return np.zeros((0, 2, 3))
+    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[seg]].reshape(-1, 2, 3)
 
 
 def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResult:
