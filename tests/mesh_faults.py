@@ -83,3 +83,15 @@ def remesh_finer(ctx) -> None:
     gmsh.model.mesh.clear([(2, s)])
     ctx.outcomes[s] = mesh_faces([s], ctx.emap.face_of_surface)[s]
     ctx.progress(f"refined {FAULT_FACE}")
+
+
+def break_a_face(ctx) -> None:
+    """After meshing, drop one triangle of face ``FAULT_FACE`` (as a faulty optimiser step would leave a hole)."""
+    import gmsh
+
+    s = ctx.emap.faces[FAULT_FACE]
+    tags, nodes = gmsh.model.mesh.getElementsByType(2, s)
+    inner, coords, params = gmsh.model.mesh.getNodes(2, s, includeBoundary=False, returnParametricCoord=True)
+    gmsh.model.mesh.clear([(2, s)])  # drops the face's inner nodes too: put them back
+    gmsh.model.mesh.addNodes(2, s, list(inner), list(coords), list(params))
+    gmsh.model.mesh.addElementsByType(s, 2, list(tags[1:]), list(nodes[3:]))

@@ -178,3 +178,51 @@ def test_a_hard_timeout_after_the_re_mesh_delivers_the_final_mesh(cylinder):
         assert np.sum(killed.triangle_faces == f) == np.sum(done.triangle_faces == f)
     used = np.unique(done.nodes[done.triangles.ravel()], axis=0)
     assert np.array_equal(np.unique(killed.nodes[killed.triangles.ravel()], axis=0), used)
+
+
+def test_a_face_broken_after_meshing_is_meshed_again(cylinder):
+    """A face whose triangles stop matching its boundary after the after-meshing steps (here one triangle
+    dropped) is checked again and meshed from scratch: the mesh stays watertight."""
+    result = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:break_a_face"]})
+    _every_face(result)
+    assert all(s.watertight for s in result.check.shells)
+    assert any(f"faces {FAULT_FACE}: the steps after meshing" in n for n in result.notes)
+
+
+def test_two_faces_on_one_boundary_loop_get_interior_nodes():
+    """Two surfaces on the same boundary loop (a lens flattened: the wing's revolved face and its cap at
+    ALD 1e-1), meshed coarse from their boundary nodes alone, repeat each other's triangles; the re-check
+    meshes them again finer, with interior nodes, so no inner edge is shared any more."""
+    import types
+
+    import gmsh
+
+    from cadedge.mesh.generate import FaceOutcome
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.worker import _overlapping_faces, _recheck
+
+    with gmsh_session():
+        occ = gmsh.model.occ
+        pts = [occ.addPoint(x, y, 0) for x, y in ((0, 0), (10, 0), (10, 10), (0, 10))]
+        loop = occ.addCurveLoop([occ.addLine(pts[i], pts[(i + 1) % 4]) for i in range(4)])
+        occ.addPlaneSurface([loop])
+        occ.addPlaneSurface([loop])
+        occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 20.0)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 20.0)
+        gmsh.model.mesh.generate(1)  # one segment a side; both faces as two triangles on the corners only
+        corner = [int(gmsh.model.mesh.getNodes(0, p)[0][0]) for p in pts]
+        for s in (1, 2):
+            first = int(gmsh.model.mesh.getMaxElementTag()) + 1
+            gmsh.model.mesh.addElementsByType(s, 2, [first, first + 1],
+                                              [corner[i] for i in (0, 1, 2, 0, 2, 3)])
+        overlap = _overlapping_faces([1, 2])
+        assert set(overlap) == {1, 2} and overlap[1] == pytest.approx(10 * np.sqrt(2))
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
+        ctx = types.SimpleNamespace(emap=types.SimpleNamespace(face_of_surface={1: 1, 2: 2}),
+                                    outcomes={s: FaceOutcome(face=s, surface=s, strategy="x") for s in (1, 2)})
+        notes: list[str] = []
+        _recheck(ctx, notes)
+        assert all(o.ok for o in ctx.outcomes.values()) and _overlapping_faces([1, 2]) == {}
+        assert all(len(gmsh.model.mesh.getNodes(2, s, includeBoundary=False)[0]) for s in (1, 2))
+        assert any("faces 1, 2: triangulated from their boundary nodes alone" in n for n in notes)

@@ -184,6 +184,81 @@ def _curve_segments(curve: int) -> np.ndarray:
     return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[seg]].reshape(-1, 2, 3)
 
 
+def _overlapping_faces(surfaces: list[int]) -> dict[int, float]:
+    """Meshed surfaces whose inner triangle edges (not curve segments) are also edges of another surface's
+    triangles: two faces with the same boundary loop (a lens) triangulated from their boundary nodes alone
+    give the same triangles twice. Returns each one with the shortest such edge's length."""
+    import gmsh
+
+    from .generate import node_lookup
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    if not len(tags):
+        return {}
+    lookup = node_lookup(tags)
+    x = np.asarray(coords, dtype=float).reshape(-1, 3)
+    big = int(np.max(tags)) + 1
+    _, seg = gmsh.model.mesh.getElementsByType(1)
+    seg = np.sort(np.asarray(seg, dtype=np.int64).reshape(-1, 2), axis=1)
+    on_curves = seg[:, 0] * big + seg[:, 1]
+    keys, owners, pairs = [], [], []
+    for s in surfaces:
+        tri = np.asarray(gmsh.model.mesh.getElementsByType(2, s)[1], dtype=np.int64).reshape(-1, 3)
+        e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+        k = e[:, 0] * big + e[:, 1]
+        inner = ~np.isin(k, on_curves)
+        keys.append(k[inner])
+        pairs.append(e[inner])
+        owners.append(np.full(int(inner.sum()), s, dtype=np.int64))
+    if not keys:
+        return {}
+    k, own, pr = np.concatenate(keys), np.concatenate(owners), np.vstack(pairs)
+    uniq, inverse, counts = np.unique(k, return_inverse=True, return_counts=True)
+    shared = counts[inverse.ravel()] > 1
+    out: dict[int, float] = {}
+    lengths = np.linalg.norm(x[lookup[pr[shared, 0]]] - x[lookup[pr[shared, 1]]], axis=1)
+    for s, length in zip(own[shared].tolist(), lengths.tolist()):
+        out[s] = min(out.get(s, np.inf), length)
+    return out
+
+
+def _recheck(ctx: JobContext, notes: list[str]) -> None:
+    """Check every meshed face again after the ``after_generate`` hooks (a re-mesh, the optimiser's moves
+    and flips): a face whose triangles no longer match its boundary curves exactly, or whose inner edges are
+    not each shared by two triangles, is meshed again from scratch; faces whose inner edges coincide with
+    another face's (the same triangles twice) are meshed again with sizes under a quarter of those edges,
+    so they get interior nodes. Boundaries are unchanged, so neighbours stay conforming; a note names them."""
+    import gmsh
+
+    from .generate import mesh_faces, surface_ok
+
+    face_of = ctx.emap.face_of_surface
+    meshed = [s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0]
+    broken = [s for s in meshed if not surface_ok(s)]
+    for s in broken:
+        gmsh.model.mesh.clear([(2, s)])
+        ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+    if broken:
+        notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in broken)}: the steps after meshing (re-mesh "
+                     "finer, optimiser) left triangles that do not match the face's boundary; meshed again")
+    overlap = _overlapping_faces([s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0])
+    if not overlap:
+        return
+    cap = gmsh.option.getNumber("Mesh.MeshSizeMax")
+    try:
+        for s, length in sorted(overlap.items()):
+            gmsh.option.setNumber("Mesh.MeshSizeMax", min(cap, 0.25 * length))
+            gmsh.model.mesh.clear([(2, s)])
+            ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+            if not ctx.outcomes[s].ok:  # keep a face meshed as before rather than none
+                gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
+                ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+    finally:
+        gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
+    notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in sorted(overlap))}: triangulated from their "
+                 "boundary nodes alone they repeated another face's triangles; meshed again with interior nodes")
+
+
 def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResult:
     """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step.
 
@@ -276,6 +351,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
+        _recheck(ctx, notes)
         if deliver is not None:  # the hooks may have meshed faces again or moved their nodes
             for s, o in sorted(ctx.outcomes.items()):
                 if o.ok and s in face_of:
