@@ -5,7 +5,8 @@ process (``--one``), itself under an outer time limit: gmsh is already isolated 
 limit only catches a hang or crash that *reached the caller* (counted, and a target of 0). Per run:
 the exit code the CLI would give (0 ok, 1 faces failed / crash / timeout, 2 bad input), faces meshed of
 total, hangs and crashes cadedge contained, the minimum angle, the share of triangles under 10 degrees,
-and the time. Results are appended to a JSON-lines file as they finish (a long run can be stopped and
+the time, whether the hard timeout ended it, and the lines on its stderr that do not name the file
+(native OCCT or gmsh output, tracebacks: ``cadedge mesh`` would print them unnamed). Results are appended to a JSON-lines file as they finish (a long run can be stopped and
 its table still made), then printed as the markdown table of docs/mesh.md:
 
     python scripts/bench_mesh.py --ald 1e-1 1e-2 1e-3 --jsonl bench_mesh.jsonl
