@@ -5,7 +5,8 @@ process (``--one``), itself under an outer time limit: gmsh is already isolated 
 limit only catches a hang or crash that *reached the caller* (counted, and a target of 0). Per run:
 the exit code the CLI would give (0 ok, 1 faces failed / crash / timeout, 2 bad input), faces meshed of
 total, hangs and crashes cadedge contained, the minimum angle, the share of triangles under 10 degrees,
-and the time. Results are appended to a JSON-lines file as they finish (a long run can be stopped and
+the time, whether the hard timeout ended it, and the lines on its stderr that do not name the file
+(native OCCT or gmsh output, tracebacks: ``cadedge mesh`` would print them unnamed). Results are appended to a JSON-lines file as they finish (a long run can be stopped and
 its table still made), then printed as the markdown table of docs/mesh.md:
 
     python scripts/bench_mesh.py --ald 1e-1 1e-2 1e-3 --jsonl bench_mesh.jsonl
@@ -25,6 +26,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,7 +56,7 @@ def one(path: Path, ald: float, mode: str, timeout: float) -> dict:
 
     t0 = time.perf_counter()
     rec = {"model": path.name, "ald": ald, "mode": mode}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, warnings.catch_warnings(record=True):  # as the CLI: recorded
         try:
             r = mesh_shape(path, ald=ald, mode=mode, output=Path(tmp) / "out.msh", timeout=timeout)
         except CadedgeError as exc:
@@ -66,6 +68,7 @@ def one(path: Path, ald: float, mode: str, timeout: float) -> dict:
     contained = [n for n in r.notes if "hung" in n or "crashed" in n] + ([r.error] if r.error else [])
     rec.update(exit=0 if r.ok else 1, faces=faces, meshed=faces - len(failed), written=written,
                contained=len(contained), contained_what=contained[:3], error=r.error,
+               hard_timeout=any("was stopped" in n for n in r.notes),
                failures=[f.line() for f in r.failures][:5],
                min_angle=r.check.min_angle_deg if r.check else None,
                under10=100 * r.check.small_angle_share if r.check else None,
@@ -139,7 +142,12 @@ def run_isolated(path: Path, ald: float, mode: str, timeout: float) -> dict:
         tail = (done.stderr.strip().splitlines() or [""])[-1][:200]
         return {"model": path.name, "ald": ald, "mode": mode, "exit": None,
                 "escaped": f"caller died with code {done.returncode}: {tail}", "seconds": time.perf_counter() - t0}
-    return json.loads(lines[-1])
+    rec = json.loads(lines[-1])
+    # what reached stderr outside cadedge's own lines (native OCCT or gmsh output, tracebacks): the CLI would
+    # print it too, without the input file's name
+    stray = [ln for ln in done.stderr.splitlines() if ln.strip() and path.name not in ln]
+    rec.update(stray_stderr=len(stray), stray_what=stray[:3])
+    return rec
 
 
 def _fmt(x, spec: str) -> str:
@@ -162,12 +170,14 @@ def table(records: list[dict]) -> list[str]:
     exit2 = sum(1 for r in records if r.get("exit") == 2)
     no_mesh = sum(1 for r in records if not r.get("written"))
     contained = sum(r.get("contained", 0) for r in records)
+    stray = sum(r.get("stray_stderr", 0) for r in records)
     share = 100.0 * meshed / total if total else float("nan")
     out.append("")
     out.append(f"{len(records)} runs: faces meshed {meshed}/{total} ({share:.2f}%); exit 0 in "
                f"{sum(1 for r in records if r.get('exit') == 0)}, exit 1 in "
                f"{sum(1 for r in records if r.get('exit') == 1)}, exit 2 in {exit2}; hangs/crashes contained "
-               f"{contained}, reaching the caller {escaped}; runs without a mesh {no_mesh}")
+               f"{contained}, reaching the caller {escaped}; runs without a mesh {no_mesh}; stderr lines not naming "
+               f"the file {stray}")
     return out
 
 

@@ -3,12 +3,17 @@
 Helical sweeps, revolved and lofted splines, thin and sliver faces, tiny edges beside long ones,
 multi-body assemblies (one part placed twice), a hole through a fillet, a B-spline cage, loose
 tolerances, free edges, seams and degenerate edges, and an AP242 STEP written with PMI (a dimension and
-annotation curves) through OCCT's XDE writer (``STEPCAFControl_Writer``).
+annotation curves) through OCCT's XDE writer (``STEPCAFControl_Writer``). A second set, kinds the first
+one lacks: a threaded bolt (helical thread, build123d), fillets and chamfers on a boolean of four
+primitives, a drafted and shelled box, a non-planar sweep, a sphere-cylinder-cone union with tangent
+seams, a knurled cylinder (110 faces), a plate with a sliver slot and a tiny hole, an XDE assembly
+with one part instanced three times, a faceted solid (an STL mesh sewn into 228 planar faces) and a
+tube swept along a polyline with round bends.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step for every model
 
 ``MODELS`` maps each name to a builder returning an OCP ``TopoDS_Shape``; ``write_model(name, folder)``
-writes one STEP file (the PMI model through XDE, the others through cadquery's exporter).
+writes one STEP file (``XDE_WRITERS`` through XDE, the others through cadquery's exporter).
 """
 
 from __future__ import annotations
@@ -143,6 +148,112 @@ def assembly() -> object:
     ]).wrapped
 
 
+def threaded_bolt() -> object:
+    """A bolt with a helical thread (a triangle swept along a helix, build123d) fused to its core and a head."""
+    import build123d as bd
+
+    pitch, r_core, depth, length = 1.0, 2.5, 0.55, 6.0
+    x0 = r_core - 0.05  # the thread root sits inside the core: the fusion cuts it along a helical seam
+    helix = bd.Helix(pitch=pitch, height=length, radius=x0)
+    profile = bd.make_face(bd.Polyline((x0, 0, -0.4 * pitch), (x0 + depth, 0, 0), (x0, 0, 0.4 * pitch), close=True))
+    thread = bd.sweep(profile, path=helix, is_frenet=True)
+    bottom = (bd.Align.CENTER, bd.Align.CENTER, bd.Align.MIN)
+    core = bd.Cylinder(r_core, length + 2, align=bottom).moved(bd.Location((0, 0, -1)))
+    head = bd.Cylinder(4.0, 2.0, align=bottom).moved(bd.Location((0, 0, -3)))
+    return core.fuse(thread).fuse(head).wrapped
+
+
+def filleted_boolean() -> object:
+    """A box, a boss, a rib and a ball fused, then vertical edges filleted, the base chamfered, a hole drilled."""
+    body = (cq.Workplane().box(30, 20, 8).union(cq.Workplane().cylinder(12, 6).translate((8, 0, 6)))
+            .union(cq.Workplane().box(4, 18, 10).translate((-8, 0, 5)))
+            .union(cq.Workplane().sphere(4).translate((-8, 0, 10))))
+    return body.edges("|Z").fillet(1.0).faces("<Z").chamfer(0.8).faces(">Z").workplane().hole(3.0).val().wrapped
+
+
+def shelled_drafted() -> object:
+    """A box extruded with a 6-degree draft, its slanted corners filleted, shelled open at the top."""
+    box = cq.Workplane().rect(20, 14).extrude(10, taper=6).edges("not(|X or |Y)").fillet(2.0)
+    return box.faces(">Z").shell(-0.8).val().wrapped
+
+
+def swept_nonplanar() -> object:
+    """An ellipse swept along a non-planar 3-D spline: B-spline faces twisting along the path."""
+    pts = [(0, 0, 0), (5, 3, 2), (10, -2, 6), (15, 1, 4), (20, 0, 10)]
+    path = cq.Wire.assembleEdges([cq.Edge.makeSpline([cq.Vector(*p) for p in pts])])
+    return cq.Workplane("YZ").ellipse(1.5, 0.8).sweep(cq.Workplane().add(path), transition="round").val().wrapped
+
+
+def tangent_union() -> object:
+    """A sphere, a cylinder of the same radius and a cone on it fused: tangent seams between the pieces."""
+    r = 3.0
+    cyl = cq.Solid.makeCylinder(r, 10, cq.Vector(0, 0, 0), cq.Vector(0, 0, 1))
+    ball = cq.Solid.makeSphere(r, cq.Vector(0, 0, 0))
+    cone = cq.Solid.makeCone(r, 0.0, 6, cq.Vector(0, 0, 10), cq.Vector(0, 0, 1))
+    return cq.Workplane().add(cyl).union(cq.Workplane().add(ball)).union(cq.Workplane().add(cone)).val().wrapped
+
+
+def knurled() -> object:
+    """A cylinder with 36 axial V-grooves cut around it (a knurl): 110 faces, many of them long and thin."""
+    cut = None
+    for k in range(36):
+        groove = (cq.Workplane().box(0.6, 0.6, 14).rotate((0, 0, 0), (0, 0, 1), 45).translate((6, 0, 0))
+                  .rotate((0, 0, 0), (0, 0, 1), 10.0 * k))
+        cut = groove if cut is None else cut.union(groove)
+    return cq.Workplane().cylinder(12, 6).cut(cut).val().wrapped
+
+
+def sliver_hole() -> object:
+    """A plate with a 0.004-wide slot and a 0.02-diameter pin hole through it: sliver and tiny hole faces."""
+    plate = cq.Workplane().box(20, 20, 2)
+    slot = cq.Workplane().box(8, 0.004, 4).translate((2, 3, 0))
+    pin = cq.Workplane().cylinder(4, 0.01).translate((-5, -5, 0))
+    return plate.cut(slot).cut(pin).val().wrapped
+
+
+def faceted() -> object:
+    """A sphere fused with a cylinder, triangulated and sewn back as 228 planar triangle faces (a STEP
+    made from an STL mesh): many small faces, thin triangles forced by the facets."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon, BRepBuilderAPI_Sewing
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopLoc import TopLoc_Location
+
+    solid = cq.Solid.makeSphere(10).fuse(cq.Solid.makeCylinder(4, 15, cq.Vector(0, 0, 0)))
+    BRepMesh_IncrementalMesh(solid.wrapped, 1.2, False, 0.6)
+    sew = BRepBuilderAPI_Sewing(1e-6)
+    for face in solid.Faces():
+        loc = TopLoc_Location()
+        tri = BRep_Tool.Triangulation_s(face.wrapped, loc)
+        for i in range(1, tri.NbTriangles() + 1):
+            p = [tri.Node(k).Transformed(loc.Transformation()) for k in tri.Triangle(i).Get()]
+            sew.Add(BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakePolygon(p[0], p[1], p[2], True).Wire(), True).Face())
+    sew.Perform()
+    return sew.SewedShape()
+
+
+def pipe_bends() -> object:
+    """A tube (2.0 / 1.6 radii) swept along a polyline with round transitions: toroidal bends between
+    straight runs."""
+    path = cq.Workplane().polyline([(0, 0, 0), (20, 0, 0), (20, 15, 0), (20, 15, 12), (5, 25, 12)]).val()
+    return cq.Workplane("YZ").circle(2.0).circle(1.6).sweep(cq.Workplane().add(path), transition="round").val().wrapped
+
+
+def write_xde_assembly(path: Path) -> None:
+    """A STEP assembly through XDE: a drilled plate and one chamfered bolt placed three times (one shared
+    product, three instances under a sub-assembly)."""
+    from cadquery.occ_impl.exporters.assembly import exportAssembly
+
+    bolt = cq.Workplane().cylinder(6, 0.8).faces(">Z").chamfer(0.2)
+    plate = cq.Workplane().box(12, 6, 2).faces(">Z").workplane().rarray(6, 1, 3, 1).hole(1.8)
+    row = cq.Assembly(name="bolts")
+    for i, x in enumerate((-6, 0, 6)):
+        row.add(bolt, name=f"bolt{i}", loc=cq.Location(cq.Vector(x, 0, 2)))
+    assy = cq.Assembly(name="root").add(plate, name="plate").add(row, name="row")
+    if not exportAssembly(assy, str(path)):
+        raise RuntimeError(f"XDE could not write {path}")
+
+
 def pmi_part() -> object:
     """The PMI model's geometry: a bracket with holes and fillets, a second body, annotation curves."""
     plate = (cq.Workplane().box(30, 20, 4).edges("|Z").fillet(3).faces(">Z").workplane()
@@ -203,15 +314,20 @@ MODELS: dict[str, Callable[[], object]] = {
     "tiny_edges": tiny_edges, "hole_through_fillet": hole_through_fillet, "bspline_cage": bspline_cage,
     "wavy_plate": wavy_plate, "loose_tolerance": loose_tolerance, "free_edges": free_edges,
     "seams_and_poles": seams_and_poles, "assembly": assembly,
+    "threaded_bolt": threaded_bolt, "filleted_boolean": filleted_boolean, "shelled_drafted": shelled_drafted,
+    "swept_nonplanar": swept_nonplanar, "tangent_union": tangent_union, "knurled": knurled,
+    "sliver_hole": sliver_hole, "faceted": faceted, "pipe_bends": pipe_bends,
 }
-NAMES = list(MODELS) + ["pmi_ap242"]
+#: Models written through XDE rather than cadquery's shape exporter.
+XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
+NAMES = list(MODELS) + list(XDE_WRITERS)
 
 
 def write_model(name: str, folder: Path) -> Path:
     """Write model ``name`` as ``folder/<name>.step``; returns the path."""
     path = Path(folder) / f"{name}.step"
-    if name == "pmi_ap242":
-        write_pmi_step(path)
+    if name in XDE_WRITERS:
+        XDE_WRITERS[name](path)
     else:
         cq.exporters.export(cq.Shape.cast(MODELS[name]()), str(path), exportType="STEP")
     return path

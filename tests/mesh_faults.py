@@ -50,3 +50,48 @@ def hang_after_meshing(ctx) -> None:
     """Never return once every face is meshed (only the job's hard timeout ends it)."""
     while True:
         time.sleep(1)
+
+
+def lose_a_face_and_hang(ctx) -> None:
+    """Once every face is meshed, clear face ``FAULT_FACE`` (as a re-mesh starts) and never return: the hard
+    timeout delivers the other faces only."""
+    import gmsh
+
+    gmsh.model.mesh.clear([(2, ctx.emap.faces[FAULT_FACE])])
+    if ctx.deliver is not None:
+        ctx.deliver(2, FAULT_FACE, None)
+    while True:
+        time.sleep(1)
+
+
+def hang_before_writing(ctx) -> None:
+    """Never return once the mesh is final (re-meshed finer and optimised), before gmsh writes it."""
+    while True:
+        time.sleep(1)
+
+
+def remesh_finer(ctx) -> None:
+    """Mesh face ``FAULT_FACE`` again with sizes capped at a twentieth of its size (as the surface target's
+    re-mesh does, announced by ``refined F``)."""
+    import gmsh
+
+    from cadedge.mesh.generate import mesh_faces
+
+    s = ctx.emap.faces[FAULT_FACE]
+    box = gmsh.model.getBoundingBox(2, s)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.05 * max(box[3] - box[0], box[4] - box[1], box[5] - box[2]))
+    gmsh.model.mesh.clear([(2, s)])
+    ctx.outcomes[s] = mesh_faces([s], ctx.emap.face_of_surface)[s]
+    ctx.progress(f"refined {FAULT_FACE}")
+
+
+def break_a_face(ctx) -> None:
+    """After meshing, drop one triangle of face ``FAULT_FACE`` (as a faulty optimiser step would leave a hole)."""
+    import gmsh
+
+    s = ctx.emap.faces[FAULT_FACE]
+    tags, nodes = gmsh.model.mesh.getElementsByType(2, s)
+    inner, coords, params = gmsh.model.mesh.getNodes(2, s, includeBoundary=False, returnParametricCoord=True)
+    gmsh.model.mesh.clear([(2, s)])  # drops the face's inner nodes too: put them back
+    gmsh.model.mesh.addNodes(2, s, list(inner), list(coords), list(params))
+    gmsh.model.mesh.addElementsByType(s, 2, list(tags[1:]), list(nodes[3:]))

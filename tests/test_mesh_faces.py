@@ -121,3 +121,108 @@ def test_the_hard_timeout_delivers_the_faces_already_meshed(cylinder, tmp_path):
     assert result.check.ok and all(s.watertight for s in result.check.shells)
     assert any("stopped" in n and "delivered" in n for n in result.notes)
     assert result.output == out and trimesh.load(out).is_watertight
+
+
+def _msh_groups(path) -> tuple[dict, dict]:
+    """Physical groups of a .msh file read by gmsh: {(dim, tag): name} and {(dim, tag): element count}."""
+    import gmsh
+
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(path))
+        names, counts = {}, {}
+        for dim, tag in gmsh.model.getPhysicalGroups():
+            names[(dim, tag)] = gmsh.model.getPhysicalName(dim, tag)
+            counts[(dim, tag)] = sum(len(gmsh.model.mesh.getElements(dim, e)[1][0])
+                                     for e in gmsh.model.getEntitiesForPhysicalGroup(dim, tag))
+        return names, counts
+    finally:
+        gmsh.finalize()
+
+
+def test_a_hard_timeout_mesh_keeps_its_groups_and_names_the_missing_face(cylinder, tmp_path):
+    """A child that loses face 2 and then hangs: the hard timeout delivers faces 1 and 3 in a .msh with the
+    physical groups ``face <id>`` / ``edge <id>`` gmsh's writer gives, and the report names face 2."""
+    out = tmp_path / "c.msh"
+    result = mesh_shape(cylinder, output=out, hooks={"after_generate": ["mesh_faults:lose_a_face_and_hang"]},
+                        timeout=20, face_timeout=100)
+    assert result.error is None and [f.face for f in result.failures] == [FAULT_FACE]
+    assert "not finished: no result within 20 s" in result.failures[0].reason
+    assert set(np.unique(result.triangle_faces)) == {1, 3}
+    assert result.check.ok, result.check.problems  # the missing face's edges are open boundaries, not cracks
+    report = {f.face: f for f in result.report.faces}
+    assert report[FAULT_FACE].status == "failed" and "no result within" in report[FAULT_FACE].note
+    assert report[1].status != "failed" and report[1].triangles > 0
+    assert any(f"face {FAULT_FACE}" in line and "no result within" in line for line in result.problems())
+    names, counts = _msh_groups(out)
+    assert {k: v for k, v in names.items() if k[0] == 2} == {(2, 1): "face 1", (2, 3): "face 3"}
+    assert counts[(2, 1)] + counts[(2, 3)] == len(result.triangles)
+    edges = {e.id for e in cylinder.edges if not e.degenerate}
+    assert {k[1] for k in names if k[0] == 1} == edges
+    assert all(names[(1, e)] == f"edge {e}" and counts[(1, e)] > 0 for e in edges)
+
+
+def test_a_hard_timeout_after_the_re_mesh_delivers_the_final_mesh(cylinder):
+    """A face meshed again finer after its first meshing is delivered again: a child killed before writing
+    hands over the mesh a finished run gives, not the first meshes."""
+    first = mesh_shape(cylinder)
+    done = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"]})
+    assert np.sum(done.triangle_faces == FAULT_FACE) > np.sum(first.triangle_faces == FAULT_FACE)
+    killed = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"],
+                                         "before_write": ["mesh_faults:hang_before_writing"]},
+                        timeout=20, face_timeout=100)
+    assert killed.error is None and not killed.failures
+    assert any("stopped" in n for n in killed.notes)
+    for f in range(1, cylinder.faces + 1):
+        assert np.sum(killed.triangle_faces == f) == np.sum(done.triangle_faces == f)
+    used = np.unique(done.nodes[done.triangles.ravel()], axis=0)
+    assert np.array_equal(np.unique(killed.nodes[killed.triangles.ravel()], axis=0), used)
+
+
+def test_a_face_broken_after_meshing_is_meshed_again(cylinder):
+    """A face whose triangles stop matching its boundary after the after-meshing steps (here one triangle
+    dropped) is checked again and meshed from scratch: the mesh stays watertight."""
+    result = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:break_a_face"]})
+    _every_face(result)
+    assert all(s.watertight for s in result.check.shells)
+    assert any(f"faces {FAULT_FACE}: the steps after meshing" in n for n in result.notes)
+
+
+def test_two_faces_on_one_boundary_loop_get_interior_nodes():
+    """Two surfaces on the same boundary loop (a lens flattened: the wing's revolved face and its cap at
+    ALD 1e-1), meshed coarse from their boundary nodes alone, repeat each other's triangles; the re-check
+    meshes them again finer, with interior nodes, so no inner edge is shared any more."""
+    import types
+
+    import gmsh
+
+    from cadedge.mesh.generate import FaceOutcome
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.worker import _overlapping_faces, _recheck
+
+    with gmsh_session():
+        occ = gmsh.model.occ
+        pts = [occ.addPoint(x, y, 0) for x, y in ((0, 0), (10, 0), (10, 10), (0, 10))]
+        loop = occ.addCurveLoop([occ.addLine(pts[i], pts[(i + 1) % 4]) for i in range(4)])
+        occ.addPlaneSurface([loop])
+        occ.addPlaneSurface([loop])
+        occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 20.0)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 20.0)
+        gmsh.model.mesh.generate(1)  # one segment a side; both faces as two triangles on the corners only
+        corner = [int(gmsh.model.mesh.getNodes(0, p)[0][0]) for p in pts]
+        for s in (1, 2):
+            first = int(gmsh.model.mesh.getMaxElementTag()) + 1
+            gmsh.model.mesh.addElementsByType(s, 2, [first, first + 1],
+                                              [corner[i] for i in (0, 1, 2, 0, 2, 3)])
+        overlap = _overlapping_faces([1, 2])
+        assert set(overlap) == {1, 2} and overlap[1] == pytest.approx(10 * np.sqrt(2))
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
+        ctx = types.SimpleNamespace(emap=types.SimpleNamespace(face_of_surface={1: 1, 2: 2}),
+                                    outcomes={s: FaceOutcome(face=s, surface=s, strategy="x") for s in (1, 2)})
+        notes: list[str] = []
+        _recheck(ctx, notes)
+        assert all(o.ok for o in ctx.outcomes.values()) and _overlapping_faces([1, 2]) == {}
+        assert all(len(gmsh.model.mesh.getNodes(2, s, includeBoundary=False)[0]) for s in (1, 2))
+        assert any("faces 1, 2: triangulated from their boundary nodes alone" in n for n in notes)

@@ -174,6 +174,21 @@ def test_cli_timeout_is_exit_1_naming_the_file_and_writes_nothing(tmp_path):
     assert not (tmp_path / "part.msh").exists()
 
 
+def test_cli_internal_error_on_a_valid_file_is_one_line_exit_1(tmp_path, monkeypatch):
+    """A fault of ours after meshing (here the report raising) is not bad input: exit 1, one line naming
+    the file, no traceback."""
+    import cadedge.mesh.report as report
+
+    def broken(*args, **kwargs):
+        raise ValueError("injected fault")
+
+    monkeypatch.setattr(report, "report_of", broken)
+    (tmp_path / "part.step").write_bytes(CYL.read_bytes())
+    code, err = _run_cli(tmp_path, "part.step", "--ald", "1e-1", "-o", "part.msh")
+    assert code == 1
+    assert err == ["cadedge mesh: part.step: internal error: ValueError: injected fault"]
+
+
 def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]))
     code = ("import functools, sys; import cadedge.mesh as m; from cadedge.cli import main; "
@@ -220,7 +235,7 @@ def test_ap242_with_pmi_written_by_xde_meshes_every_face(tmp_path):
         assert (tmp_path / f"{mode}.msh").exists()
 
 
-@pytest.mark.parametrize("name", ["revolved_spline", "bspline_cage"])
+@pytest.mark.parametrize("name", ["revolved_spline", "bspline_cage", "tangent_union"])
 def test_hard_models_mesh_every_face(name):
     pytest.importorskip("cadquery")
     shape = _hard_models().MODELS[name]()

@@ -67,6 +67,16 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print(f"cadedge mesh: {args.input}: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # a fault of ours on a valid file: one line naming it, exit 1 (--debug: traceback)
+        from . import _interrupted
+
+        if _interrupted(exc):
+            print(f"cadedge mesh: {args.input}: interrupted", file=sys.stderr)
+            return 130
+        if getattr(args, "debug", False):
+            raise
+        _err(args.input, f"internal error: {type(exc).__name__}: {exc}")
+        return 1
 
 
 def _err(source: str, message: object) -> None:

@@ -97,7 +97,7 @@ class FaceOutcome:
         return f"{name}: {first}{more}"
 
 
-def _surface_ok(surface: int) -> bool:
+def surface_ok(surface: int) -> bool:
     """Does the surface carry triangles whose boundary is exactly its (imposed or meshed) curve segments?"""
     _, tri_nodes = gmsh.model.mesh.getElementsByType(2, surface)
     if len(tri_nodes) == 0:
@@ -200,7 +200,7 @@ def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
     _clear_log()
     out: dict[int, str | None] = {}
     for s in surfaces:
-        if _surface_ok(s):
+        if surface_ok(s):
             out[s] = None
         else:
             gmsh.model.mesh.clear([(2, s)])

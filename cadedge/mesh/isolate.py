@@ -209,12 +209,12 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             if run.status == "timeout":
                 reason = f"no result within {timeout:g} s (--timeout)"
                 _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-                result = _delivered(os.path.join(tmp, "faces"), job, known_ok, reason, events)
-                if result is None:
+                delivered = _delivered(os.path.join(tmp, "faces"), job, known_ok, reason, events)
+                if delivered is None:
                     return _failed(reason, events)
                 if output is not None:
-                    _write(result, output)
-                return result
+                    _write(delivered, output)
+                return delivered.result
             words = run.last.split()
             if words[:1] == ["batch"] and len(words) > 1:
                 _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
@@ -248,51 +248,101 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
         return _failed(f"gave up after {MAX_RESTARTS} restarts of the mesh process", events)
 
 
-def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
-               events: list[str]) -> JobResult | None:
-    """The faces the killed children delivered (``worker.run_job``'s ``deliver``; the last record of a
-    face wins, a cleared face is dropped), as a result whose other faces fail with ``reason``; None when
-    no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes."""
-    from .generate import FaceOutcome
+@dataclass
+class _Delivered:
+    """A killed child's mesh: the result, and its edges' segments for the writer (``lines`` (k, 2) node
+    indices, ``line_edges`` (k,) edge ids)."""
 
+    result: JobResult
+    lines: np.ndarray
+    line_edges: np.ndarray
+
+
+def _read_deliveries(path: str) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray]]:
+    """Faces' triangles and edges' segments from the child's delivery file (``worker.run_job``'s
+    ``deliver``): the last record of an entity wins, a cleared face is dropped, a record cut off ends it."""
     faces: dict[int, np.ndarray] = {}
+    edges: dict[int, np.ndarray] = {}
     try:
         with open(path, "rb") as f:
             while True:
-                face, tris = pickle.load(f)
-                if tris is None:
-                    faces.pop(face, None)
+                dim, tag, corners = pickle.load(f)
+                into = faces if dim == 2 else edges
+                if corners is None:
+                    into.pop(tag, None)
                 else:
-                    faces[face] = tris
+                    into[tag] = corners
     except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError):  # the end, or a record cut off
         pass
-    faces = {f: t for f, t in faces.items() if len(t)}
+    return {f: t for f, t in faces.items() if len(t)}, {e: c for e, c in edges.items() if len(c)}
+
+
+def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
+               events: list[str]) -> _Delivered | None:
+    """The faces the killed children delivered, as a result whose other faces fail with ``reason``; None
+    when no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes,
+    and the delivered edge segments are the faces' boundary segments, so each edge's multiplicity for the
+    check is known (how many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
+    from .generate import FaceOutcome
+
+    faces, edges = _read_deliveries(path)
     if not faces:
         return None
     order = sorted(faces)
-    corners = np.concatenate([faces[f].reshape(-1, 3) for f in order])
+    edge_order = sorted(edges)
+    corners = np.concatenate([faces[f].reshape(-1, 3) for f in order]
+                             + [edges[e].reshape(-1, 3) for e in edge_order])
     nodes, index = np.unique(corners, axis=0, return_inverse=True)
+    index = index.ravel()
+    n_tri = sum(len(faces[f]) for f in order)
     result = empty_result("")
     result.error = None
-    result.nodes, result.triangles = nodes, index.reshape(-1, 3).astype(np.int64)
+    result.nodes, result.triangles = nodes, index[:3 * n_tri].reshape(-1, 3).astype(np.int64)
     result.triangle_faces = np.concatenate([np.full(len(faces[f]), f, dtype=np.int64) for f in order])
+    lines = index[3 * n_tri:].reshape(-1, 2).astype(np.int64)
+    line_edges = np.concatenate([np.full(len(edges[e]), e, dtype=np.int64) for e in edge_order]) \
+        if edge_order else np.zeros(0, dtype=np.int64)
+    by_id = {e.id: e for e in job.grid.edges}
+    uses = {}
+    for e in edge_order:
+        on = by_id[e].faces if e in by_id else []
+        uses[e] = 0 if len(on) == 1 else sum(1 for f in on if f in faces)
+    result.edge_pairs = np.sort(lines, axis=1)
+    result.edge_uses = np.array([uses[e] for e in line_edges.tolist()], dtype=np.int64)
     names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
     result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))
                     if f in faces else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
                     for f in range(1, job.grid.faces + 1)]
-    result.notes = events + [f"the mesh process was stopped ({reason}); the {len(faces)} faces it had meshed "
-                             "are delivered without the steps after meshing (re-meshing finer, gmsh's writer)"]
-    return result
+    missing = job.grid.faces - len(faces)
+    result.notes = events + [f"the mesh process was stopped ({reason}); the {len(faces)} faces it had meshed are "
+                             "delivered as last meshed (re-meshed finer where that had finished), without the "
+                             "face optimiser's last pass or gmsh's writer"
+                             + (f"; {missing} faces are missing" if missing else "")]
+    return _Delivered(result, lines, line_edges)
 
 
-def _write(result: JobResult, output: Path) -> None:
-    """Write a delivered result with meshio (gmsh did not finish): triangles tagged with their face ids."""
+def _write(delivered: _Delivered, output: Path) -> None:
+    """Write a delivered result with meshio (gmsh did not finish): in a ``.msh`` (format 2.2) the triangles
+    and edge segments carry the physical groups gmsh's writer would give (``face <id>``, ``edge <id>``,
+    tagged with the B-rep ids, see :mod:`cadedge.mesh.groups`); ``.stl`` and ``.vtk`` get the triangles."""
     import meshio
 
+    result = delivered.result
     faces = result.triangle_faces.astype(np.int64)
-    mesh = meshio.Mesh(result.nodes, [("triangle", result.triangles)],
-                       cell_data={"gmsh:physical": [faces], "gmsh:geometrical": [faces]})
-    fmt = {".msh": "gmsh", ".stl": "stl", ".vtk": "vtk"}[output.suffix.lower()]
+    cells = [("triangle", result.triangles)]
+    tags = [faces]
+    field_data = {}
+    # MSH 2.2: elements carry their physical and entity tags themselves (meshio's MSH 4.1 writer wants one
+    # cell block and one node per entity)
+    fmt = {".msh": "gmsh22", ".stl": "stl", ".vtk": "vtk"}[output.suffix.lower()]
+    if fmt == "gmsh22":
+        if len(delivered.lines):
+            cells.insert(0, ("line", delivered.lines))
+            tags.insert(0, delivered.line_edges)
+        field_data = {**{f"edge {e}": np.array([e, 1]) for e in np.unique(delivered.line_edges).tolist()},
+                      **{f"face {f}": np.array([f, 2]) for f in np.unique(faces).tolist()}}
+    mesh = meshio.Mesh(result.nodes, cells, cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                       field_data=field_data)
     with atomic_path(output) as dst:
         meshio.write(str(dst), mesh, file_format=fmt)
     result.written = True

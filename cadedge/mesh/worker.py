@@ -77,6 +77,7 @@ class JobContext:
     face: int = 0  # the face attempt under way (for "before_face" hooks)
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
+    deliver: Any = None  # deliver(dim, id, corners): hand mesh to the parent as it is made (see run_job)
 
 
 @dataclass
@@ -165,11 +166,108 @@ def _face_triangles(surface: int) -> np.ndarray:
     return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[np.asarray(tri, dtype=np.int64)]].reshape(-1, 3, 3)
 
 
+def _curve_segments(curve: int) -> np.ndarray:
+    """The segments of one gmsh curve's 1-D mesh as end-point coordinates, shape (k, 2, 3) (none when
+    they reference a node gmsh does not list on the curve or its end points)."""
+    import gmsh
+
+    from .generate import node_lookup
+
+    _, seg = gmsh.model.mesh.getElementsByType(1, curve)
+    if not len(seg):
+        return np.zeros((0, 2, 3))
+    tags, coords, _ = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
+    lookup = node_lookup(tags)
+    seg = np.asarray(seg, dtype=np.int64)
+    if seg.max() >= len(lookup) or (lookup[seg] < 0).any():  # a node off the curve and its ends: not ours
+        return np.zeros((0, 2, 3))
+    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[seg]].reshape(-1, 2, 3)
+
+
+def _overlapping_faces(surfaces: list[int]) -> dict[int, float]:
+    """Meshed surfaces whose inner triangle edges (not curve segments) are also edges of another surface's
+    triangles: two faces with the same boundary loop (a lens) triangulated from their boundary nodes alone
+    give the same triangles twice. Returns each one with the shortest such edge's length."""
+    import gmsh
+
+    from .generate import node_lookup
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    if not len(tags):
+        return {}
+    lookup = node_lookup(tags)
+    x = np.asarray(coords, dtype=float).reshape(-1, 3)
+    big = int(np.max(tags)) + 1
+    _, seg = gmsh.model.mesh.getElementsByType(1)
+    seg = np.sort(np.asarray(seg, dtype=np.int64).reshape(-1, 2), axis=1)
+    on_curves = seg[:, 0] * big + seg[:, 1]
+    keys, owners, pairs = [], [], []
+    for s in surfaces:
+        tri = np.asarray(gmsh.model.mesh.getElementsByType(2, s)[1], dtype=np.int64).reshape(-1, 3)
+        e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+        k = e[:, 0] * big + e[:, 1]
+        inner = ~np.isin(k, on_curves)
+        keys.append(k[inner])
+        pairs.append(e[inner])
+        owners.append(np.full(int(inner.sum()), s, dtype=np.int64))
+    if not keys:
+        return {}
+    k, own, pr = np.concatenate(keys), np.concatenate(owners), np.vstack(pairs)
+    uniq, inverse, counts = np.unique(k, return_inverse=True, return_counts=True)
+    shared = counts[inverse.ravel()] > 1
+    out: dict[int, float] = {}
+    lengths = np.linalg.norm(x[lookup[pr[shared, 0]]] - x[lookup[pr[shared, 1]]], axis=1)
+    for s, length in zip(own[shared].tolist(), lengths.tolist()):
+        out[s] = min(out.get(s, np.inf), length)
+    return out
+
+
+def _recheck(ctx: JobContext, notes: list[str]) -> None:
+    """Check every meshed face again after the ``after_generate`` hooks (a re-mesh, the optimiser's moves
+    and flips): a face whose triangles no longer match its boundary curves exactly, or whose inner edges are
+    not each shared by two triangles, is meshed again from scratch; faces whose inner edges coincide with
+    another face's (the same triangles twice) are meshed again with sizes under a quarter of those edges,
+    so they get interior nodes. Boundaries are unchanged, so neighbours stay conforming; a note names them."""
+    import gmsh
+
+    from .generate import mesh_faces, surface_ok
+
+    face_of = ctx.emap.face_of_surface
+    meshed = [s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0]
+    broken = [s for s in meshed if not surface_ok(s)]
+    for s in broken:
+        gmsh.model.mesh.clear([(2, s)])
+        ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+    if broken:
+        notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in broken)}: the steps after meshing (re-mesh "
+                     "finer, optimiser) left triangles that do not match the face's boundary; meshed again")
+    overlap = _overlapping_faces([s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0])
+    if not overlap:
+        return
+    cap = gmsh.option.getNumber("Mesh.MeshSizeMax")
+    try:
+        for s, length in sorted(overlap.items()):
+            gmsh.option.setNumber("Mesh.MeshSizeMax", min(cap, 0.25 * length))
+            gmsh.model.mesh.clear([(2, s)])
+            ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+            if not ctx.outcomes[s].ok:  # keep a face meshed as before rather than none
+                gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
+                ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+    finally:
+        gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
+    notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in sorted(overlap))}: triangulated from their "
+                 "boundary nodes alone they repeated another face's triangles; meshed again with interior nodes")
+
+
 def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResult:
-    """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step and
-    ``deliver(face, triangles)`` each face's triangles as corner coordinates (m, 3, 3) as soon as it is
-    meshed (``None`` when a face meshed before is cleared), so a parent that must kill this process at
-    its hard timeout still has what was meshed."""
+    """Mesh ``job`` in this process (see the module doc); ``progress(line)`` gets one line per step.
+
+    ``deliver(dim, id, corners)`` gets the mesh as it is made, so a parent that must kill this process at
+    its hard timeout still has it: ``(2, face, triangles (m, 3, 3))`` as soon as a face is meshed, again
+    when it is meshed finer (``refined F``) and once more after the ``after_generate`` hooks (the final
+    mesh), ``(2, face, None)`` when a meshed face is cleared, and ``(1, edge, segments (k, 2, 3))`` for
+    every matched edge once its curve is meshed and again after the faces (strategies may split a curve
+    or replace its mesh). Later records of the same entity replace earlier ones."""
     import gmsh
 
     from .generate import boundary_multiplicity, mesh_faces, read_mesh
@@ -177,8 +275,20 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     from .impose import impose_edge_grids
     from .sizes import apply_spacing_sizes, configure_gmsh_sizes, curves_from_spacings
 
-    say = progress or (lambda line: None)
     notes: list[str] = []
+
+    def say(line: str) -> None:
+        if progress is not None:
+            progress(line)
+        words = line.split()
+        if deliver is not None and words[:1] == ["refined"] and len(words) == 2 and int(words[1]) in emap.faces:
+            deliver(2, int(words[1]), _face_triangles(emap.faces[int(words[1])]))  # the finer mesh
+
+    def deliver_edges() -> None:
+        if deliver is not None:
+            for eid, m in sorted(emap.edges.items()):
+                deliver(1, eid, _curve_segments(m.tag))
+
     with gmsh_session():
         say("import")
         error, partial = _import(job.brep, notes)
@@ -206,9 +316,10 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                 gmsh.model.mesh.generate(1)
         except Exception as exc:  # gmsh's bare Exception: the faces on the curves it missed fail below
             notes.append(f"gmsh's curve meshing reported: {exc}")
+        deliver_edges()
         ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)]
         face_of = emap.face_of_surface
-        ctx.progress = say
+        ctx.progress, ctx.deliver = say, deliver
 
         def prepare(face: int, k: int) -> None:
             ctx.face, ctx.strategy = face, k
@@ -221,14 +332,15 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
             if reason is None and deliver is not None and face in emap.faces:
-                deliver(face, _face_triangles(emap.faces[face]))
+                deliver(2, face, _face_triangles(emap.faces[face]))
 
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
                                   batch_started=lambda faces: say("batch " + " ".join(map(str, faces))),
                                   prepare=prepare, no_batch=job.no_batch,
-                                  cleared=lambda faces: [deliver(f, None) for f in faces] if deliver else None)
+                                  cleared=lambda faces: [deliver(2, f, None) for f in faces] if deliver else None)
+        deliver_edges()
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
             from .generate import FaceOutcome
 
@@ -239,6 +351,11 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
+        _recheck(ctx, notes)
+        if deliver is not None:  # the hooks may have meshed faces again or moved their nodes
+            for s, o in sorted(ctx.outcomes.items()):
+                if o.ok and s in face_of:
+                    deliver(2, face_of[s], _face_triangles(s))
         say("read")
         raw = ctx.raw = read_mesh(ctx.surfaces)
         meshed = [s for s, o in ctx.outcomes.items() if o.ok]
@@ -272,15 +389,16 @@ def _limit_memory() -> None:
 
 def main(argv: list[str]) -> int:
     """``python -m cadedge.mesh.worker JOB RESULT PROGRESS [FACES]``: unpickle the job, run it, pickle the
-    result; each meshed face's triangles are appended to FACES as they come (see :func:`run_job`)."""
+    result; each meshed face's triangles and each edge's segments are appended to FACES as they come (see
+    :func:`run_job`)."""
     job_path, result_path, progress_path = argv[:3]
     faces_path = argv[3] if len(argv) > 3 else os.devnull
     _limit_memory()
     with open(job_path, "rb") as f:
         job = pickle.load(f)
     with open(progress_path, "a", buffering=1) as prog, open(faces_path, "ab") as faces:
-        def deliver(face: int, triangles: np.ndarray | None) -> None:
-            pickle.dump((face, triangles), faces, protocol=pickle.HIGHEST_PROTOCOL)
+        def deliver(dim: int, tag: int, corners: np.ndarray | None) -> None:
+            pickle.dump((dim, tag, corners), faces, protocol=pickle.HIGHEST_PROTOCOL)
             faces.flush()
 
         def say(line: str) -> None:
