@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -132,3 +133,57 @@ def test_curves_from_spacings_sets_and_restores_gmsh_options():
             assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == INTEGRATION_PRECISION
         assert gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") == 20
         assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == 1e-9
+
+
+_GEO_CHILD = """
+import json, sys
+import gmsh
+import numpy as np
+from cadedge.mesh.check import check_triangles
+from cadedge.mesh.generate import read_mesh
+
+gmsh.initialize(readConfigFiles=False)
+gmsh.option.setNumber("General.Terminal", 0)
+gmsh.open(sys.argv[1])
+gmsh.model.mesh.generate(2)
+surfaces = [t for _, t in gmsh.model.getEntities(2)]
+raw = read_mesh(surfaces)
+check = check_triangles(raw.nodes, raw.triangles)
+print(json.dumps({"surfaces": len(surfaces), "meshed": len(np.unique(raw.triangle_surfaces)),
+                  "min_angle": check.min_angle_deg}))
+"""
+
+
+def _mesh_geo_in_child(path, timeout: float) -> dict:
+    """``gmsh part.geo -2`` in a child Python (a gmsh that never ends fails the test, not the session)."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(cadedge.__file__).parents[1]),
+                                                         os.environ.get("PYTHONPATH", "")])}
+    try:
+        done = subprocess.run([sys.executable, "-c", _GEO_CHILD, str(path)], capture_output=True, text=True,
+                              timeout=timeout, env=env, cwd=path.parent)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"gmsh did not mesh {path.name} within {timeout} s")
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_geo_export_caps_a_thin_tube_by_its_curvature(tmp_path):
+    """The helical spring (a 0.5-radius circle swept along a helix): sized from its edges alone, its tube
+    got triangles wider than the tube, and gmsh split its curves and started again without end (over 120 s
+    at ALD 1e-1; 0.7-degree triangles at 1e-2). Its face is now capped by its curvature (a Constant
+    field) and meshes in about a second with good triangles."""
+    path = cq.Wire.makeHelix(pitch=2.0, height=8.0, radius=3.0)
+    spring = cq.Workplane("XZ").center(3.0, 0.0).circle(0.5).sweep(cq.Workplane().add(path), isFrenet=True)
+    out = tmp_path / "spring.geo"
+    mesh_shape(spring.val().wrapped, ald=1e-1, output=out)
+    text = out.read_text()
+    caps = [float(h) for h in re.findall(r"= Constant; Field\[\d+\]\.SurfacesList = \{[^}]*\}; Field\[\d+\]\.VIn = "
+                                          r"([0-9.e+-]+);", text)]
+    assert caps and max(caps) < 2 * np.pi * 0.5, caps  # finer than the tube's circumference
+    got = _mesh_geo_in_child(out, timeout=60)
+    assert got["meshed"] == got["surfaces"] and got["min_angle"] > 20, got
