@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import re
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -187,3 +188,37 @@ def test_geo_export_caps_a_thin_tube_by_its_curvature(tmp_path):
     assert caps and max(caps) < 2 * np.pi * 0.5, caps  # finer than the tube's circumference
     got = _mesh_geo_in_child(out, timeout=60)
     assert got["meshed"] == got["surfaces"] and got["min_angle"] > 20, got
+
+
+def test_a_face_that_failed_every_strategy_gets_its_curves_meshed_again_at_other_sizes():
+    """``sizes.retry_failed_faces`` (the sizes mode's ``after_generate`` hook): a face whose curve mesh
+    no strategy could use (on mesh_T106_V3 gmsh could not recover the loose B-spline edges of the thin
+    face 5 in its parameter plane; here the cap's circle simply loses its mesh) has its curves meshed
+    again at other sizes and is meshed again with the faces sharing them, every face conforming."""
+    from cadedge.mesh.generate import FaceOutcome, _surface_ok, mesh_faces
+    from cadedge.mesh.gmsh_model import gmsh_session, import_brep, map_entities, shape_to_brep, surface_curve_uses
+    from cadedge.mesh.sizes import SizeField, apply_spacing_sizes, configure_gmsh_sizes, retry_failed_faces
+    from cadedge.mesh.worker import JobContext, MeshJob
+
+    grid = cadedge.refine_shape(cq.Solid.makeCylinder(1.0, 2.0).wrapped, ald=ALD, max_growth=2.0)
+    field = SizeField(grid)
+    job = MeshJob(source="cylinder", brep=b"", grid=grid, field=field, mode="sizes")
+    with gmsh_session():
+        path = Path(tempfile.mkdtemp()) / "cyl.brep"
+        path.write_bytes(shape_to_brep(grid.shape))
+        import_brep(str(path))
+        ctx = JobContext(job=job, emap=map_entities(grid))
+        apply_spacing_sizes(grid, ctx.emap, field)
+        configure_gmsh_sizes(field)
+        gmsh.model.mesh.generate(1)
+        surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        ctx.outcomes = mesh_faces(surfaces, ctx.emap.face_of_surface)
+        assert all(o.ok for o in ctx.outcomes.values())
+        cap = ctx.emap.faces[2]
+        gmsh.model.mesh.clear([(2, cap)] + [(1, c) for c in surface_curve_uses(cap)])
+        ctx.outcomes[cap] = FaceOutcome(face=2, surface=cap, attempts=[("Frontal-Delaunay", "0 nodes")])
+        retry_failed_faces(ctx)
+        assert all(o.ok for o in ctx.outcomes.values()), ctx.outcomes
+        assert "spacing sizes" in ctx.outcomes[cap].strategy
+        assert ctx.outcomes[cap].attempts == [("Frontal-Delaunay", "0 nodes")]
+        assert all(_surface_ok(s) for s in surfaces)

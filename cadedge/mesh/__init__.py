@@ -170,6 +170,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
     grid, fidelity = prepare(grid, surface_ald)  # faces' area target: boundary fit, curvature sizes
     hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
+    if mode == "sizes":  # failed faces get their curves meshed at other sizes before the surface target
+        hooks["after_generate"] = ["cadedge.mesh.sizes:retry_failed_faces"] + hooks.get("after_generate", [])
     job_options = {**(job_options or {}), "fidelity": fidelity}
     notes = []
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
