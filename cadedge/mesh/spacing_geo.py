@@ -19,7 +19,7 @@ the cost of the export is the cost of that field, times the number of evaluation
   mesher then produced invalid elements, split the face's curves and started again, without end (over
   120 s at ALD 1e-1), and at 1e-2 the triangles that did come out had 0.7-degree angles. Each curved face
   gets one size from its curvature, ``2 pi / (n k)`` with ``n`` the surface target's count per circle
-  (:func:`~cadedge.mesh.fidelity.per_circle`) and ``k`` a high percentile of its largest principal
+  (:func:`~cadedge.mesh.fidelity.per_circle`), at most :data:`GEO_PER_CIRCLE`, and ``k`` a high percentile of its largest principal
   curvature sampled on a grid of its parameters (:func:`face_curvature_sizes`). Faces are grouped into
   the same size classes, one ``Constant`` field per class (cheap: a set lookup per evaluation), with
   their boundary curves included so a curve is never coarser than the faces it bounds.
@@ -46,6 +46,9 @@ from ..shapegrid import ShapeGrid
 from . import DEFAULT_GROWTH
 from .sizes import INTEGRATION_PRECISION, SizeField, node_spacings, vertex_sizes
 
+#: At most this many triangles per circle of curvature in a face's cap: the caps keep gmsh off faces much
+#: wider than they are curved (finer interiors cost gmsh minutes on wing_fuselage's B-spline faces).
+GEO_PER_CIRCLE = 6.0
 #: Curvature samples per parametric direction of a face (:func:`face_curvature_sizes`).
 CURVATURE_SAMPLES = 16
 #: Percentile of the sampled curvatures taken as the face's (spikes at poles and near-singular points of
@@ -77,7 +80,7 @@ def size_classes(sizes: dict[int, float], base: float) -> dict[float, list[int]]
 
 def face_curvature_sizes(shape: object, surface_ald: float) -> dict[int, float]:
     """One size per curved face of ``shape`` (ids in ``TopExp::MapShapes`` order): ``2 pi / (n k)`` with
-    ``n = per_circle(surface_ald, type)`` and ``k`` the :data:`CURVATURE_PERCENTILE` of the largest
+    ``n = min(per_circle(surface_ald, type), GEO_PER_CIRCLE)`` and ``k`` the :data:`CURVATURE_PERCENTILE` of the largest
     principal curvature on a :data:`CURVATURE_SAMPLES` square grid of the face's parameter bounds, no
     smaller than the size giving about ``MAX_FACE_TRIANGLES`` on the face. Planar faces and faces OCCT
     cannot evaluate get none."""
@@ -111,7 +114,7 @@ def face_curvature_sizes(shape: object, surface_ald: float) -> dict[int, float]:
         k95 = float(np.percentile(k, CURVATURE_PERCENTILE)) if k else 0.0
         if not k95 > 0 or not math.isfinite(k95):
             continue
-        h = 2.0 * math.pi / (per_circle(surface_ald, kind) * k95)
+        h = 2.0 * math.pi / (min(per_circle(surface_ald, kind), GEO_PER_CIRCLE) * k95)
         out[fid] = max(h, math.sqrt(2.3 * areas[fid - 1] / MAX_FACE_TRIANGLES))
     return out
 
