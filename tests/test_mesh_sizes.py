@@ -6,6 +6,8 @@ from __future__ import annotations
 import copy
 import dataclasses
 import re
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -132,3 +134,91 @@ def test_curves_from_spacings_sets_and_restores_gmsh_options():
             assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == INTEGRATION_PRECISION
         assert gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") == 20
         assert gmsh.option.getNumber("Mesh.LcIntegrationPrecision") == 1e-9
+
+
+_GEO_CHILD = """
+import json, sys
+import gmsh
+import numpy as np
+from cadedge.mesh.check import check_triangles
+from cadedge.mesh.generate import read_mesh
+
+gmsh.initialize(readConfigFiles=False)
+gmsh.option.setNumber("General.Terminal", 0)
+gmsh.open(sys.argv[1])
+gmsh.model.mesh.generate(2)
+surfaces = [t for _, t in gmsh.model.getEntities(2)]
+raw = read_mesh(surfaces)
+check = check_triangles(raw.nodes, raw.triangles)
+print(json.dumps({"surfaces": len(surfaces), "meshed": len(np.unique(raw.triangle_surfaces)),
+                  "min_angle": check.min_angle_deg}))
+"""
+
+
+def _mesh_geo_in_child(path, timeout: float) -> dict:
+    """``gmsh part.geo -2`` in a child Python (a gmsh that never ends fails the test, not the session)."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(cadedge.__file__).parents[1]),
+                                                         os.environ.get("PYTHONPATH", "")])}
+    try:
+        done = subprocess.run([sys.executable, "-c", _GEO_CHILD, str(path)], capture_output=True, text=True,
+                              timeout=timeout, env=env, cwd=path.parent)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"gmsh did not mesh {path.name} within {timeout} s")
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_geo_export_caps_a_thin_tube_by_its_curvature(tmp_path):
+    """The helical spring (a 0.5-radius circle swept along a helix): sized from its edges alone, its tube
+    got triangles wider than the tube, and gmsh split its curves and started again without end (over 120 s
+    at ALD 1e-1; 0.7-degree triangles at 1e-2). Its face is now capped by its curvature (a Constant
+    field) and meshes in about a second with good triangles."""
+    path = cq.Wire.makeHelix(pitch=2.0, height=8.0, radius=3.0)
+    spring = cq.Workplane("XZ").center(3.0, 0.0).circle(0.5).sweep(cq.Workplane().add(path), isFrenet=True)
+    out = tmp_path / "spring.geo"
+    mesh_shape(spring.val().wrapped, ald=1e-1, output=out)
+    text = out.read_text()
+    caps = [float(h) for h in re.findall(r"= Constant; Field\[\d+\]\.SurfacesList = \{[^}]*\}; Field\[\d+\]\.VIn = "
+                                          r"([0-9.e+-]+);", text)]
+    assert caps and max(caps) < 2 * np.pi * 0.5, caps  # finer than the tube's circumference
+    got = _mesh_geo_in_child(out, timeout=60)
+    assert got["meshed"] == got["surfaces"] and got["min_angle"] > 20, got
+
+
+def test_a_face_that_failed_every_strategy_gets_its_curves_meshed_again_at_other_sizes():
+    """``sizes.retry_failed_faces`` (the sizes mode's ``after_generate`` hook): a face whose curve mesh
+    no strategy could use (on mesh_T106_V3 gmsh could not recover the loose B-spline edges of the thin
+    face 5 in its parameter plane; here the cap's circle simply loses its mesh) has its curves meshed
+    again at other sizes and is meshed again with the faces sharing them, every face conforming."""
+    from cadedge.mesh.generate import FaceOutcome, _surface_ok, mesh_faces
+    from cadedge.mesh.gmsh_model import gmsh_session, import_brep, map_entities, shape_to_brep, surface_curve_uses
+    from cadedge.mesh.sizes import SizeField, apply_spacing_sizes, configure_gmsh_sizes, retry_failed_faces
+    from cadedge.mesh.worker import JobContext, MeshJob
+
+    grid = cadedge.refine_shape(cq.Solid.makeCylinder(1.0, 2.0).wrapped, ald=ALD, max_growth=2.0)
+    field = SizeField(grid)
+    job = MeshJob(source="cylinder", brep=b"", grid=grid, field=field, mode="sizes")
+    with gmsh_session():
+        path = Path(tempfile.mkdtemp()) / "cyl.brep"
+        path.write_bytes(shape_to_brep(grid.shape))
+        import_brep(str(path))
+        ctx = JobContext(job=job, emap=map_entities(grid))
+        apply_spacing_sizes(grid, ctx.emap, field)
+        configure_gmsh_sizes(field)
+        gmsh.model.mesh.generate(1)
+        surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        ctx.outcomes = mesh_faces(surfaces, ctx.emap.face_of_surface)
+        assert all(o.ok for o in ctx.outcomes.values())
+        cap = ctx.emap.faces[2]
+        gmsh.model.mesh.clear([(2, cap)] + [(1, c) for c in surface_curve_uses(cap)])
+        ctx.outcomes[cap] = FaceOutcome(face=2, surface=cap, attempts=[("Frontal-Delaunay", "0 nodes")])
+        retry_failed_faces(ctx)
+        assert all(o.ok for o in ctx.outcomes.values()), ctx.outcomes
+        assert "spacing sizes" in ctx.outcomes[cap].strategy
+        assert ctx.outcomes[cap].attempts == [("Frontal-Delaunay", "0 nodes")]
+        assert all(_surface_ok(s) for s in surfaces)

@@ -157,7 +157,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         return SizeField(g, growth=growth, min_size=min_length, max_size=max_size or max_length)
 
     if out is not None and out.suffix.lower() == ".geo":
-        write_geo(grid, out, growth=growth, max_size=max_size or max_length)
+        write_geo(grid, out, growth=growth, max_size=max_size or max_length, surface_ald=surface_ald)
         return MeshResult(source=grid.source, mode="sizes", grid=grid, nodes=np.zeros((0, 3)),
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
@@ -170,6 +170,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
     grid, fidelity = prepare(grid, surface_ald)  # faces' area target: boundary fit, curvature sizes
     hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
+    if mode == "sizes":  # failed faces get their curves meshed at other sizes before the surface target
+        hooks["after_generate"] = ["cadedge.mesh.sizes:retry_failed_faces"] + hooks.get("after_generate", [])
     job_options = {**(job_options or {}), "fidelity": fidelity}
     notes = []
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is

@@ -117,7 +117,8 @@ def _samples(edge: ShapeEdgeGrid, max_size: float) -> tuple[np.ndarray, np.ndarr
     return params, points
 
 
-def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField) -> None:
+def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField, *, factor: float = 1.0,
+                        curves: set[int] | None = None) -> None:
     """Spacing-only mode: sizes at parametric points on each curve and at each B-rep vertex.
 
     Each curve gets the graded size ``field`` at its grid parameters and at extra parameters splitting
@@ -126,33 +127,37 @@ def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField) -> N
     are graded from their neighbours too rather than meshed at the largest size.
     Each vertex gets its spacing as its point size (kept in the model for exports and for meshers that
     read point sizes; gmsh's interpolation of point sizes along curves is off, see
-    :func:`configure_gmsh_sizes`).
+    :func:`configure_gmsh_sizes`). ``factor`` scales the curve sizes and ``curves`` (gmsh tags) limits
+    them to those curves (see :func:`retry_failed_faces`).
     """
-    for vid, h in vertex_sizes(grid).items():
-        if h > 0 and vid in emap.vertices:
-            gmsh.model.mesh.setSize([(0, emap.vertices[vid])], float(h))
+    if curves is None:
+        for vid, h in vertex_sizes(grid).items():
+            if h > 0 and vid in emap.vertices:
+                gmsh.model.mesh.setSize([(0, emap.vertices[vid])], float(h))
     sized = set()
     for e in grid.edges:
         if e.degenerate or e.id not in emap.edges or len(e.points) < 2:
             continue
         m = emap.edges[e.id]
+        if curves is not None and m.tag not in curves:
+            continue
         own, pts = _samples(e, field.max_size)
         gparams = np.interp(own, e.params, m.params)  # our parameters -> gmsh's (same or reversed)
-        sizes = field(pts)
+        sizes = factor * field(pts)
         if gparams[-1] < gparams[0]:
             gparams, sizes = gparams[::-1], sizes[::-1]
         gmsh.model.mesh.setSizeAtParametricPoints(1, m.tag, gparams.tolist(), sizes.tolist())
         sized.add(m.tag)
     for tag in emap.unmatched_curves:
-        if tag not in sized and tag not in emap.degenerate_curves:
-            _size_own_curve(tag, field)
+        if tag not in sized and tag not in emap.degenerate_curves and (curves is None or tag in curves):
+            _size_own_curve(tag, field, factor)
 
 
 #: Points sampled on a curve without a grid to size it from the field (sizes are linear in between).
 _OWN_CURVE_SAMPLES = 65
 
 
-def _size_own_curve(tag: int, field: SizeField) -> None:
+def _size_own_curve(tag: int, field: SizeField, factor: float = 1.0) -> None:
     """Sizes from ``field`` at evenly spaced parameters of gmsh curve ``tag`` (one no grid maps to)."""
     try:
         lo, hi = (float(b[0]) for b in gmsh.model.getParametrizationBounds(1, tag))
@@ -161,7 +166,7 @@ def _size_own_curve(tag: int, field: SizeField) -> None:
     except Exception:  # gmsh raises a bare Exception on a curve it cannot evaluate: leave it to the field
         return
     if len(x) == len(u) and np.all(np.isfinite(x)):
-        gmsh.model.mesh.setSizeAtParametricPoints(1, tag, u.tolist(), field(x).tolist())
+        gmsh.model.mesh.setSizeAtParametricPoints(1, tag, u.tolist(), (factor * field(x)).tolist())
 
 
 #: ``Mesh.LcIntegrationPrecision`` for meshing curves from sizes (gmsh's default: 1e-9). gmsh integrates
@@ -192,3 +197,78 @@ def curves_from_spacings() -> Iterator[None]:
     finally:
         for name, value in before.items():
             gmsh.option.setNumber(name, value)
+
+
+#: Factors on a failed face's curve sizes tried by :func:`retry_failed_faces`, in turn.
+RETRY_FACTORS = (4.0, 2.0, 0.5)
+
+
+def retry_failed_faces(ctx) -> None:
+    """``after_generate`` hook of the sizes mode: a face that failed every strategy gets its curves meshed
+    again by gmsh at other sizes (:data:`RETRY_FACTORS` times the spacing sizes) and is meshed again, with
+    the faces sharing those curves.
+
+    The retry strategies of :mod:`cadedge.mesh.generate` keep a face's curve mesh (or split it, or have
+    gmsh mesh it again from the same sizes), so a curve mesh gmsh cannot recover in the face's parameter
+    plane fails them all: on mesh_T106_V3, whose B-spline edges lie 0.02 off their faces, gmsh's nodes on
+    the 3-D curve map to a boundary gmsh cannot recover in the plane of the thin face 5 ("Unable to
+    recover the edge"). Other node spacings step over it (4x there). gmsh's ``generate(1)`` clears every
+    face's mesh, so every meshed face is meshed again after each retry: costly on a large model, but only
+    faces that failed every strategy come here. A retry is kept only if the face and every
+    neighbour it cleared mesh; otherwise the curves get their spacing sizes back and the neighbours are
+    meshed again as they were. Each retry is announced as ``refine F`` (the watchdog's line for meshing
+    after the first pass: a hang or crash there keeps the face as it was). Only the first two strategies
+    are tried on the face per retry; faces in ``job.no_refine`` (a retry hung or crashed) are left alone.
+    """
+    import time
+
+    from .generate import STRATEGIES, FaceOutcome, mesh_faces, remesh_curves
+    from .gmsh_model import surface_curve_uses
+
+    job = ctx.job
+    if job.mode != "sizes":
+        return
+    face_of = ctx.emap.face_of_surface
+    say = ctx.progress or (lambda line: None)
+    per_circle = (job.options.get("fidelity") or {}).get("face_per_circle", {})
+    default = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature")
+
+    def started(face: int, k: int) -> None:  # each face's own curvature sizes, as the first pass gave them
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle.get(face, default))
+
+    def remesh(s: int, curves: set[int], factor: float, only: set[int]) -> dict:
+        apply_spacing_sizes(job.grid, ctx.emap, job.field, factor=factor, curves=curves)
+        with curves_from_spacings():
+            touched = set(remesh_curves(sorted(curves))) | {s}
+        skip = {face_of.get(s, s): {k: "not tried again" for k in range(2, len(STRATEGIES))}}
+        return mesh_faces(sorted(n for n in touched if n in only), face_of, skip=skip, started=started)
+
+    failed = [s for s, o in ctx.outcomes.items() if s > 0 and not o.ok and face_of.get(s, s) not in job.no_refine]
+    try:
+        for s in failed:
+            face, curves = face_of.get(s, s), set(surface_curve_uses(s))
+            attempts = list(ctx.outcomes[s].attempts)
+            tried = won = False
+            was_ok = {n for n, o in ctx.outcomes.items() if o.ok}
+            for factor in RETRY_FACTORS:
+                if job.deadline is not None and time.time() > job.deadline:
+                    break
+                say(f"refine {face}")
+                tried = True
+                redo = remesh(s, curves, factor, set(ctx.outcomes))
+                if redo[s].ok and all(o.ok for n, o in redo.items() if n in was_ok):
+                    redo[s].strategy = f"{redo[s].strategy}, curves at {factor:g}x the spacing sizes"
+                    redo[s].attempts = attempts
+                    ctx.outcomes.update(redo)
+                    won = True
+                    break
+                why = redo[s].reason() if not redo[s].ok else "a neighbouring face failed on that curve mesh"
+                attempts.append((f"curves at {factor:g}x the spacing sizes", why))
+                ctx.outcomes.update({n: o for n, o in redo.items() if n != s})
+            if not won:
+                if tried:  # back to the spacing sizes: the neighbours as they were, this face failed
+                    ctx.outcomes.update(remesh(s, curves, 1.0, set(ctx.outcomes) - {s}))
+                    gmsh.model.mesh.clear([(2, s)])
+                ctx.outcomes[s] = FaceOutcome(face=face, surface=s, attempts=attempts)
+    finally:
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", default)

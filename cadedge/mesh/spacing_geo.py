@@ -14,6 +14,16 @@ the cost of the export is the cost of that field, times the number of evaluation
   thousands of times per curve. At :data:`~cadedge.mesh.sizes.INTEGRATION_PRECISION` the curve meshes are the same (on
   917_fusee one curve of 723 gets one segment more) for a tenth of the time.
 
+- **Curved faces capped by their curvature.** Sizes from the edges alone left a thin tube (the helical
+  spring's swept face, radius 1 under sizes of 3-5) with triangles larger than the tube is wide: gmsh's
+  mesher then produced invalid elements, split the face's curves and started again, without end (over
+  120 s at ALD 1e-1), and at 1e-2 the triangles that did come out had 0.7-degree angles. Each curved face
+  gets one size from its curvature, ``2 pi / (n k)`` with ``n`` the surface target's count per circle
+  (:func:`~cadedge.mesh.fidelity.per_circle`), at most :data:`GEO_PER_CIRCLE`, and ``k`` a high percentile of its largest principal
+  curvature sampled on a grid of its parameters (:func:`face_curvature_sizes`). Faces are grouped into
+  the same size classes, one ``Constant`` field per class (cheap: a set lookup per evaluation), with
+  their boundary curves included so a curve is never coarser than the faces it bounds.
+
 The sizes stay graded the way :class:`~cadedge.mesh.sizes.SizeField` grades them: near a vertex the
 size is its spacing, growing linearly away from it; along and around a curve the size grows from the
 curve's median spacing. A long straight edge between two fine vertices is therefore fine at its ends
@@ -35,6 +45,15 @@ from ..errors import InputError
 from ..shapegrid import ShapeGrid
 from . import DEFAULT_GROWTH
 from .sizes import INTEGRATION_PRECISION, SizeField, node_spacings, vertex_sizes
+
+#: At most this many triangles per circle of curvature in a face's cap: the caps keep gmsh off faces much
+#: wider than they are curved (finer interiors cost gmsh minutes on wing_fuselage's B-spline faces).
+GEO_PER_CIRCLE = 6.0
+#: Curvature samples per parametric direction of a face (:func:`face_curvature_sizes`).
+CURVATURE_SAMPLES = 16
+#: Percentile of the sampled curvatures taken as the face's (spikes at poles and near-singular points of
+#: spline surfaces are left out).
+CURVATURE_PERCENTILE = 95.0
 
 #: Spacings are rounded down to ``base * CLASS_RATIO**k``: a size class per factor of sqrt(2).
 CLASS_RATIO = math.sqrt(2.0)
@@ -59,6 +78,47 @@ def size_classes(sizes: dict[int, float], base: float) -> dict[float, list[int]]
     return {base * CLASS_RATIO ** k: sorted(ids) for k, ids in sorted(out.items())}
 
 
+def face_curvature_sizes(shape: object, surface_ald: float) -> dict[int, float]:
+    """One size per curved face of ``shape`` (ids in ``TopExp::MapShapes`` order): ``2 pi / (n k)`` with
+    ``n = min(per_circle(surface_ald, type), GEO_PER_CIRCLE)`` and ``k`` the :data:`CURVATURE_PERCENTILE` of the largest
+    principal curvature on a :data:`CURVATURE_SAMPLES` square grid of the face's parameter bounds, no
+    smaller than the size giving about ``MAX_FACE_TRIANGLES`` on the face. Planar faces and faces OCCT
+    cannot evaluate get none."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepLProp import BRepLProp_SLProps
+    from OCP.BRepTools import BRepTools
+
+    from ..occt.topology import Topology
+    from .fidelity import brep_face_areas, per_circle
+    from .generate import MAX_FACE_TRIANGLES
+
+    faces = Topology(shape).faces
+    areas = brep_face_areas(shape)
+    t = (np.arange(CURVATURE_SAMPLES) + 0.5) / CURVATURE_SAMPLES
+    out: dict[int, float] = {}
+    for fid, face in enumerate(faces, start=1):
+        surface = BRepAdaptor_Surface(face)
+        kind = str(surface.GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
+        if kind == "Plane":
+            continue
+        u0, u1, v0, v1 = BRepTools.UVBounds_s(face)
+        if not all(map(math.isfinite, (u0, u1, v0, v1))):
+            continue
+        props = BRepLProp_SLProps(surface, 2, 1e-9)
+        k = []
+        for u in (u0 + (u1 - u0) * t).tolist():
+            for v in (v0 + (v1 - v0) * t).tolist():
+                props.SetParameters(u, v)
+                if props.IsCurvatureDefined():
+                    k.append(max(abs(props.MaxCurvature()), abs(props.MinCurvature())))
+        k95 = float(np.percentile(k, CURVATURE_PERCENTILE)) if k else 0.0
+        if not k95 > 0 or not math.isfinite(k95):
+            continue
+        h = 2.0 * math.pi / (min(per_circle(surface_ald, kind), GEO_PER_CIRCLE) * k95)
+        out[fid] = max(h, math.sqrt(2.3 * areas[fid - 1] / MAX_FACE_TRIANGLES))
+    return out
+
+
 def _ids(ids: list[int]) -> str:
     return ", ".join(map(str, ids))
 
@@ -70,9 +130,11 @@ def _threshold(n: int, size: float, max_size: float, growth: float) -> str:
             f"Field[{n + 1}].DistMax = {max(max_size - size, 0.0) / growth!r};")
 
 
-def geo_fields(grid: ShapeGrid, field: SizeField, growth: float) -> list[str]:
+def geo_fields(grid: ShapeGrid, field: SizeField, growth: float,
+               face_sizes: dict[int, float] | None = None) -> list[str]:
     """The ``.geo`` lines of the size fields: per size class a Distance and a Threshold field, for the
-    vertices and for the curves of that class, then their ``Min`` as the background field."""
+    vertices and for the curves of that class, and a Constant field for the faces of that class in
+    ``face_sizes`` (face id -> size; boundaries included), then their ``Min`` as the background field."""
     vertex_h = {vid: h for vid, h in vertex_sizes(grid).items() if h > 0}
     edges = [e for e in grid.edges if not e.degenerate and len(e.points) >= 2]
     curve_h = {e.id: float(np.median(node_spacings(e))) for e in edges}
@@ -96,17 +158,24 @@ def geo_fields(grid: ShapeGrid, field: SizeField, growth: float) -> list[str]:
                   _threshold(n, size, max(top, size), growth)]
         thresholds.append(n + 1)
         n += 2
+    capped = {f: h for f, h in (face_sizes or {}).items() if h < top}
+    for size, fids in size_classes(capped, base).items():
+        lines.append(f"Field[{n}] = Constant; Field[{n}].SurfacesList = {{{_ids(fids)}}}; "
+                     f"Field[{n}].VIn = {size!r}; Field[{n}].IncludeBoundary = 1;")
+        thresholds.append(n)
+        n += 1
     return lines + [f"Field[{n}] = Min; Field[{n}].FieldsList = {{{_ids(thresholds)}}};",
                     f"Background Field = {n};"]
 
 
 def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAULT_GROWTH,
-              max_size: float | None = None) -> Path:
+              max_size: float | None = None, surface_ald: float | None = None) -> Path:
     """Write a gmsh ``.geo`` carrying our spacings, plus the shape as ``<stem>.brep`` beside it.
 
     The ``.geo`` merges the BREP (gmsh's tags are then cadedge's ids: MapShapes order) without any of
     gmsh's healing, and sizes the mesh with the size-class fields of :func:`geo_fields` (see the module
-    doc). :func:`~cadedge.mesh.sizes.apply_spacing_sizes` gives gmsh the exact per-point sizes through
+    doc), curved faces capped by :func:`face_curvature_sizes` for ``surface_ald`` (default: the grid's
+    ALD). :func:`~cadedge.mesh.sizes.apply_spacing_sizes` gives gmsh the exact per-point sizes through
     the API instead (``cadedge mesh --mode sizes``).
     """
     from OCP.BRepTools import BRepTools
@@ -117,6 +186,8 @@ def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAU
     if not growth > 0:
         raise InputError(f"growth must be positive, got {growth}")
     field = SizeField(grid, growth=growth, max_size=max_size)
+    surface_ald = surface_ald or grid.options.get("ald")
+    face_sizes = face_curvature_sizes(grid.shape, float(surface_ald)) if surface_ald else {}
     brep = target.with_suffix(".brep")
     with atomic_path(brep) as tmp:
         if not BRepTools.Write_s(grid.shape, str(tmp)):
@@ -126,7 +197,7 @@ def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAU
              f'Merge "{brep.name}";',
              "Mesh.MeshSizeFromCurvature = 0; Mesh.MeshSizeFromPoints = 0; Mesh.MeshSizeExtendFromBoundary = 0;",
              f"Mesh.MeshSizeMax = {field.max_size!r}; Mesh.LcIntegrationPrecision = {INTEGRATION_PRECISION!r};",
-             *geo_fields(grid, field, growth)]
+             *geo_fields(grid, field, growth, face_sizes)]
     with atomic_path(target) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     return target
