@@ -384,13 +384,32 @@ def gmsh_surface_areas(surfaces: list[int]) -> dict[int, float]:
     return out
 
 
+#: Under a surface target, face interiors grow from their boundary sizes this many times faster than
+#: ``growth`` (the boundaries themselves stay graded at ``growth``): the curvature sizes, not the finest
+#: boundary segment, are what the target needs inside a face. On the bracket at 1e-2: 5682 -> 4680
+#: triangles, minimum angle 32.1 -> 32.0 degrees (4086 and 30.0 at 3.2x).
+INTERIOR_GROWTH = 2.0
+
+
 def before_generate(ctx) -> None:
-    """Hook: face interiors sized by curvature for the surface target (see :func:`per_circle`)."""
+    """Hook: face interiors sized by curvature for the surface target (see :func:`per_circle`), growing
+    from their boundaries at :data:`INTERIOR_GROWTH` times the job's growth."""
     from .sizes import configure_curvature_sizes
 
     opts = ctx.job.options.get("fidelity")
     if opts:
         configure_curvature_sizes(opts["per_circle"], MIN_SIZE_SHARE * ctx.job.field.min_size)
+        grow_interiors(ctx.job.field, INTERIOR_GROWTH * ctx.job.field.growth)
+
+
+def grow_interiors(field, growth: float) -> None:
+    """Let face interiors grow from their boundary sizes at ``growth`` per unit distance: gmsh's ``Extend``
+    background fields (see ``sizes.configure_gmsh_sizes``) reach ``field.max_size`` sooner."""
+    import gmsh
+
+    for tag in gmsh.model.mesh.field.list():
+        if gmsh.model.mesh.field.getType(tag) == "Extend":
+            gmsh.model.mesh.field.setNumber(tag, "DistMax", max(field.max_size - field.min_size, 0.0) / growth)
 
 
 def before_face(ctx) -> None:
