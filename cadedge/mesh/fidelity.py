@@ -341,7 +341,7 @@ PASSES = 3
 #: Curvature sizes stop at this share of the finest edge spacing (see ``sizes.configure_curvature_sizes``).
 MIN_SIZE_SHARE = 0.25
 #: A face meshed finer whose |deficit| kept more than this share is not converging (its gmsh face differs
-#: from the B-rep face, e.g. loose tolerances): it is left as it is and reported.
+#: from the B-rep face, e.g. loose tolerances): it is meshed again as it was first meshed, and reported.
 CONVERGED = 0.8
 #: A face whose first |deficit| is over this many times the target, and over :data:`DISAGREE_FLOOR`, is not
 #: meshed again: sizes chosen for the target miss it by far less, so its mesh and B-rep areas disagree
@@ -427,13 +427,15 @@ def after_generate(ctx) -> None:
     finer (``Mesh.MeshSizeFromCurvature`` raised by the measured excess), keeping the better mesh.
 
     Only the face's interior changes: its boundary curves keep their nodes, so neighbours stay conforming.
-    Planar faces are left alone (their area is fixed by their boundary polygon). What was done lands in
-    ``ctx.fidelity``: the per-circle count each re-meshed face ended with.
+    Planar faces are left alone (their area is fixed by their boundary polygon). Then curved faces far
+    under the worst face are meshed again coarser (:func:`cadedge.mesh.coarsen.coarsen`). What was done
+    lands in ``ctx.fidelity``: the per-circle count each re-meshed face ended with.
     """
     import time
 
     import gmsh
 
+    from .coarsen import coarsen
     from .generate import mesh_faces
 
     opts = ctx.job.options.get("fidelity")
@@ -462,6 +464,14 @@ def after_generate(ctx) -> None:
             if (s in last and abs(d) > CONVERGED * abs(last[s])) or (
                     s not in last and abs(d) > max(DISAGREE * target, DISAGREE_FLOOR)):
                 stuck.append(face_of.get(s, s))
+                if s in last:  # its finer mesh bought nothing: back to the first (LLNL boxed_sphere: 24
+                    f = face_of.get(s, s)  # cylinders 2.8% off at any size, 3x the triangles once refined)
+                    say(f"refine {f}")
+                    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", opts["face_per_circle"].get(f, n0))
+                    gmsh.model.mesh.clear([(2, s)])
+                    ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+                    per_face.pop(f, None)
+                    say(f"refined {f}")
         pending = [s for s, d in measured.items()
                    if abs(d) > target and face_of.get(s, s) not in stuck and face_of.get(s, s) not in no_refine]
         if not pending or k == PASSES:
@@ -484,8 +494,14 @@ def after_generate(ctx) -> None:
             per_face[f] = n
             last[s] = measured[s]
             say(f"refined {f}")
+    ok = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) not in stuck]
+    level = min(max((abs(deficit(s, a)) for s, a in gmsh_surface_areas(ok).items()), default=0.0), target)
+    calm = [s for s in ok if face_of.get(s, s) in curved and face_of.get(s, s) not in no_refine
+            and face_of.get(s, s) not in per_face]
+    coarser = coarsen(ctx, level=level, deficit=deficit, faces=calm,
+                      per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
-    ctx.fidelity = {"per_circle": n0, "refined": per_face, "stuck": sorted(stuck)}
+    ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "stuck": sorted(stuck)}
 
 
 def after_mesh(ctx) -> dict:
