@@ -179,7 +179,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
             grid = fit_to_sizes(grid, make_field)
         except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
             notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
-        from .fidelity import grade_faces
+        from .grading import grade_faces
         from .widths import fit_to_widths
 
         cap = max_size or max_length or make_field(grid).max_size  # thin faces must not shrink the cap

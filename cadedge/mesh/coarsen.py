@@ -1,0 +1,61 @@
+"""Inside the gmsh job: curved faces far under the model's worst face are meshed again, coarser.
+
+A model's fidelity is its worst face. Sizes chosen per surface type before meshing leave many curved
+faces well under it (a fillet at 3e-3 beside a planar face at 5.6e-3), and their extra triangles buy
+nothing. Each such face is meshed again with ``Mesh.MeshSizeFromCurvature`` lowered by the measured
+margin (deficit ~ N**-2) and kept only when it has fewer triangles and stays within the level; otherwise
+it is meshed again as it was (gmsh is deterministic). Only the face's interior changes: its boundary
+nodes stay, so neighbours stay conforming.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+#: A curved face whose |deficit| is under this share of the level is meshed again coarser.
+BELOW = 0.75
+#: The coarser mesh aims at this share of the level.
+AIM = 0.9
+#: Bounds of the per-circle factor of one coarsening (at most halved, at least 10% fewer).
+FACTOR = (0.5, 0.9)
+
+
+def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float], faces: list[int]) -> dict[int, float]:
+    """Mesh gmsh surfaces ``faces`` of the current model again coarser where their |deficit| is under
+    ``BELOW * level`` (``deficit(s, mesh_area)``; ``per_circle[s]`` the count they were meshed with).
+    Returns the per-circle count of each face that kept a coarser mesh."""
+    import gmsh
+
+    from .fidelity import gmsh_surface_areas
+    from .generate import mesh_faces
+
+    face_of = ctx.emap.face_of_surface
+    say = ctx.progress or (lambda line: None)
+    kept: dict[int, float] = {}
+    measured = {s: deficit(s, a) for s, a in gmsh_surface_areas(faces).items()}
+    for s, d in measured.items():
+        if abs(d) >= BELOW * level or not np.isfinite(d):
+            continue
+        if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
+            break
+        f = face_of.get(s, s)
+        old_n = per_circle[s]
+        n = old_n * float(np.clip(np.sqrt(max(abs(d), 1e-12) / (AIM * level)), *FACTOR))
+        before = len(gmsh.model.mesh.getElementsByType(2, s)[0])
+        say(f"refine {f}")  # same watchdog line as a refinement: a hang here keeps the face as first meshed
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n)
+        gmsh.model.mesh.clear([(2, s)])
+        redo = mesh_faces([s], face_of)[s]
+        better = redo.ok and len(gmsh.model.mesh.getElementsByType(2, s)[0]) < before and abs(
+            deficit(s, gmsh_surface_areas([s])[s])) <= level
+        if not better:  # mesh it again as it was
+            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", old_n)
+            gmsh.model.mesh.clear([(2, s)])
+            redo = mesh_faces([s], face_of)[s]
+        else:
+            kept[f] = n
+        ctx.outcomes[s] = redo
+        say(f"refined {f}")
+    return kept
