@@ -91,8 +91,12 @@ def surface_types(shape: object) -> list[str]:
 
     from ..occt.topology import Topology
 
-    return [str(BRepAdaptor_Surface(f).GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
-            for f in Topology(shape).faces]
+    return [surface_type_name(BRepAdaptor_Surface(f)) for f in Topology(shape).faces]
+
+
+def surface_type_name(surface) -> str:
+    """The type name of a ``BRepAdaptor_Surface`` (its ``GeomAbs_SurfaceType`` without the prefix)."""
+    return str(surface.GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
 
 
 def _face_probe(face):
