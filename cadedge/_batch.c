@@ -481,7 +481,7 @@ fail:
     return status;
 }
 
-/* target._evaluate_new: points at params (m), from the samples where a parameter is one; counts the rest.
+/* splitting.evaluate_new: points at params (m), from the samples where a parameter is one; counts the rest.
  * Returns 0, 1 for a non-finite point or -1 if out of memory. */
 static int evaluate_new(const Geometry *g, Py_ssize_t e, const Explored *x, const double *params, Py_ssize_t m,
                         double *out, int64_t *evaluations)
