@@ -142,7 +142,9 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
     curved strip losing on one side what it gains on the other) needs far fewer splits than the unsigned
     rule asks. Its budget is credited with the measured cancellation, ``sum |slivers| / |net deficit|``
     (halved), and the fit is repeated; a face the credit puts over its budget gets a quarter of it
-    next round, and after :data:`PLANAR_ROUNDS` rounds the unsigned rule."""
+    next round, and a credit of 1 or less is dropped (the unsigned rule). After :data:`PLANAR_ROUNDS`
+    rounds without every credited face within its budget, the fit with the credits left is returned
+    without a further check."""
     from .planar import planar_polygon_areas
 
     areas = brep_face_areas(grid.shape) if brep_areas is None else np.asarray(brep_areas, dtype=float)
