@@ -214,12 +214,12 @@ PyObject *ck_evaluate_edges(PyObject *self, PyObject *args)
     Geometry g;
     PyObject *result = NULL;
     g.kind = ck_arg(&b, args, 0, I64, 0, &n_edges);
-    g.gofs = g.kind ? ck_arg(&b, args, 1, I64, 0, NULL) : NULL;
-    g.ints = g.gofs ? ck_arg(&b, args, 2, I64, 0, NULL) : NULL;
-    g.gdata = g.ints ? ck_arg(&b, args, 3, F64, 0, NULL) : NULL;
-    const int64_t *edge = g.gdata ? ck_arg(&b, args, 4, I64, 0, &m) : NULL;
-    const double *u = edge ? ck_arg(&b, args, 5, F64, 0, NULL) : NULL;
-    double *out = u ? ck_arg(&b, args, 6, F64, 1, &n_out) : NULL;
+    g.gofs = ck_arg(&b, args, 1, I64, 0, NULL);
+    g.ints = ck_arg(&b, args, 2, I64, 0, NULL);
+    g.gdata = ck_arg(&b, args, 3, F64, 0, NULL);
+    const int64_t *edge = ck_arg(&b, args, 4, I64, 0, &m);
+    const double *u = ck_arg(&b, args, 5, F64, 0, NULL);
+    double *out = ck_arg(&b, args, 6, F64, 1, &n_out);
     if (!out)
         goto done;
     if (n_out != 3 * m) {
@@ -481,7 +481,7 @@ fail:
     return status;
 }
 
-/* target._evaluate_new: points at params (m), from the samples where a parameter is one; counts the rest.
+/* splitting.evaluate_new: points at params (m), from the samples where a parameter is one; counts the rest.
  * Returns 0, 1 for a non-finite point or -1 if out of memory. */
 static int evaluate_new(const Geometry *g, Py_ssize_t e, const Explored *x, const double *params, Py_ssize_t m,
                         double *out, int64_t *evaluations)
@@ -771,17 +771,17 @@ PyObject *ck_refine_edges(PyObject *self, PyObject *args)
     int64_t *status = NULL, *offsets = NULL, *evaluations = NULL;
     double *estimate = NULL, *raw = NULL;
     g.kind = ck_arg(&b, args, 0, I64, 0, &n_edges);
-    g.gofs = g.kind ? ck_arg(&b, args, 1, I64, 0, NULL) : NULL;
-    g.ints = g.gofs ? ck_arg(&b, args, 2, I64, 0, NULL) : NULL;
-    g.gdata = g.ints ? ck_arg(&b, args, 3, F64, 0, NULL) : NULL;
-    const int64_t *hofs = g.gdata ? ck_arg(&b, args, 4, I64, 0, NULL) : NULL;
-    const double *hdata = hofs ? ck_arg(&b, args, 5, F64, 0, NULL) : NULL;
-    const double *domain = hdata ? ck_arg(&b, args, 6, F64, 0, NULL) : NULL;
-    const double *ald = domain ? ck_arg(&b, args, 7, F64, 0, NULL) : NULL;
-    const double *exact = ald ? ck_arg(&b, args, 8, F64, 0, NULL) : NULL;
-    const double *first = exact ? ck_arg(&b, args, 9, F64, 0, NULL) : NULL;
-    const double *last = first ? ck_arg(&b, args, 10, F64, 0, NULL) : NULL;
-    const double *set = last ? ck_arg(&b, args, 11, F64, 0, &n_settings) : NULL;
+    g.gofs = ck_arg(&b, args, 1, I64, 0, NULL);
+    g.ints = ck_arg(&b, args, 2, I64, 0, NULL);
+    g.gdata = ck_arg(&b, args, 3, F64, 0, NULL);
+    const int64_t *hofs = ck_arg(&b, args, 4, I64, 0, NULL);
+    const double *hdata = ck_arg(&b, args, 5, F64, 0, NULL);
+    const double *domain = ck_arg(&b, args, 6, F64, 0, NULL);
+    const double *ald = ck_arg(&b, args, 7, F64, 0, NULL);
+    const double *exact = ck_arg(&b, args, 8, F64, 0, NULL);
+    const double *first = ck_arg(&b, args, 9, F64, 0, NULL);
+    const double *last = ck_arg(&b, args, 10, F64, 0, NULL);
+    const double *set = ck_arg(&b, args, 11, F64, 0, &n_settings);
     if (!set)
         goto done;
     if (n_settings != 11) {

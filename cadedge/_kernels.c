@@ -53,9 +53,13 @@ void ck_release(Buffers *b)
     b->n = 0;
 }
 
-/* The next argument as a buffer; returns its data or NULL (exception set). */
+/* The next argument as a buffer; returns its data or NULL (exception set). Once an argument has failed,
+ * every later call returns NULL and keeps that first error, so a wrapper reads its arguments in a row and
+ * checks only the last one. */
 void *ck_arg(Buffers *b, PyObject *args, Py_ssize_t i, int kind, int writable, Py_ssize_t *count)
 {
+    if (PyErr_Occurred())
+        return NULL;
     if (i >= PyTuple_GET_SIZE(args)) {
         PyErr_SetString(PyExc_TypeError, "too few arguments");
         return NULL;
@@ -133,15 +137,15 @@ static PyObject *classify(PyObject *self, PyObject *args)
     double tol, scale, min_width, noise, straight_share, asymptotic;
     PyObject *result = NULL;
     const double *ua = ck_arg(&b, args, 0, F64, 0, &n);
-    const double *um = ua ? ck_arg(&b, args, 1, F64, 0, NULL) : NULL;
-    const double *ub = um ? ck_arg(&b, args, 2, F64, 0, NULL) : NULL;
-    const double *pa = ub ? ck_arg(&b, args, 3, F64, 0, NULL) : NULL;
-    const double *pm = pa ? ck_arg(&b, args, 4, F64, 0, NULL) : NULL;
-    const double *pb = pm ? ck_arg(&b, args, 5, F64, 0, NULL) : NULL;
-    const double *ratio = pb ? ck_arg(&b, args, 6, F64, 0, NULL) : NULL;
-    double *corners = ratio ? ck_arg(&b, args, 7, F64, 1, &nc) : NULL;
-    int64_t *split = corners ? ck_arg(&b, args, 8, I64, 1, NULL) : NULL;
-    double *gains = split ? ck_arg(&b, args, 9, F64, 1, NULL) : NULL;
+    const double *um = ck_arg(&b, args, 1, F64, 0, NULL);
+    const double *ub = ck_arg(&b, args, 2, F64, 0, NULL);
+    const double *pa = ck_arg(&b, args, 3, F64, 0, NULL);
+    const double *pm = ck_arg(&b, args, 4, F64, 0, NULL);
+    const double *pb = ck_arg(&b, args, 5, F64, 0, NULL);
+    const double *ratio = ck_arg(&b, args, 6, F64, 0, NULL);
+    double *corners = ck_arg(&b, args, 7, F64, 1, &nc);
+    int64_t *split = ck_arg(&b, args, 8, I64, 1, NULL);
+    double *gains = ck_arg(&b, args, 9, F64, 1, NULL);
     if (!gains || ck_num(args, 10, &tol) || ck_num(args, 11, &scale) || ck_num(args, 12, &min_width) ||
         ck_num(args, 13, &noise) || ck_num(args, 14, &straight_share) || ck_num(args, 15, &asymptotic))
         goto done;
@@ -193,22 +197,22 @@ static PyObject *children(PyObject *self, PyObject *args)
     Buffers b = {.n = 0};
     Py_ssize_t n;
     const double *ua = ck_arg(&b, args, 0, F64, 0, NULL);
-    const double *um = ua ? ck_arg(&b, args, 1, F64, 0, NULL) : NULL;
-    const double *ub = um ? ck_arg(&b, args, 2, F64, 0, NULL) : NULL;
-    const double *pa = ub ? ck_arg(&b, args, 3, F64, 0, NULL) : NULL;
-    const double *pm = pa ? ck_arg(&b, args, 4, F64, 0, NULL) : NULL;
-    const double *pb = pm ? ck_arg(&b, args, 5, F64, 0, NULL) : NULL;
-    const int64_t *split = pb ? ck_arg(&b, args, 6, I64, 0, &n) : NULL;
-    const double *gains = split ? ck_arg(&b, args, 7, F64, 0, NULL) : NULL;
-    const double *q = gains ? ck_arg(&b, args, 8, F64, 0, NULL) : NULL;
-    const double *pq = q ? ck_arg(&b, args, 9, F64, 0, NULL) : NULL;
-    double *c_ua = pq ? ck_arg(&b, args, 10, F64, 1, NULL) : NULL;
-    double *c_um = c_ua ? ck_arg(&b, args, 11, F64, 1, NULL) : NULL;
-    double *c_ub = c_um ? ck_arg(&b, args, 12, F64, 1, NULL) : NULL;
-    double *c_pa = c_ub ? ck_arg(&b, args, 13, F64, 1, NULL) : NULL;
-    double *c_pm = c_pa ? ck_arg(&b, args, 14, F64, 1, NULL) : NULL;
-    double *c_pb = c_pm ? ck_arg(&b, args, 15, F64, 1, NULL) : NULL;
-    double *c_ratio = c_pb ? ck_arg(&b, args, 16, F64, 1, NULL) : NULL;
+    const double *um = ck_arg(&b, args, 1, F64, 0, NULL);
+    const double *ub = ck_arg(&b, args, 2, F64, 0, NULL);
+    const double *pa = ck_arg(&b, args, 3, F64, 0, NULL);
+    const double *pm = ck_arg(&b, args, 4, F64, 0, NULL);
+    const double *pb = ck_arg(&b, args, 5, F64, 0, NULL);
+    const int64_t *split = ck_arg(&b, args, 6, I64, 0, &n);
+    const double *gains = ck_arg(&b, args, 7, F64, 0, NULL);
+    const double *q = ck_arg(&b, args, 8, F64, 0, NULL);
+    const double *pq = ck_arg(&b, args, 9, F64, 0, NULL);
+    double *c_ua = ck_arg(&b, args, 10, F64, 1, NULL);
+    double *c_um = ck_arg(&b, args, 11, F64, 1, NULL);
+    double *c_ub = ck_arg(&b, args, 12, F64, 1, NULL);
+    double *c_pa = ck_arg(&b, args, 13, F64, 1, NULL);
+    double *c_pm = ck_arg(&b, args, 14, F64, 1, NULL);
+    double *c_pb = ck_arg(&b, args, 15, F64, 1, NULL);
+    double *c_ratio = ck_arg(&b, args, 16, F64, 1, NULL);
     if (!c_ratio) {
         ck_release(&b);
         return NULL;
@@ -400,10 +404,10 @@ static PyObject *fewest(PyObject *self, PyObject *args)
     double budget, min_length, max_length;
     PyObject *result = NULL;
     const double *p = ck_arg(&b, args, 0, F64, 0, NULL);
-    const double *cum = p ? ck_arg(&b, args, 1, F64, 0, &n) : NULL;
-    const int64_t *stops = cum ? ck_arg(&b, args, 2, I64, 0, NULL) : NULL;
-    const uint8_t *fixed = stops ? ck_arg(&b, args, 3, BOOL, 0, NULL) : NULL;
-    int64_t *out = fixed ? ck_arg(&b, args, 4, I64, 1, NULL) : NULL;
+    const double *cum = ck_arg(&b, args, 1, F64, 0, &n);
+    const int64_t *stops = ck_arg(&b, args, 2, I64, 0, NULL);
+    const uint8_t *fixed = ck_arg(&b, args, 3, BOOL, 0, NULL);
+    int64_t *out = ck_arg(&b, args, 4, I64, 1, NULL);
     if (!out || ck_num(args, 5, &budget) || ck_num(args, 6, &min_length) || ck_num(args, 7, &max_length))
         goto done;
     if (n < 1) {
@@ -449,9 +453,9 @@ static PyObject *deficit_measure(PyObject *self, PyObject *args)
     Buffers b = {.n = 0};
     Py_ssize_t n, nc;
     const double *p = ck_arg(&b, args, 0, F64, 0, NULL);
-    const double *cum = p ? ck_arg(&b, args, 1, F64, 0, &n) : NULL;
-    const int64_t *corners = cum ? ck_arg(&b, args, 2, I64, 0, &nc) : NULL;
-    double *measure = corners ? ck_arg(&b, args, 3, F64, 1, NULL) : NULL;
+    const double *cum = ck_arg(&b, args, 1, F64, 0, &n);
+    const int64_t *corners = ck_arg(&b, args, 2, I64, 0, &nc);
+    double *measure = ck_arg(&b, args, 3, F64, 1, NULL);
     if (!measure) {
         ck_release(&b);
         return NULL;
@@ -490,9 +494,9 @@ static PyObject *interp_sorted(PyObject *self, PyObject *args)
     Buffers b = {.n = 0};
     Py_ssize_t nx, nxp, nfp, nout;
     const double *x = ck_arg(&b, args, 0, F64, 0, &nx);
-    const double *xp = x ? ck_arg(&b, args, 1, F64, 0, &nxp) : NULL;
-    const double *fp = xp ? ck_arg(&b, args, 2, F64, 0, &nfp) : NULL;
-    double *out = fp ? ck_arg(&b, args, 3, F64, 1, &nout) : NULL;
+    const double *xp = ck_arg(&b, args, 1, F64, 0, &nxp);
+    const double *fp = ck_arg(&b, args, 2, F64, 0, &nfp);
+    double *out = ck_arg(&b, args, 3, F64, 1, &nout);
     if (!out) {
         ck_release(&b);
         return NULL;
@@ -556,11 +560,11 @@ static PyObject *place(PyObject *self, PyObject *args)
     Py_ssize_t pieces, size;
     PyObject *result = NULL;
     const double *params = ck_arg(&b, args, 0, F64, 0, NULL);
-    const double *cum = params ? ck_arg(&b, args, 1, F64, 0, NULL) : NULL;
-    const double *measure = cum ? ck_arg(&b, args, 2, F64, 0, NULL) : NULL;
-    const int64_t *cut = measure ? ck_arg(&b, args, 3, I64, 0, NULL) : NULL;
-    const int64_t *alloc = cut ? ck_arg(&b, args, 4, I64, 0, &pieces) : NULL;
-    double *out = alloc ? ck_arg(&b, args, 5, F64, 1, &size) : NULL;
+    const double *cum = ck_arg(&b, args, 1, F64, 0, NULL);
+    const double *measure = ck_arg(&b, args, 2, F64, 0, NULL);
+    const int64_t *cut = ck_arg(&b, args, 3, I64, 0, NULL);
+    const int64_t *alloc = ck_arg(&b, args, 4, I64, 0, &pieces);
+    double *out = ck_arg(&b, args, 5, F64, 1, &size);
     if (out) {
         Py_ssize_t count = ck_place(params, cum, measure, cut, alloc, pieces, out, size);
         result = count < 0 ? PyErr_NoMemory() : PyLong_FromSsize_t(count);
@@ -622,9 +626,9 @@ static PyObject *de_boor(PyObject *self, PyObject *args)
     Py_ssize_t nk, ncoef, nu, nout;
     PyObject *result = NULL;
     const double *knots = ck_arg(&b, args, 0, F64, 0, &nk);
-    const double *coef = knots ? ck_arg(&b, args, 1, F64, 0, &ncoef) : NULL;
-    const double *u = coef ? ck_arg(&b, args, 2, F64, 0, &nu) : NULL;
-    double *out = u ? ck_arg(&b, args, 3, F64, 1, &nout) : NULL;
+    const double *coef = ck_arg(&b, args, 1, F64, 0, &ncoef);
+    const double *u = ck_arg(&b, args, 2, F64, 0, &nu);
+    double *out = ck_arg(&b, args, 3, F64, 1, &nout);
     if (!out)
         goto done;
     long degree = PyTuple_GET_SIZE(args) > 4 ? PyLong_AsLong(PyTuple_GET_ITEM(args, 4)) : -1;

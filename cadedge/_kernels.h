@@ -18,7 +18,8 @@ typedef struct {
 } Buffers;
 
 void ck_release(Buffers *b);
-/* Argument i as a C-contiguous buffer of kind (F64, I64, BOOL); its data, or NULL with an exception set. */
+/* Argument i as a C-contiguous buffer of kind (F64, I64, BOOL); its data, or NULL with an exception set
+ * (also when an exception is already set: an earlier argument failed, so only the last result needs a check). */
 void *ck_arg(Buffers *b, PyObject *args, Py_ssize_t i, int kind, int writable, Py_ssize_t *count);
 /* Argument i as a float; 0, or -1 with an exception set. */
 int ck_num(PyObject *args, Py_ssize_t i, double *out);

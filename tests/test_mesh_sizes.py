@@ -195,7 +195,7 @@ def test_a_face_that_failed_every_strategy_gets_its_curves_meshed_again_at_other
     no strategy could use (on mesh_T106_V3 gmsh could not recover the loose B-spline edges of the thin
     face 5 in its parameter plane; here the cap's circle simply loses its mesh) has its curves meshed
     again at other sizes and is meshed again with the faces sharing them, every face conforming."""
-    from cadedge.mesh.generate import FaceOutcome, _surface_ok, mesh_faces
+    from cadedge.mesh.generate import FaceOutcome, mesh_faces, surface_ok
     from cadedge.mesh.gmsh_model import gmsh_session, import_brep, map_entities, shape_to_brep, surface_curve_uses
     from cadedge.mesh.sizes import SizeField, apply_spacing_sizes, configure_gmsh_sizes, retry_failed_faces
     from cadedge.mesh.worker import JobContext, MeshJob
@@ -221,4 +221,4 @@ def test_a_face_that_failed_every_strategy_gets_its_curves_meshed_again_at_other
         assert all(o.ok for o in ctx.outcomes.values()), ctx.outcomes
         assert "spacing sizes" in ctx.outcomes[cap].strategy
         assert ctx.outcomes[cap].attempts == [("Frontal-Delaunay", "0 nodes")]
-        assert all(_surface_ok(s) for s in surfaces)
+        assert all(surface_ok(s) for s in surfaces)

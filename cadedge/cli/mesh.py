@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import CadedgeError, CadedgeWarning, InputError
+from . import _interrupted
 from .refine import add_refine_options, check_writable, parse_number, refine_options
 
 
@@ -64,13 +65,8 @@ def run(args: argparse.Namespace) -> int:
     except CadedgeError as exc:  # a valid file our pipeline could not finish: not bad input
         _err(args.input, exc)
         return 1
-    except KeyboardInterrupt:
-        print(f"cadedge mesh: {args.input}: interrupted", file=sys.stderr)
-        return 130
-    except Exception as exc:  # a fault of ours on a valid file: one line naming it, exit 1 (--debug: traceback)
-        from . import _interrupted
-
-        if _interrupted(exc):
+    except (KeyboardInterrupt, Exception) as exc:  # Ctrl-C (native code may turn it into another error), or a
+        if _interrupted(exc):                       # fault of ours on a valid file: one line, exit 1 (--debug: raise)
             print(f"cadedge mesh: {args.input}: interrupted", file=sys.stderr)
             return 130
         if getattr(args, "debug", False):

@@ -22,19 +22,19 @@ AIM = 0.9
 FACTOR = (0.5, 0.9)
 
 
-def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float], faces: list[int]) -> dict[int, float]:
-    """Mesh gmsh surfaces ``faces`` of the current model again coarser where their |deficit| is under
-    ``BELOW * level`` (``deficit(s, mesh_area)``; ``per_circle[s]`` the count they were meshed with).
-    Returns the per-circle count of each face that kept a coarser mesh."""
+def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
+            measured: dict[int, float]) -> dict[int, float]:
+    """Mesh the gmsh surfaces of ``measured`` (surface -> its deficit as meshed now) again coarser where
+    their |deficit| is under ``BELOW * level`` (``deficit(s, mesh_area)`` measures a new mesh;
+    ``per_circle[s]`` the count they were meshed with). Returns the per-circle count of each face that
+    kept a coarser mesh."""
     import gmsh
 
-    from .fidelity import gmsh_surface_areas
-    from .generate import mesh_faces
+    from .fidelity import gmsh_surface_areas, remesh_face
 
     face_of = ctx.emap.face_of_surface
     say = ctx.progress or (lambda line: None)
     kept: dict[int, float] = {}
-    measured = {s: deficit(s, a) for s, a in gmsh_surface_areas(faces).items()}
     for s, d in measured.items():
         if abs(d) >= BELOW * level or not np.isfinite(d):
             continue
@@ -45,15 +45,11 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float], faces: 
         n = old_n * float(np.clip(np.sqrt(max(abs(d), 1e-12) / (AIM * level)), *FACTOR))
         before = len(gmsh.model.mesh.getElementsByType(2, s)[0])
         say(f"refine {f}")  # same watchdog line as a refinement: a hang here keeps the face as first meshed
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n)
-        gmsh.model.mesh.clear([(2, s)])
-        redo = mesh_faces([s], face_of)[s]
+        redo = remesh_face(s, n, face_of)
         better = redo.ok and len(gmsh.model.mesh.getElementsByType(2, s)[0]) < before and abs(
             deficit(s, gmsh_surface_areas([s])[s])) <= level
         if not better:  # mesh it again as it was
-            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", old_n)
-            gmsh.model.mesh.clear([(2, s)])
-            redo = mesh_faces([s], face_of)[s]
+            redo = remesh_face(s, old_n, face_of)
         else:
             kept[f] = n
         ctx.outcomes[s] = redo

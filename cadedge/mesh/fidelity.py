@@ -91,8 +91,12 @@ def surface_types(shape: object) -> list[str]:
 
     from ..occt.topology import Topology
 
-    return [str(BRepAdaptor_Surface(f).GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
-            for f in Topology(shape).faces]
+    return [surface_type_name(BRepAdaptor_Surface(f)) for f in Topology(shape).faces]
+
+
+def surface_type_name(surface) -> str:
+    """The type name of a ``BRepAdaptor_Surface`` (its ``GeomAbs_SurfaceType`` without the prefix)."""
+    return str(surface.GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
 
 
 def _face_probe(face):
@@ -138,7 +142,9 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
     curved strip losing on one side what it gains on the other) needs far fewer splits than the unsigned
     rule asks. Its budget is credited with the measured cancellation, ``sum |slivers| / |net deficit|``
     (halved), and the fit is repeated; a face the credit puts over its budget gets a quarter of it
-    next round, and after :data:`PLANAR_ROUNDS` rounds the unsigned rule."""
+    next round, and a credit of 1 or less is dropped (the unsigned rule). After :data:`PLANAR_ROUNDS`
+    rounds without every credited face within its budget, the fit with the credits left is returned
+    without a further check."""
     from .planar import planar_polygon_areas
 
     areas = brep_face_areas(grid.shape) if brep_areas is None else np.asarray(brep_areas, dtype=float)
@@ -239,7 +245,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
                 k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
                 k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
-            pieces = np.maximum(pieces, np.nan_to_num(np.maximum.reduce([k_area, k_curv, k_thin + 0 * chord]),
+            pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
                                                       nan=1).astype(int))
         if not np.any(pieces > 1):
             continue
@@ -315,6 +321,18 @@ def gmsh_surface_areas(surfaces: list[int]) -> dict[int, float]:
 #: Curved faces keep ``growth``: on mesh_T106_V3's extrusion faces gmsh's Frontal-Delaunay ran out of
 #: time on six of eight faces with the faster growth.
 INTERIOR_GROWTH = 2.0
+
+
+def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
+    """Mesh gmsh surface ``s`` again from scratch with ``Mesh.MeshSizeFromCurvature`` at ``per_circle``
+    (its boundary curves keep their nodes); returns its :class:`~cadedge.mesh.generate.FaceOutcome`."""
+    import gmsh
+
+    from .generate import mesh_faces
+
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
+    gmsh.model.mesh.clear([(2, s)])
+    return mesh_faces([s], face_of)[s]
 
 
 def before_generate(ctx) -> None:
@@ -415,9 +433,7 @@ def after_generate(ctx) -> None:
                 if s in last:  # its finer mesh bought nothing: back to the first (LLNL boxed_sphere: 24
                     f = face_of.get(s, s)  # cylinders 2.8% off at any size, 3x the triangles once refined)
                     say(f"refine {f}")
-                    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", opts["face_per_circle"].get(f, n0))
-                    gmsh.model.mesh.clear([(2, s)])
-                    ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+                    ctx.outcomes[s] = remesh_face(s, opts["face_per_circle"].get(f, n0), face_of)
                     per_face.pop(f, None)
                     say(f"refined {f}")
         pending = [s for s, d in measured.items()
@@ -431,9 +447,7 @@ def after_generate(ctx) -> None:
             say(f"refine {f}")  # the watchdog bounds it; a hang or crash here keeps the face as first meshed
             old_n = per_face.get(f, opts["face_per_circle"].get(f, n0))
             n = old_n * float(np.clip(np.sqrt(abs(measured[s]) / (AIM * target)), 1.25, 3.0))
-            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n)
-            gmsh.model.mesh.clear([(2, s)])
-            redo = mesh_faces([s], face_of)[s]
+            redo = remesh_face(s, n, face_of)
             if not redo.ok:  # keep what met the boundary before: mesh it again as it was
                 gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", old_n)
                 redo = mesh_faces([s], face_of)[s]
@@ -443,10 +457,11 @@ def after_generate(ctx) -> None:
             last[s] = measured[s]
             say(f"refined {f}")
     ok = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) not in stuck]
-    level = min(max((abs(deficit(s, a)) for s, a in gmsh_surface_areas(ok).items()), default=0.0), target)
+    final = {s: deficit(s, a) for s, a in gmsh_surface_areas(ok).items()}
+    level = min(max(map(abs, final.values()), default=0.0), target)
     calm = [s for s in ok if face_of.get(s, s) in curved and face_of.get(s, s) not in no_refine
             and face_of.get(s, s) not in per_face]
-    coarser = coarsen(ctx, level=level, deficit=deficit, faces=calm,
+    coarser = coarsen(ctx, level=level, deficit=deficit, measured={s: final[s] for s in calm},
                       per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
     ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "stuck": sorted(stuck)}

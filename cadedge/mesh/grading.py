@@ -30,12 +30,12 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
     from OCP.Standard import Standard_Failure
 
     from ..errors import GeometryError, InputError
-    from ..occt.edgecurve import EdgeCurve
-    from ..occt.topology import Topology
     from ..shapegrid import with_edges
+    from ..splitting import insert_points, split_evenly
+    from .proximity import _LazyCurves
     from .sizes import SizeField
 
-    topo = None
+    curves = _LazyCurves(grid)  # each edge's OCCT curve built once, on first use
     edges = list(grid.edges)
     by_face: dict[int, list[int]] = {}
     for i, e in enumerate(edges):
@@ -67,19 +67,16 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
             if not np.any(k > 1) or not np.all(np.diff(e.params) > 0):
                 continue
             try:
-                topo = topo or Topology(grid.shape)
-                curve = EdgeCurve(topo.edges[e.id - 1], e.id)
-                new_u = np.concatenate([e.params[j] + (e.params[j + 1] - e.params[j]) * np.arange(1, n) / n
-                                        for j, n in enumerate(k) if n > 1])
+                curve = curves[e.id]
+                new_u = split_evenly(e.params, k)
                 new_p = curve.evaluate(new_u)
             except (GeometryError, Standard_Failure):
                 continue
             if np.max(np.linalg.norm(curve.evaluate(e.params[[0, -1]]) - e.points[[0, -1]], axis=1)) > max(
                     10 * e.tolerance, 1e-7 * (1 + float(np.abs(e.points).max()))):
                 continue  # the grid's parameters are not this curve's: leave the edge alone
-            at = np.repeat(np.arange(1, len(e.params)), k - 1)
-            edges[i] = dataclasses.replace(e, params=np.insert(e.params, at, new_u),
-                                           points=np.insert(e.points, at, new_p, axis=0))
+            params, points = insert_points(e.params, e.points, new_u, new_p)
+            edges[i] = dataclasses.replace(e, params=params, points=points)
             changed = True
         if not changed:
             break

@@ -89,7 +89,7 @@ def face_curvature_sizes(shape: object, surface_ald: float) -> dict[int, float]:
     from OCP.BRepTools import BRepTools
 
     from ..occt.topology import Topology
-    from .fidelity import brep_face_areas, per_circle
+    from .fidelity import brep_face_areas, per_circle, surface_type_name
     from .generate import MAX_FACE_TRIANGLES
 
     faces = Topology(shape).faces
@@ -98,7 +98,7 @@ def face_curvature_sizes(shape: object, surface_ald: float) -> dict[int, float]:
     out: dict[int, float] = {}
     for fid, face in enumerate(faces, start=1):
         surface = BRepAdaptor_Surface(face)
-        kind = str(surface.GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
+        kind = surface_type_name(surface)
         if kind == "Plane":
             continue
         u0, u1, v0, v1 = BRepTools.UVBounds_s(face)

@@ -154,34 +154,24 @@ def _import(brep: bytes, notes: list[str]) -> tuple[str | None, str | None]:
     return None, partial
 
 
-def _face_triangles(surface: int) -> np.ndarray:
-    """The triangles of one gmsh surface as corner coordinates, shape (m, 3, 3)."""
+def _corners(dim: int, tag: int) -> np.ndarray:
+    """The linear elements of one gmsh entity as corner coordinates: a surface's triangles (``dim`` 2,
+    shape (m, 3, 3)) or a curve's segments (``dim`` 1, shape (k, 2, 3)); none when they reference a node
+    gmsh does not list on the entity or its boundary."""
     import gmsh
 
     from .generate import node_lookup
 
-    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
-    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+    k = dim + 1
+    _, elements = gmsh.model.mesh.getElementsByType(dim, tag)  # element type 1: 2-node line, 2: 3-node triangle
+    if not len(elements):
+        return np.zeros((0, k, 3))
+    tags, coords, _ = gmsh.model.mesh.getNodes(dim, tag, includeBoundary=True)
     lookup = node_lookup(tags)
-    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[np.asarray(tri, dtype=np.int64)]].reshape(-1, 3, 3)
-
-
-def _curve_segments(curve: int) -> np.ndarray:
-    """The segments of one gmsh curve's 1-D mesh as end-point coordinates, shape (k, 2, 3) (none when
-    they reference a node gmsh does not list on the curve or its end points)."""
-    import gmsh
-
-    from .generate import node_lookup
-
-    _, seg = gmsh.model.mesh.getElementsByType(1, curve)
-    if not len(seg):
-        return np.zeros((0, 2, 3))
-    tags, coords, _ = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
-    lookup = node_lookup(tags)
-    seg = np.asarray(seg, dtype=np.int64)
-    if seg.max() >= len(lookup) or (lookup[seg] < 0).any():  # a node off the curve and its ends: not ours
-        return np.zeros((0, 2, 3))
-    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[seg]].reshape(-1, 2, 3)
+    elements = np.asarray(elements, dtype=np.int64)
+    if elements.max() >= len(lookup) or (lookup[elements] < 0).any():  # a node off the entity: not ours
+        return np.zeros((0, k, 3))
+    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[elements]].reshape(-1, k, 3)
 
 
 def _overlapping_faces(surfaces: list[int]) -> dict[int, float]:
@@ -282,12 +272,12 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             progress(line)
         words = line.split()
         if deliver is not None and words[:1] == ["refined"] and len(words) == 2 and int(words[1]) in emap.faces:
-            deliver(2, int(words[1]), _face_triangles(emap.faces[int(words[1])]))  # the finer mesh
+            deliver(2, int(words[1]), _corners(2, emap.faces[int(words[1])]))  # the finer mesh
 
     def deliver_edges() -> None:
         if deliver is not None:
             for eid, m in sorted(emap.edges.items()):
-                deliver(1, eid, _curve_segments(m.tag))
+                deliver(1, eid, _corners(1, m.tag))
 
     with gmsh_session():
         say("import")
@@ -332,7 +322,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
             if reason is None and deliver is not None and face in emap.faces:
-                deliver(2, face, _face_triangles(emap.faces[face]))
+                deliver(2, face, _corners(2, emap.faces[face]))
 
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
@@ -355,7 +345,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         if deliver is not None:  # the hooks may have meshed faces again or moved their nodes
             for s, o in sorted(ctx.outcomes.items()):
                 if o.ok and s in face_of:
-                    deliver(2, face_of[s], _face_triangles(s))
+                    deliver(2, face_of[s], _corners(2, s))
         say("read")
         raw = ctx.raw = read_mesh(ctx.surfaces)
         meshed = [s for s, o in ctx.outcomes.items() if o.ok]

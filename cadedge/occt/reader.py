@@ -33,8 +33,8 @@ __all__ = ["LoadedShape", "load_shape", "quiet_occt", "tolerance_warnings", "SUF
 SUFFIXES = INPUT_FORMATS
 #: Warn when the worst edge tolerance exceeds this fraction of the model's bounding-box diagonal ...
 TOL_REL_MODEL = 5e-4
-#: ... or exceeds this many times the uncertainty the STEP file declares.
-TOL_REL_DECLARED = 10.0
+#: ... or exceeds this many times the uncertainty the STEP file declares (and this fraction of the diagonal).
+TOL_REL_DECLARED, TOL_REL_DECLARED_MODEL = 10.0, 1e-5
 
 
 def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None = None) -> list[str]:
@@ -45,7 +45,7 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
     """
     worst = BRep_Tool.MaxTolerance_s(shape, TopAbs_EDGE)
     file_test = declared is not None and worst > TOL_REL_DECLARED * declared
-    if worst <= (1e-5 if file_test else TOL_REL_MODEL) * _diagonal_at_least(shape, worst):
+    if worst <= (TOL_REL_DECLARED_MODEL if file_test else TOL_REL_MODEL) * _diagonal_at_least(shape, worst):
         return []  # neither test below can fire: skip the bounding box (OCCT boxes every face's surface)
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)
@@ -53,7 +53,7 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
         return []
     diag = box.SquareExtent() ** 0.5  # not box.Get(): OCP 8.0 cannot return its Limits struct
     too_big_for_model = diag > 0 and worst > TOL_REL_MODEL * diag
-    too_big_for_file = declared is not None and worst > TOL_REL_DECLARED * declared and worst > 1e-5 * diag
+    too_big_for_file = file_test and worst > TOL_REL_DECLARED_MODEL * diag
     if not (too_big_for_model or too_big_for_file):
         return []
     edges = TopTools_IndexedMapOfShape()

@@ -81,7 +81,7 @@ class Topology:
             key, faces_of = emap.FindKey, lambda i, edge: ancestors.FindFromKey(edge)
         else:
             key, faces_of = ancestors.FindKey, lambda i, edge: ancestors.FindFromIndex(i)
-        to_edge, face_id, vertex_id, ends = TopoDS.Edge_s, fmap.FindIndex, vmap.FindIndex, TopExp.Vertices_s
+        face_id, vertex_id, ends = fmap.FindIndex, vmap.FindIndex, TopExp.Vertices_s
         self.edges: list[TopoDS_Edge] = []
         self.vertices: list[TopoDS_Vertex] = [TopoDS.Vertex_s(vmap.FindKey(i)) for i in range(1, vmap.Extent() + 1)]
         self.faces: list[TopoDS_Face] = [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
@@ -90,7 +90,7 @@ class Topology:
         self._seam: list[bool] | None = None  # computed on first use: refining does not need it
         first, last = TopoDS_Vertex(), TopoDS_Vertex()  # filled by TopExp::Vertices for each edge
         for i in range(1, ancestors.Extent() + 1):
-            edge = to_edge(key(i).Oriented(TopAbs_FORWARD))
+            edge = forward(key(i))
             self.edges.append(edge)
             ids: list[int] = []
             for face in _shapes(faces_of(i, edge)):
