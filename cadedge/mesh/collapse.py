@@ -42,8 +42,8 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
     """Collapse interior edges of triangles under ``below`` degrees where that raises the smallest angle
     around them (see the module doc).
 
-    ``project(points (k, 3))`` returns the points moved onto the surface and their parametric coordinates
-    (k, d). Returns ``(x, tri, removed, params)``: the coordinates (rows of removed nodes unchanged, no
+    ``project(points (k, 3), rows (k,))`` returns the points (near nodes ``rows``) moved onto the surface
+    and their parametric coordinates (k, d). Returns ``(x, tri, removed, params)``: the coordinates (rows of removed nodes unchanged, no
     longer used), the remaining triangles (orientation kept), a mask of the removed nodes, and for every
     node the parametric coordinates of its new position (NaN rows for nodes that did not move; shape
     (n, d), or (n, 0) when nothing moved).
@@ -100,7 +100,7 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
             normals0 = _normal(x[rt[keep]])
             neighbours = np.array(sorted(na | nb))
             trial = np.array([0.5 * (x[a] + x[b]), x[a], x[b], x[neighbours].mean(axis=0)])
-            on, uv = project(trial)
+            on, uv = project(trial, np.full(len(trial), a))
             for pos, puv in zip(on, uv):
                 p = x[new]
                 p[new == a] = pos

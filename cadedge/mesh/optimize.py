@@ -7,7 +7,7 @@ on the same cylinders and boxes. Each face gets a few passes of:
 - edge swaps (:func:`flip_edges`): the diagonal of two triangles is swapped where that raises their
   smaller angle; curve segments are never swapped;
 - a "smart" Laplacian (:func:`smooth_nodes`): every interior node moves to the mean of its neighbours in
-  3-D, projected back onto the B-rep surface (``gmsh.model.getClosestPoint``), where the smallest angle
+  3-D, projected back onto the B-rep surface (:class:`Projector`), where the smallest angle
   of its triangles does not fall and none flips;
 - a local search (:func:`climb_nodes`): nodes of triangles under :data:`CLIMB_BELOW` degrees move to the
   best of 24 trial positions around them, the one that raises their worst angle most.
@@ -89,8 +89,8 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
                  iterations: int = ITERATIONS) -> tuple[np.ndarray, np.ndarray | None]:
     """Smart-Laplacian smoothing of the ``movable`` nodes of the triangles ``tri`` (indices into ``x``).
 
-    ``project(points (k, 3))`` returns the points moved onto the surface and their parametric coordinates
-    (k, d). Returns the new coordinates and the parametric coordinates of the movable nodes (NaN rows for
+    ``project(points (k, 3), rows (k,))`` returns the points (those of nodes ``rows``) moved onto the
+    surface and their parametric coordinates (k, d). Returns the new coordinates and the parametric coordinates of the movable nodes (NaN rows for
     nodes that stayed; ``None`` if nothing moved). A move stays only if no triangle of the node flips and
     the smallest angle of its triangles does not fall; moves that, with their neighbours', flip a triangle
     or bring it below the worst angle around it before the pass are undone.
@@ -110,7 +110,7 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         nrm0 = _normals(x, tri)
         node0 = _node_min(ang0, tri, n)
         target = (adj @ x)[mov] / deg[mov, None]
-        moved, uv = project(target)
+        moved, uv = project(target, mov)
         cand = x.copy()
         cand[mov] = moved
         ang1 = triangle_angles(cand, tri).min(axis=1)
@@ -268,7 +268,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         moved = np.flatnonzero(improves)
         if not len(moved):
             break
-        px, puv = project(best_pos[moved])
+        px, puv = project(best_pos[moved], moved)
         cand = x.copy()
         cand[moved] = px
         after = triangle_angles(cand, tri).min(axis=1)
@@ -294,14 +294,97 @@ def _near_bad(x: np.ndarray, tri: np.ndarray, movable: np.ndarray) -> np.ndarray
     return near & movable
 
 
-def _project_on(surface: int):
-    import gmsh
+#: Gauss-Newton steps of a projection started from the node's own parameters, and the tolerance (a share
+#: of the face's bounding-box diagonal) under which its tangential residual counts as converged.
+NEWTON_STEPS = 6
+NEWTON_TOL = 1e-9
 
-    def project(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        coords, uv = gmsh.model.getClosestPoint(2, surface, np.asarray(points, dtype=float).ravel().tolist())
+
+class Projector:
+    """Moves points onto one gmsh surface, each from the parameters of the node it belongs to.
+
+    ``gmsh.model.getClosestPoint`` searches the whole surface (OCCT's projection has no start): on B-spline
+    faces it took nearly all the optimiser's time. A moved node lies a fraction of an edge from where it
+    was, so a few Gauss-Newton steps on the parametrisation (``getValue`` and ``getDerivative``, batched)
+    from its own ``(u, v)`` find the same foot point. A point whose start is unknown, whose steps leave
+    the parametric bounds (a seam or the face's edge), hit a pole (singular derivatives) or do not
+    converge goes to ``getClosestPoint`` instead. ``uv`` (node row -> parameters, NaN where unknown) is
+    read at each call; :attr:`searched` counts the points given to ``getClosestPoint``."""
+
+    def __init__(self, surface: int, uv: np.ndarray | None = None):
+        import gmsh
+
+        self.surface = surface
+        self.uv = uv
+        lo, hi = gmsh.model.getParametrizationBounds(2, surface)
+        self.lo, self.hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        box = np.asarray(gmsh.model.getBoundingBox(2, surface), dtype=float)
+        self.size = max(float(np.linalg.norm(box[3:] - box[:3])), 1e-300)
+        self.searched = 0
+        self.walked = 0
+
+    def _search(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        import gmsh
+
+        self.searched += len(points)
+        coords, uv = gmsh.model.getClosestPoint(2, self.surface, points.ravel().tolist())
         return np.asarray(coords, dtype=float).reshape(-1, 3), np.asarray(uv, dtype=float).reshape(len(points), -1)
 
-    return project
+    def _walk(self, points: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Gauss-Newton from ``start``: the foot points, their parameters and which converged (tangential
+        residual under :data:`NEWTON_TOL` of the face's size within :data:`NEWTON_STEPS` steps, inside
+        the parametric bounds, derivatives not singular)."""
+        import gmsh
+
+        uv = start.copy()
+        span = self.hi - self.lo
+        live = np.ones(len(points), dtype=bool)  # neither failed nor converged yet
+        done = np.zeros(len(points), dtype=bool)
+        foot = np.zeros_like(points)
+        for step in range(NEWTON_STEPS + 1):
+            k = np.flatnonzero(live)
+            if not len(k):
+                break
+            q = uv[k].ravel().tolist()
+            foot[k] = np.asarray(gmsh.model.getValue(2, self.surface, q), dtype=float).reshape(-1, 3)
+            d = np.asarray(gmsh.model.getDerivative(2, self.surface, q), dtype=float).reshape(-1, 2, 3)
+            g = np.einsum("nij,nj->ni", d, points[k] - foot[k])
+            conv = np.all(np.abs(g) <= NEWTON_TOL * self.size * np.linalg.norm(d, axis=2), axis=1)
+            done[k[conv]] = True
+            live[k[conv]] = False
+            if step == NEWTON_STEPS:
+                break
+            k, d, g = k[~conv], d[~conv], g[~conv]
+            a = np.einsum("nij,nkj->nik", d, d)
+            det = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] * a[:, 1, 0]
+            sing = det <= 1e-12 * np.maximum(a[:, 0, 0] * a[:, 1, 1], 1e-300)
+            safe = np.where(sing, 1.0, det)
+            new = uv[k] + np.column_stack([a[:, 1, 1] * g[:, 0] - a[:, 0, 1] * g[:, 1],
+                                           a[:, 0, 0] * g[:, 1] - a[:, 1, 0] * g[:, 0]]) / safe[:, None]
+            out = sing | ~np.all((new >= self.lo - 1e-9 * span) & (new <= self.hi + 1e-9 * span), axis=1)
+            live[k[out]] = False
+            uv[k[~out]] = new[~out]
+        return foot, uv, done
+
+    def __call__(self, points: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The points (k, 3) moved onto the surface and their parameters (k, 2); ``rows``: the node row
+        each point belongs to (its parameters start the search)."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        out = np.empty_like(points)
+        par = np.full((len(points), 2), np.nan)
+        todo = np.ones(len(points), dtype=bool)
+        if rows is not None and self.uv is not None and len(points):
+            start = self.uv[np.asarray(rows)]
+            known = ~np.isnan(start).any(axis=1)
+            if known.any():
+                s, uv, ok = self._walk(points[known], start[known])
+                idx = np.flatnonzero(known)[ok]
+                out[idx], par[idx] = s[ok], uv[ok]
+                todo[idx] = False
+                self.walked += len(idx)
+        if todo.any():
+            out[todo], par[todo] = self._search(points[todo])
+        return out, par
 
 
 def _area(x: np.ndarray, tri: np.ndarray) -> float:
@@ -330,6 +413,8 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
     :class:`_Face` (``face`` is left as it is); stops when ``late()``."""
     x, tri, movable = face.x, face.tri, face.movable.copy()
     uv, moved = face.uv.copy(), face.moved.copy()
+    if isinstance(project, Projector):
+        project.uv = uv  # the nodes' current parameters start their projections
 
     def took(params: np.ndarray | None, rows: np.ndarray) -> None:
         if params is None or not params.shape[1]:
@@ -403,7 +488,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     if len(inner) and len(inner_uv) == 2 * len(inner):
         uv[lookup[inner]] = np.asarray(inner_uv, dtype=float).reshape(-1, 2)
     start = _Face(x0, tri0, movable, uv, np.zeros(len(tags), dtype=bool))
-    project = _project_on(surface)
+    project = Projector(surface)
 
     def late() -> bool:
         return deadline is not None and time.time() > deadline
