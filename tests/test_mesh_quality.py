@@ -191,7 +191,7 @@ def test_a_cube_beside_a_cylinder_beats_gmsh_alone():
 
 def test_projector_walks_from_each_nodes_parameters_and_searches_only_across_the_seam():
     gmsh = pytest.importorskip("gmsh")
-    from cadedge.mesh.optimize import Projector
+    from cadedge.mesh.project import Projector
 
     gmsh.initialize(["-noenv"], readConfigFiles=False)
     try:
@@ -221,5 +221,31 @@ def test_projector_walks_from_each_nodes_parameters_and_searches_only_across_the
         project.searched = 0
         on, _ = project(across[None], np.array([seam]))
         assert project.searched == 1 and np.abs(on[0] - across).max() < 1e-7
+    finally:
+        gmsh.finalize()
+
+
+def test_a_face_out_of_time_keeps_gmshs_triangles():
+    gmsh = pytest.importorskip("gmsh")
+    from cadedge.mesh.optimize import smooth_face
+
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, 2, 1)
+        gmsh.model.occ.synchronize()
+        side = next(t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) == "Cylinder")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.3)
+        gmsh.model.mesh.generate(2)
+
+        def mesh() -> tuple[np.ndarray, np.ndarray]:
+            _, xyz, _ = gmsh.model.mesh.getNodes(2, side, includeBoundary=True)
+            return np.asarray(xyz), np.asarray(gmsh.model.mesh.getElementsByType(2, side)[1])
+
+        before = mesh()
+        assert not smooth_face(side, deadline=0.0)  # a budget of zero
+        after = mesh()
+        assert np.array_equal(before[0], after[0]) and np.array_equal(before[1], after[1])
+        assert smooth_face(side)  # with time, the same face does change
     finally:
         gmsh.finalize()

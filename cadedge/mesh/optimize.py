@@ -7,7 +7,7 @@ on the same cylinders and boxes. Each face gets a few passes of:
 - edge swaps (:func:`flip_edges`): the diagonal of two triangles is swapped where that raises their
   smaller angle; curve segments are never swapped;
 - a "smart" Laplacian (:func:`smooth_nodes`): every interior node moves to the mean of its neighbours in
-  3-D, projected back onto the B-rep surface (:class:`Projector`), where the smallest angle
+  3-D, projected back onto the B-rep surface (:class:`~cadedge.mesh.project.Projector`), where the smallest angle
   of its triangles does not fall and none flips;
 - a local search (:func:`climb_nodes`): nodes of triangles under :data:`CLIMB_BELOW` degrees move to the
   best of 24 trial positions around them, the one that raises their worst angle most.
@@ -34,6 +34,7 @@ import numpy as np
 from scipy import sparse
 
 from .collapse import COLLAPSE_BELOW, collapse_edges
+from .project import Projector
 from .quality import triangle_angles
 
 #: Smoothing iterations per pass, and passes (edge swaps, then smoothing) per face.
@@ -52,6 +53,13 @@ CLIMB_BELOW = 45.0
 STEPS = (0.03, 0.1, 0.25)
 #: Edge-swap rounds per face and pass.
 FLIP_ROUNDS = 10
+#: The optimiser's time budget: this share of the time the job took before it (reading the shape, sizes,
+#: gmsh's meshing), at least :data:`MIN_BUDGET` seconds, and never past the job's soft deadline. Each
+#: face (worst first) may use :data:`FACE_SHARE` of what is left, or more if its triangles are a larger
+#: share of those still to improve; a face out of time keeps its last stage's result (or gmsh's).
+BUDGET_SHARE = 3.0
+MIN_BUDGET = 30.0
+FACE_SHARE = 0.5
 #: Rounds of undoing moves that made a triangle worse than before the pass (its nodes' neighbours moved
 #: too), after which the pass is undone as a whole.
 _UNDO_ROUNDS = 8
@@ -294,99 +302,6 @@ def _near_bad(x: np.ndarray, tri: np.ndarray, movable: np.ndarray) -> np.ndarray
     return near & movable
 
 
-#: Gauss-Newton steps of a projection started from the node's own parameters, and the tolerance (a share
-#: of the face's bounding-box diagonal) under which its tangential residual counts as converged.
-NEWTON_STEPS = 6
-NEWTON_TOL = 1e-9
-
-
-class Projector:
-    """Moves points onto one gmsh surface, each from the parameters of the node it belongs to.
-
-    ``gmsh.model.getClosestPoint`` searches the whole surface (OCCT's projection has no start): on B-spline
-    faces it took nearly all the optimiser's time. A moved node lies a fraction of an edge from where it
-    was, so a few Gauss-Newton steps on the parametrisation (``getValue`` and ``getDerivative``, batched)
-    from its own ``(u, v)`` find the same foot point. A point whose start is unknown, whose steps leave
-    the parametric bounds (a seam or the face's edge), hit a pole (singular derivatives) or do not
-    converge goes to ``getClosestPoint`` instead. ``uv`` (node row -> parameters, NaN where unknown) is
-    read at each call; :attr:`searched` counts the points given to ``getClosestPoint``."""
-
-    def __init__(self, surface: int, uv: np.ndarray | None = None):
-        import gmsh
-
-        self.surface = surface
-        self.uv = uv
-        lo, hi = gmsh.model.getParametrizationBounds(2, surface)
-        self.lo, self.hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-        box = np.asarray(gmsh.model.getBoundingBox(2, surface), dtype=float)
-        self.size = max(float(np.linalg.norm(box[3:] - box[:3])), 1e-300)
-        self.searched = 0
-        self.walked = 0
-
-    def _search(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        import gmsh
-
-        self.searched += len(points)
-        coords, uv = gmsh.model.getClosestPoint(2, self.surface, points.ravel().tolist())
-        return np.asarray(coords, dtype=float).reshape(-1, 3), np.asarray(uv, dtype=float).reshape(len(points), -1)
-
-    def _walk(self, points: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Gauss-Newton from ``start``: the foot points, their parameters and which converged (tangential
-        residual under :data:`NEWTON_TOL` of the face's size within :data:`NEWTON_STEPS` steps, inside
-        the parametric bounds, derivatives not singular)."""
-        import gmsh
-
-        uv = start.copy()
-        span = self.hi - self.lo
-        live = np.ones(len(points), dtype=bool)  # neither failed nor converged yet
-        done = np.zeros(len(points), dtype=bool)
-        foot = np.zeros_like(points)
-        for step in range(NEWTON_STEPS + 1):
-            k = np.flatnonzero(live)
-            if not len(k):
-                break
-            q = uv[k].ravel().tolist()
-            foot[k] = np.asarray(gmsh.model.getValue(2, self.surface, q), dtype=float).reshape(-1, 3)
-            d = np.asarray(gmsh.model.getDerivative(2, self.surface, q), dtype=float).reshape(-1, 2, 3)
-            g = np.einsum("nij,nj->ni", d, points[k] - foot[k])
-            conv = np.all(np.abs(g) <= NEWTON_TOL * self.size * np.linalg.norm(d, axis=2), axis=1)
-            done[k[conv]] = True
-            live[k[conv]] = False
-            if step == NEWTON_STEPS:
-                break
-            k, d, g = k[~conv], d[~conv], g[~conv]
-            a = np.einsum("nij,nkj->nik", d, d)
-            det = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] * a[:, 1, 0]
-            sing = det <= 1e-12 * np.maximum(a[:, 0, 0] * a[:, 1, 1], 1e-300)
-            safe = np.where(sing, 1.0, det)
-            new = uv[k] + np.column_stack([a[:, 1, 1] * g[:, 0] - a[:, 0, 1] * g[:, 1],
-                                           a[:, 0, 0] * g[:, 1] - a[:, 1, 0] * g[:, 0]]) / safe[:, None]
-            out = sing | ~np.all((new >= self.lo - 1e-9 * span) & (new <= self.hi + 1e-9 * span), axis=1)
-            live[k[out]] = False
-            uv[k[~out]] = new[~out]
-        return foot, uv, done
-
-    def __call__(self, points: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """The points (k, 3) moved onto the surface and their parameters (k, 2); ``rows``: the node row
-        each point belongs to (its parameters start the search)."""
-        points = np.asarray(points, dtype=float).reshape(-1, 3)
-        out = np.empty_like(points)
-        par = np.full((len(points), 2), np.nan)
-        todo = np.ones(len(points), dtype=bool)
-        if rows is not None and self.uv is not None and len(points):
-            start = self.uv[np.asarray(rows)]
-            known = ~np.isnan(start).any(axis=1)
-            if known.any():
-                s, uv, ok = self._walk(points[known], start[known])
-                idx = np.flatnonzero(known)[ok]
-                out[idx], par[idx] = s[ok], uv[ok]
-                todo[idx] = False
-                self.walked += len(idx)
-        if todo.any():
-            out[todo], par[todo] = self._search(points[todo])
-        return out, par
-
-
 def _area(x: np.ndarray, tri: np.ndarray) -> float:
     return float(0.5 * np.linalg.norm(_normals(x, tri), axis=1).sum())
 
@@ -553,8 +468,9 @@ def _face_min_angle(surface: int) -> float:
 
 def after_generate(ctx) -> None:
     """Hook (after the area-target pass): improve every meshed face (:func:`smooth_face`), worst smallest
-    angle first, until the job's soft deadline (on a loaded machine a large model gets part of the
-    faces: the worst go first); the faces whose mesh changed land in ``ctx.smoothed``."""
+    angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`; on a loaded
+    machine a large model gets part of the faces: the worst go first); the faces whose mesh changed land
+    in ``ctx.smoothed``."""
     import time
 
     import gmsh
@@ -564,16 +480,24 @@ def after_generate(ctx) -> None:
     target = opts.get("surface_ald")
     face_of = ctx.emap.face_of_surface
     kept = []
+    now = time.time()
+    end = now + max(MIN_BUDGET, BUDGET_SHARE * (now - ctx.started))
+    if ctx.job.deadline is not None:
+        end = min(end, ctx.job.deadline)
     meshed = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok]
     worst = {s: _face_min_angle(s) for s in meshed}
-    for s in sorted(meshed, key=lambda s: worst[s]):
-        if worst[s] >= CLIMB_BELOW:
-            break  # this face and the rest have no triangle worth moving
-        if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
-            break  # out of the job's time: the faces keep gmsh's triangles
+    todo = [s for s in sorted(meshed, key=lambda s: worst[s]) if worst[s] < CLIMB_BELOW]
+    size = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo}
+    left = sum(size.values())
+    for s in todo:  # worst smallest angle first; faces without a triangle worth moving are left alone
+        now = time.time()
+        if now > end:
+            break  # out of the optimiser's time: the faces left keep gmsh's triangles
+        share = max(FACE_SHARE, size[s] / left if left > 0 else 1.0)
+        left -= size[s]
         f = face_of.get(s, s)
         area = float(areas[f - 1]) if 1 <= f <= len(areas) else 0.0
-        if smooth_face(s, brep_area=area, target=target, deadline=ctx.job.deadline):
+        if smooth_face(s, brep_area=area, target=target, deadline=now + share * (end - now)):
             kept.append(f)
             ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
     ctx.smoothed = kept

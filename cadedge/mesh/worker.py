@@ -32,6 +32,7 @@ import os
 import pickle
 import sys
 import tempfile
+import time
 import traceback
 from dataclasses import dataclass, field
 from typing import Any
@@ -77,6 +78,7 @@ class JobContext:
     face: int = 0  # the face attempt under way (for "before_face" hooks)
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
+    started: float = field(default_factory=time.time)  # time.time() when the child took the job
 
 
 @dataclass
