@@ -57,7 +57,7 @@ FLIP_ROUNDS = 10
 #: gmsh's meshing), at least :data:`MIN_BUDGET` seconds, and never past the job's soft deadline. Each
 #: face (worst first) may use :data:`FACE_SHARE` of what is left, or more if its triangles are a larger
 #: share of those still to improve; a face out of time keeps its last stage's result (or gmsh's).
-BUDGET_SHARE = 3.0
+BUDGET_SHARE = 1.0
 MIN_BUDGET = 30.0
 FACE_SHARE = 0.5
 #: Rounds of undoing moves that made a triangle worse than before the pass (its nodes' neighbours moved
