@@ -7,7 +7,7 @@ on the same cylinders and boxes. Each face gets a few passes of:
 - edge swaps (:func:`flip_edges`): the diagonal of two triangles is swapped where that raises their
   smaller angle; curve segments are never swapped;
 - a "smart" Laplacian (:func:`smooth_nodes`): every interior node moves to the mean of its neighbours in
-  3-D, projected back onto the B-rep surface (``gmsh.model.getClosestPoint``), where the smallest angle
+  3-D, projected back onto the B-rep surface (:class:`~cadedge.mesh.project.Projector`), where the smallest angle
   of its triangles does not fall and none flips;
 - a local search (:func:`climb_nodes`): nodes of triangles under :data:`CLIMB_BELOW` degrees move to the
   best of 24 trial positions around them, the one that raises their worst angle most.
@@ -34,6 +34,7 @@ import numpy as np
 from scipy import sparse
 
 from .collapse import COLLAPSE_BELOW, collapse_edges
+from .project import Projector
 from .quality import triangle_angles
 
 #: Smoothing iterations per pass, and passes (edge swaps, then smoothing) per face.
@@ -52,6 +53,13 @@ CLIMB_BELOW = 45.0
 STEPS = (0.03, 0.1, 0.25)
 #: Edge-swap rounds per face and pass.
 FLIP_ROUNDS = 10
+#: The optimiser's time budget: this share of the time the job took before it (reading the shape, sizes,
+#: gmsh's meshing), at least :data:`MIN_BUDGET` seconds, and never past the job's soft deadline. Each
+#: face (worst first) may use :data:`FACE_SHARE` of what is left, or more if its triangles are a larger
+#: share of those still to improve; a face out of time keeps its last stage's result (or gmsh's).
+BUDGET_SHARE = 1.0
+MIN_BUDGET = 30.0
+FACE_SHARE = 0.5
 #: Rounds of undoing moves that made a triangle worse than before the pass (its nodes' neighbours moved
 #: too), after which the pass is undone as a whole.
 _UNDO_ROUNDS = 8
@@ -89,8 +97,8 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
                  iterations: int = ITERATIONS) -> tuple[np.ndarray, np.ndarray | None]:
     """Smart-Laplacian smoothing of the ``movable`` nodes of the triangles ``tri`` (indices into ``x``).
 
-    ``project(points (k, 3))`` returns the points moved onto the surface and their parametric coordinates
-    (k, d). Returns the new coordinates and the parametric coordinates of the movable nodes (NaN rows for
+    ``project(points (k, 3), rows (k,))`` returns the points (those of nodes ``rows``) moved onto the
+    surface and their parametric coordinates (k, d). Returns the new coordinates and the parametric coordinates of the movable nodes (NaN rows for
     nodes that stayed; ``None`` if nothing moved). A move stays only if no triangle of the node flips and
     the smallest angle of its triangles does not fall; moves that, with their neighbours', flip a triangle
     or bring it below the worst angle around it before the pass are undone.
@@ -110,7 +118,7 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         nrm0 = _normals(x, tri)
         node0 = _node_min(ang0, tri, n)
         target = (adj @ x)[mov] / deg[mov, None]
-        moved, uv = project(target)
+        moved, uv = project(target, mov)
         cand = x.copy()
         cand[mov] = moved
         ang1 = triangle_angles(cand, tri).min(axis=1)
@@ -268,7 +276,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         moved = np.flatnonzero(improves)
         if not len(moved):
             break
-        px, puv = project(best_pos[moved])
+        px, puv = project(best_pos[moved], moved)
         cand = x.copy()
         cand[moved] = px
         after = triangle_angles(cand, tri).min(axis=1)
@@ -292,16 +300,6 @@ def _near_bad(x: np.ndarray, tri: np.ndarray, movable: np.ndarray) -> np.ndarray
     for _ in range(2):
         near[tri[near[tri].any(axis=1)].ravel()] = True
     return near & movable
-
-
-def _project_on(surface: int):
-    import gmsh
-
-    def project(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        coords, uv = gmsh.model.getClosestPoint(2, surface, np.asarray(points, dtype=float).ravel().tolist())
-        return np.asarray(coords, dtype=float).reshape(-1, 3), np.asarray(uv, dtype=float).reshape(len(points), -1)
-
-    return project
 
 
 def _area(x: np.ndarray, tri: np.ndarray) -> float:
@@ -330,6 +328,8 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
     :class:`_Face` (``face`` is left as it is); stops when ``late()``."""
     x, tri, movable = face.x, face.tri, face.movable.copy()
     uv, moved = face.uv.copy(), face.moved.copy()
+    if isinstance(project, Projector):
+        project.uv = uv  # the nodes' current parameters start their projections
 
     def took(params: np.ndarray | None, rows: np.ndarray) -> None:
         if params is None or not params.shape[1]:
@@ -403,7 +403,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     if len(inner) and len(inner_uv) == 2 * len(inner):
         uv[lookup[inner]] = np.asarray(inner_uv, dtype=float).reshape(-1, 2)
     start = _Face(x0, tri0, movable, uv, np.zeros(len(tags), dtype=bool))
-    project = _project_on(surface)
+    project = Projector(surface)
 
     def late() -> bool:
         return deadline is not None and time.time() > deadline
@@ -468,8 +468,9 @@ def _face_min_angle(surface: int) -> float:
 
 def after_generate(ctx) -> None:
     """Hook (after the area-target pass): improve every meshed face (:func:`smooth_face`), worst smallest
-    angle first, until the job's soft deadline (on a loaded machine a large model gets part of the
-    faces: the worst go first); the faces whose mesh changed land in ``ctx.smoothed``."""
+    angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`; on a loaded
+    machine a large model gets part of the faces: the worst go first); the faces whose mesh changed land
+    in ``ctx.smoothed``."""
     import time
 
     import gmsh
@@ -479,16 +480,24 @@ def after_generate(ctx) -> None:
     target = opts.get("surface_ald")
     face_of = ctx.emap.face_of_surface
     kept = []
+    now = time.time()
+    end = now + max(MIN_BUDGET, BUDGET_SHARE * (now - ctx.started))
+    if ctx.job.deadline is not None:
+        end = min(end, ctx.job.deadline)
     meshed = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok]
     worst = {s: _face_min_angle(s) for s in meshed}
-    for s in sorted(meshed, key=lambda s: worst[s]):
-        if worst[s] >= CLIMB_BELOW:
-            break  # this face and the rest have no triangle worth moving
-        if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
-            break  # out of the job's time: the faces keep gmsh's triangles
+    todo = [s for s in sorted(meshed, key=lambda s: worst[s]) if worst[s] < CLIMB_BELOW]
+    size = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo}
+    left = sum(size.values())
+    for s in todo:  # worst smallest angle first; faces without a triangle worth moving are left alone
+        now = time.time()
+        if now > end:
+            break  # out of the optimiser's time: the faces left keep gmsh's triangles
+        share = max(FACE_SHARE, size[s] / left if left > 0 else 1.0)
+        left -= size[s]
         f = face_of.get(s, s)
         area = float(areas[f - 1]) if 1 <= f <= len(areas) else 0.0
-        if smooth_face(s, brep_area=area, target=target, deadline=ctx.job.deadline):
+        if smooth_face(s, brep_area=area, target=target, deadline=now + share * (end - now)):
             kept.append(f)
             ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
     ctx.smoothed = kept

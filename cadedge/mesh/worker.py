@@ -32,6 +32,7 @@ import os
 import pickle
 import sys
 import tempfile
+import time
 import traceback
 from dataclasses import dataclass, field
 from typing import Any
@@ -78,6 +79,7 @@ class JobContext:
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
     deliver: Any = None  # deliver(dim, id, corners): hand mesh to the parent as it is made (see run_job)
+    started: float = field(default_factory=time.time)  # time.time() when the child took the job
 
 
 @dataclass
