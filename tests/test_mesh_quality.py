@@ -176,16 +176,13 @@ def test_face_corners_get_matched_end_segments():
         assert all(np.any(np.all(np.isclose(new.points, p), axis=1)) for p in old.points)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 11 not met here: 38.7 degrees against gmsh tuned's 41.2 (see the "
-                   "docstring); the test passes, and strict xfail fails, once corner triangles are fixed")
 def test_a_cube_beside_a_cylinder_beats_gmsh_alone():
     """A cadquery cube beside a cylinder (two solids): gmsh alone, tuned to the same worst-face deficit,
     reaches 41.2 degrees at 1e-2 (`scripts/bench_mesh_fidelity.py` on this compound written to STEP).
-    Moves and swaps stopped at 38.8 (crowded fans beside the cylinder's seam and at the cube's corners);
-    with edge collapses, the local search up to 45 degrees and matched face corners cadedge got 42, but on
-    the merged boundary fit of the same round the cube's corners end with segments of 2.5 and 2.0 whose
-    corner triangle (all three nodes on the boundary, so no node move or collapse reaches it) has 38.7
-    degrees. Splitting such a triangle's inner edge and smoothing the new node would give about 43."""
+    Moves and swaps stopped at 38.8 (crowded fans beside the cylinder's seam and at the cube's corners).
+    The cube's corners end with boundary segments of 2.5 and 2.0 whose corner triangle has all three nodes
+    on the boundary (38.7 degrees, beyond any node move or collapse); the edge split of
+    :mod:`cadedge.mesh.corners` gives 42.3."""
     cube = cq.Workplane().box(10, 10, 10, centered=False).translate((-10, 0, 0)).val()
     cylinder = cq.Workplane().circle(5).extrude(10).translate((10, 5, 0)).val()
     result = mesh_shape(cq.Compound.makeCompound([cube, cylinder]).wrapped, ald=1e-2)

@@ -16,8 +16,9 @@ Only nodes within two rings of a triangle under :data:`CLIMB_BELOW` degrees move
 the costly part on B-spline faces); the rest of a face is left as gmsh made it. A face still under
 :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW` degrees then gets passes with edge collapses
 (:mod:`cadedge.mesh.collapse`: one interior node less where triangles crowd around a point, e.g. a
-90-degree face corner fanned out in three 30-degree wedges) and then a few more without, each stage kept
-only if the face's smallest angle rose.
+90-degree face corner fanned out in three 30-degree wedges) and edge splits (:mod:`cadedge.mesh.corners`:
+one interior node more where a triangle has all three nodes on the boundary, e.g. a face corner closed by
+one triangle), and then a few more without, each stage kept only if the face's smallest angle rose.
 
 Working in 3-D rather than in the surface's parameters treats nodes beside a seam like any other (gmsh's
 own ``Laplace2D`` and ``Relocate2D`` left the worst triangles of a cylinder, beside its seam, in place).
@@ -34,6 +35,7 @@ import numpy as np
 from scipy import sparse
 
 from .collapse import COLLAPSE_BELOW, collapse_edges
+from .corners import split_corner_triangles
 from .project import Projector
 from .quality import triangle_angles
 
@@ -323,8 +325,8 @@ class _Face:
 
 def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, late, *,
              collapse: bool = False) -> _Face:
-    """``passes`` times: edge swaps, edge collapses (with ``collapse``; see :mod:`cadedge.mesh.collapse`)
-    and swaps again, then smoothing and the local search of the nodes near bad triangles. Returns a new
+    """``passes`` times: edge swaps, edge collapses and edge splits (with ``collapse``; see
+    :mod:`cadedge.mesh.collapse` and :mod:`cadedge.mesh.corners`) and swaps again, then smoothing and the local search of the nodes near bad triangles. Returns a new
     :class:`_Face` (``face`` is left as it is); stops when ``late()``."""
     x, tri, movable = face.x, face.tri, face.movable.copy()
     uv, moved = face.uv.copy(), face.moved.copy()
@@ -347,6 +349,13 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
             took(params, np.arange(len(x)))
             if gone.any():
                 movable &= ~gone
+                tri = flip_edges(x, tri, fixed)
+            x, tri, movable, new_uv = split_corner_triangles(x, tri, movable, fixed, project)
+            if len(new_uv):  # new interior nodes: rows appended
+                uv = np.vstack([uv, new_uv])
+                moved = np.concatenate([moved, np.ones(len(new_uv), dtype=bool)])
+                if isinstance(project, Projector):
+                    project.uv = uv
                 tri = flip_edges(x, tri, fixed)
         active = _near_bad(x, tri, movable)
         if not active.any():
@@ -429,14 +438,18 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     if best is start:
         return False
     x, tri, movable, uv, moved = best.x, best.tri, best.movable, best.uv, best.moved
-    if len(tri) != len(tri0):  # nodes were removed: the face's interior is written again from scratch
+    if len(tri) != len(tri0) or len(x) != len(tags):  # nodes removed or added: the interior written anew
+        el = np.asarray(el_tags, dtype=np.int64)
+        if len(x) > len(tags):  # new nodes (edge splits) get new tags, their triangles too
+            tags = np.concatenate([tags, gmsh.model.mesh.getMaxNodeTag() + 1 + np.arange(len(x) - len(tags))])
+        if len(tri) > len(el):
+            el = np.concatenate([el, gmsh.model.mesh.getMaxElementTag() + 1 + np.arange(len(tri) - len(el))])
         keep = movable & np.bincount(tri.ravel(), minlength=len(tags)).astype(bool)
         rows = np.flatnonzero(keep)
         gmsh.model.mesh.clear([(2, surface)])
         params = [] if np.isnan(uv[rows]).any() else uv[rows].ravel().tolist()
         gmsh.model.mesh.addNodes(2, surface, tags[rows].tolist(), x[rows].ravel().tolist(), params)
-        gmsh.model.mesh.addElementsByType(surface, 2, np.asarray(el_tags)[:len(tri)].tolist(),
-                                          tags[tri].ravel().tolist())
+        gmsh.model.mesh.addElementsByType(surface, 2, el[:len(tri)].tolist(), tags[tri].ravel().tolist())
         return True
     changed = False
     for i in np.flatnonzero(moved & movable).tolist():

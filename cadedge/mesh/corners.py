@@ -1,0 +1,125 @@
+"""Edge splits: one interior node more where a triangle has all three nodes on the face's boundary.
+
+At a 90-degree face corner between boundary segments of 2.5 and 2.0, gmsh closes the corner with one
+triangle whose three nodes lie on the boundary (38.7 degrees). Nothing of it can move: every boundary node
+is an edge grid node, shared with the neighbouring face. Splitting the triangle's inner edge (the one that
+is not a curve segment) at a new interior node cuts the corner in two and gives the node freedom: placed
+well, about 43 degrees there; gmsh alone, with near-uniform sizes, gets 41. The same holds for any
+all-boundary triangle with an inner edge (a face's narrow end, a fan at a sharp corner).
+
+The split is made where the smallest angle of the four new triangles is not much below that of the two
+triangles they replace (:data:`MIN_GAIN`: the smoothing that follows settles them); the node is placed at the best of a few positions along the inner edge's normal
+in the face, each projected onto the surface first. Nodes on curves never move; the new node is interior,
+so the face stays conforming with its neighbours. The caller keeps the result only if the face's smallest
+angle rose (see :func:`cadedge.mesh.optimize.smooth_face`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .quality import triangle_angles
+
+#: All-boundary triangles under this many degrees are tried.
+SPLIT_BELOW = 42.0
+#: A split may lower the smallest angle there by up to this many degrees: its neighbours are not yet
+#: smoothed (as for the collapses: :data:`cadedge.mesh.collapse.MIN_GAIN`). A cube face's corner
+#: triangle (2.5 by 2.0, 38.7 degrees) whose neighbour's third node lies near the corner gives 28 degrees
+#: right after the split and 42.3 once smoothed; -8 left it unsplit.
+MIN_GAIN = -15.0
+#: Trial positions of the new node: the inner edge's midpoint moved into the neighbouring triangle by
+#: these shares of the edge's length.
+OFFSETS = (0.0, 0.1, 0.2, 0.3, 0.4)
+
+
+def _normal(p: np.ndarray) -> np.ndarray:
+    return np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+
+
+def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, fixed: set[tuple[int, int]],
+                           project, *, below: float = SPLIT_BELOW
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Split the inner edge of each triangle under ``below`` degrees whose three nodes are not
+    ``movable``, where that raises the smallest angle there (see the module doc). ``fixed`` holds the
+    curve segments as sorted node pairs; ``project(points (k, 3))`` returns the points on the surface and
+    their parametric coordinates (k, d).
+
+    Returns ``(x, tri, movable, params)``: coordinates with the new nodes appended, the triangles
+    (orientation kept), the movable mask extended (new nodes are movable), and the parametric coordinates
+    of the new nodes ((m, d) for the m appended rows, (0, 0) when nothing was split).
+    """
+    x = np.asarray(x, dtype=float)
+    tri = np.array(tri, dtype=np.int64)
+    movable = np.asarray(movable, dtype=bool)
+    none = (x, tri, movable, np.zeros((0, 0)))
+    if not len(tri):
+        return none
+    ang = triangle_angles(x, tri).min(axis=1)
+    bad = np.flatnonzero((ang < below) & ~movable[tri].any(axis=1))
+    if not len(bad):
+        return none
+    edge_tris: dict[tuple[int, int], list[int]] = {}
+    for t, (a, b, c) in enumerate(tri.tolist()):
+        for p, q in ((a, b), (b, c), (c, a)):
+            edge_tris.setdefault((min(p, q), max(p, q)), []).append(t)
+    touched = np.zeros(len(tri), dtype=bool)
+    new_x: list[np.ndarray] = []
+    new_uv: list[np.ndarray] = []
+    replaced: list[tuple[int, np.ndarray, np.ndarray]] = []  # triangle row, its first and second halves
+    for t in bad[np.argsort(ang[bad])].tolist():
+        if touched[t]:
+            continue
+        best = None
+        for k in range(3):
+            a, b = int(tri[t, k]), int(tri[t, (k + 1) % 3])
+            key = (min(a, b), max(a, b))
+            pair = edge_tris.get(key, [])
+            if key in fixed or len(pair) != 2:
+                continue
+            u = pair[0] if pair[1] == t else pair[1]
+            if touched[u]:
+                continue
+            old = min(ang[t], ang[u])
+            c = int(tri[t, (k + 2) % 3])
+            w = next(int(v) for v in tri[u] if v != a and v != b)
+            mid = 0.5 * (x[a] + x[b])
+            inward = x[w] - mid  # into the neighbouring triangle, within the face
+            inward -= np.dot(inward, x[b] - x[a]) / np.dot(x[b] - x[a], x[b] - x[a]) * (x[b] - x[a])
+            norm = np.linalg.norm(inward)
+            if not norm > 0:
+                continue
+            length = np.linalg.norm(x[b] - x[a])
+            trial = np.array([mid + s * length * inward / norm for s in OFFSETS])
+            on, uv = project(trial)
+            halves = []
+            for row in (t, u):  # each triangle (.., a, .., b, ..) -> its a-half and its b-half, orientation kept
+                r = tri[row]
+                halves.append((np.where(r == b, -1, r), np.where(r == a, -1, r)))
+            normals0 = _normal(x[[tri[t], tri[t], tri[u], tri[u]]])
+            for pos, puv in zip(on, uv):
+                quads = np.array([h for pair_ in halves for h in pair_])
+                p = np.where((quads == -1)[..., None], pos, x[np.maximum(quads, 0)])
+                if np.any(np.einsum("ij,ij->i", _normal(p), normals0) <= 0):
+                    continue
+                q = float(triangle_angles(p.reshape(-1, 3), np.arange(12).reshape(-1, 3)).min())
+                if q > old + MIN_GAIN and (best is None or q > best[0]):
+                    best = (q, t, u, pos, puv, halves)
+        if best is None:
+            continue
+        _, t, u, pos, puv, halves = best
+        node = len(x) + len(new_x)
+        new_x.append(pos)
+        new_uv.append(puv)
+        for row, (first, second) in zip((t, u), halves):
+            replaced.append((row, np.where(first == -1, node, first), np.where(second == -1, node, second)))
+        touched[[t, u]] = True
+    if not new_x:
+        return none
+    out = tri.copy()
+    extra = []
+    for row, first, second in replaced:
+        out[row] = first
+        extra.append(second)
+    x = np.vstack([x, np.array(new_x)])
+    movable = np.concatenate([movable, np.ones(len(new_x), dtype=bool)])
+    return x, np.vstack([out, np.array(extra)]), movable, np.array(new_uv)

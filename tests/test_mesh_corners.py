@@ -1,0 +1,51 @@
+"""Edge splits of all-boundary triangles (cadedge/mesh/corners.py), on small planar meshes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cadedge.mesh.corners import split_corner_triangles
+from cadedge.mesh.optimize import climb_nodes
+from cadedge.mesh.quality import triangle_angles
+
+
+def _plane(points: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    p = np.asarray(points, dtype=float)
+    return p, p[:, :2]
+
+
+def _corner() -> tuple[np.ndarray, np.ndarray, np.ndarray, set]:
+    """A 90-degree face corner closed by one triangle between boundary segments of 2.5 and 2.0 (nodes
+    0, 1, 2; 38.7 degrees), and an interior node 3 beyond its inner edge."""
+    x = np.array([[0, 0, 0], [2.5, 0, 0], [0, 2, 0], [2.4, 2.2, 0]], dtype=float)
+    tri = np.array([[0, 1, 2], [1, 3, 2]])
+    movable = np.array([False, False, False, True])
+    return x, tri, movable, {(0, 1), (0, 2)}
+
+
+def test_a_corner_triangle_is_split_and_the_new_node_placed_to_beat_it():
+    x, tri, movable, fixed = _corner()
+    before = triangle_angles(x, tri).min()
+    x2, tri2, movable2, uv = split_corner_triangles(x, tri, movable, fixed, _plane)
+    assert len(x2) == 5 and len(tri2) == 4 and movable2.tolist() == [False, False, False, True, True]
+    assert np.allclose(x2[:4], x) and uv.shape == (1, 2)
+    # orientation kept: every new triangle's normal points the same way as before
+    normals = np.cross(x2[tri2[:, 1]] - x2[tri2[:, 0]], x2[tri2[:, 2]] - x2[tri2[:, 0]])
+    assert (normals[:, 2] > 0).all()
+    # the boundary segments are still edges of the mesh, the corner node keeps two triangles
+    edges = {tuple(sorted((int(t[i]), int(t[(i + 1) % 3])))) for t in tri2 for i in range(3)}
+    assert fixed <= edges and (1, 2) not in edges
+    x3, _ = climb_nodes(x2, tri2, movable2, _plane)
+    assert triangle_angles(x3, tri2).min() > before + 2.5  # 38.7 -> about 41.8
+
+
+def test_no_split_of_a_curve_segment_or_a_triangle_with_an_interior_node():
+    x, tri, movable, fixed = _corner()
+    whole = fixed | {(1, 2)}  # the inner edge is a curve segment too: nothing may change
+    x2, tri2, movable2, uv = split_corner_triangles(x, tri, movable, whole, _plane)
+    assert x2 is x or np.array_equal(x2, x)
+    assert np.array_equal(tri2, tri) and len(uv) == 0
+    inner = movable.copy()
+    inner[0] = True  # the corner triangle has a node that can move: smoothing's job, not a split's
+    x2, tri2, _, uv = split_corner_triangles(x, tri, inner, fixed, _plane)
+    assert np.array_equal(tri2, tri) and len(uv) == 0
