@@ -191,63 +191,59 @@ def test_a_cube_beside_a_cylinder_beats_gmsh_alone():
     assert triangle_angles(result.nodes, result.triangles).min() >= 40.0
 
 
-def test_projector_walks_from_each_nodes_parameters_and_searches_only_across_the_seam():
+@pytest.fixture
+def gmsh_cylinder():
+    """gmsh with a meshed cylinder of radius 1: yields the module and the cylinder's side surface."""
     gmsh = pytest.importorskip("gmsh")
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, 2, 1)
+        gmsh.model.occ.synchronize()
+        side = next(t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) == "Cylinder")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.3)
+        gmsh.model.mesh.generate(2)
+        yield gmsh, side
+    finally:
+        gmsh.finalize()
+
+
+def test_projector_walks_from_each_nodes_parameters_and_searches_only_across_the_seam(gmsh_cylinder):
+    gmsh, side = gmsh_cylinder
     from cadedge.mesh.project import Projector
 
-    gmsh.initialize(["-noenv"], readConfigFiles=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, 2, 1)
-        gmsh.model.occ.synchronize()
-        side = next(t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) == "Cylinder")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.3)
-        gmsh.model.mesh.generate(2)
-        _, xyz, uv = gmsh.model.mesh.getNodes(2, side, includeBoundary=False, returnParametricCoord=True)
-        x, uv = np.reshape(xyz, (-1, 3)), np.reshape(uv, (-1, 2))
-        lo, hi = gmsh.model.getParametrizationBounds(2, side)
-        u_span = hi[0] - lo[0]
-        inside = (uv[:, 0] > lo[0] + 0.2 * u_span) & (uv[:, 0] < hi[0] - 0.2 * u_span)
-        rows = np.flatnonzero(inside)
-        moved = x[rows] * np.array([1.02, 0.99, 1.0]) + np.array([0.01, 0.02, 0.03])  # off the surface
-        project = Projector(side, uv)
-        on, par = project(moved, rows)
-        assert project.searched == 0 and project.walked == len(rows)
-        ref, _ = project._search(moved)
-        assert np.abs(on - ref).max() < 1e-7
-        assert np.abs(np.hypot(on[:, 0], on[:, 1]) - 1.0).max() < 1e-9
-        assert np.abs(np.asarray(gmsh.model.getValue(2, side, par.ravel().tolist())).reshape(-1, 3) - on).max() < 1e-12
-        # a node just before the seam, pushed across it: its walk leaves the bounds, so it is searched
-        seam = int(np.argmax(uv[:, 0]))
-        across = np.asarray(gmsh.model.getValue(2, side, [lo[0] + 0.05 * u_span, uv[seam, 1]]))
-        project.searched = 0
-        on, _ = project(across[None], np.array([seam]))
-        assert project.searched == 1 and np.abs(on[0] - across).max() < 1e-7
-    finally:
-        gmsh.finalize()
+    _, xyz, uv = gmsh.model.mesh.getNodes(2, side, includeBoundary=False, returnParametricCoord=True)
+    x, uv = np.reshape(xyz, (-1, 3)), np.reshape(uv, (-1, 2))
+    lo, hi = gmsh.model.getParametrizationBounds(2, side)
+    u_span = hi[0] - lo[0]
+    inside = (uv[:, 0] > lo[0] + 0.2 * u_span) & (uv[:, 0] < hi[0] - 0.2 * u_span)
+    rows = np.flatnonzero(inside)
+    moved = x[rows] * np.array([1.02, 0.99, 1.0]) + np.array([0.01, 0.02, 0.03])  # off the surface
+    project = Projector(side, uv)
+    on, par = project(moved, rows)
+    assert project.searched == 0 and project.walked == len(rows)
+    ref, _ = project._search(moved)
+    assert np.abs(on - ref).max() < 1e-7
+    assert np.abs(np.hypot(on[:, 0], on[:, 1]) - 1.0).max() < 1e-9
+    assert np.abs(np.asarray(gmsh.model.getValue(2, side, par.ravel().tolist())).reshape(-1, 3) - on).max() < 1e-12
+    # a node just before the seam, pushed across it: its walk leaves the bounds, so it is searched
+    seam = int(np.argmax(uv[:, 0]))
+    across = np.asarray(gmsh.model.getValue(2, side, [lo[0] + 0.05 * u_span, uv[seam, 1]]))
+    project.searched = 0
+    on, _ = project(across[None], np.array([seam]))
+    assert project.searched == 1 and np.abs(on[0] - across).max() < 1e-7
 
 
-def test_a_face_out_of_time_keeps_gmshs_triangles():
-    gmsh = pytest.importorskip("gmsh")
+def test_a_face_out_of_time_keeps_gmshs_triangles(gmsh_cylinder):
+    gmsh, side = gmsh_cylinder
     from cadedge.mesh.optimize import smooth_face
 
-    gmsh.initialize(["-noenv"], readConfigFiles=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, 2, 1)
-        gmsh.model.occ.synchronize()
-        side = next(t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) == "Cylinder")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.3)
-        gmsh.model.mesh.generate(2)
+    def mesh() -> tuple[np.ndarray, np.ndarray]:
+        _, xyz, _ = gmsh.model.mesh.getNodes(2, side, includeBoundary=True)
+        return np.asarray(xyz), np.asarray(gmsh.model.mesh.getElementsByType(2, side)[1])
 
-        def mesh() -> tuple[np.ndarray, np.ndarray]:
-            _, xyz, _ = gmsh.model.mesh.getNodes(2, side, includeBoundary=True)
-            return np.asarray(xyz), np.asarray(gmsh.model.mesh.getElementsByType(2, side)[1])
-
-        before = mesh()
-        assert not smooth_face(side, deadline=0.0)  # a budget of zero
-        after = mesh()
-        assert np.array_equal(before[0], after[0]) and np.array_equal(before[1], after[1])
-        assert smooth_face(side)  # with time, the same face does change
-    finally:
-        gmsh.finalize()
+    before = mesh()
+    assert not smooth_face(side, deadline=0.0)  # a budget of zero
+    after = mesh()
+    assert np.array_equal(before[0], after[0]) and np.array_equal(before[1], after[1])
+    assert smooth_face(side)  # with time, the same face does change
