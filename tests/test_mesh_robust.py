@@ -265,3 +265,19 @@ def test_past_the_deadline_only_faces_meshed_before_are_replayed(cylinder):
     assert outcome[1].ok and not outcome[2].ok and not outcome[3].ok
     assert "out of time" in outcome[3].attempts[-1][1]
     assert set(np.unique(res.triangle_faces)) == {1}
+
+
+def test_past_the_deadline_with_nothing_meshed_the_first_faces_are_still_tried(cylinder):
+    """A child restarted after the soft deadline when nothing was meshed before (its batch of first
+    attempts hung, as on mesh_T106_V3 in sizes mode under load) meshes faces until one is meshed, so the
+    job delivers a mesh; the rest are named out of time."""
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
+                  field=SizeField(cylinder), mode="nodes", skip={}, known_ok={}, deadline=time.time() - 1)
+    res = run_job(job)
+    meshed = [o.face for o in res.faces if o.ok]
+    assert len(meshed) == 1 and len(res.triangles)
+    assert all("out of time" in o.attempts[-1][1] for o in res.faces if not o.ok)

@@ -336,7 +336,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     ``finished(face, k, reason or None)`` after it, so a watchdog outside the process knows which attempt
     was running when gmsh hung or crashed, and what an earlier run achieved. After ``deadline``
     (``time.time()``) no attempt starts, except ``known_ok[face]``, the strategy that meshed that face in
-    an earlier run. ``own_curves`` collects the curves whose imposed mesh was replaced by gmsh's own.
+    an earlier run, and, while no face at all is meshed, the first strategy of faces never tried alone
+    (so that a job whose first batch hung still delivers a mesh). ``own_curves`` collects the curves whose imposed mesh was replaced by gmsh's own.
 
     With ``batch_started``, the first strategy meshes faces in batches (faces in ``no_batch`` excepted):
     ``batch_started(faces)`` is called before each chunk, ``prepare(face, k)`` sets a face's options (it is
@@ -373,7 +374,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 if k in skip.get(rec.face, {}):
                     rec.attempts.append((strategy.name, skip[rec.face][k]))
                     continue
-                if deadline is not None and time.time() > deadline and known_ok.get(rec.face) != k:
+                rescue = k == 0 and rec.face not in skip and not known_ok and not any(o.ok for o in out.values())
+                if deadline is not None and time.time() > deadline and known_ok.get(rec.face) != k and not rescue:
                     rec.attempts.append((strategy.name, "not tried: out of time (timeout)"))
                     break
                 started(rec.face, k)
