@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .collapse import _normal
 from .quality import triangle_angles
 
 #: All-boundary triangles under this many degrees are tried.
@@ -30,10 +31,6 @@ MIN_GAIN = -15.0
 #: Trial positions of the new node: the inner edge's midpoint moved into the neighbouring triangle by
 #: these shares of the edge's length.
 OFFSETS = (0.0, 0.1, 0.2, 0.3, 0.4)
-
-
-def _normal(p: np.ndarray) -> np.ndarray:
-    return np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
 
 
 def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, fixed: set[tuple[int, int]],
