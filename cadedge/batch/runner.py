@@ -10,6 +10,13 @@ reports it processing on a worker. Failures are isolated per input:
   LocalCluster allows no retries (``allowed-failures`` 0), so a crashing file costs one worker restart;
 - the task outlives ``timeout``: a hung OCCT call cannot be interrupted in its thread, so the worker
   running it is restarted through its nanny and the input is failed as timed out.
+
+A finished task's summary stays on its worker until fetched, and a worker stuck in C code holding
+the GIL answers nothing, not even for a summary it already holds. So summaries are fetched before
+the freed threads get new jobs (a next job hanging on the same worker would otherwise block the
+fetch, and with it the loop that times the hang out), and each fetch is bounded: a summary that
+cannot be fetched in time is tried again on later rounds, and if its worker is restarted the
+scheduler computes it again.
 """
 
 from __future__ import annotations
@@ -29,6 +36,8 @@ from typing import Any, Callable, Iterator
 from ..errors import InputError
 
 POLL_SECONDS = 0.2
+#: How long a finished task's summary is waited for on the round it ends, and on later rounds.
+FETCH_SECONDS, REFETCH_SECONDS = 2.0, 0.05
 #: How long the cluster's thread count is trusted before asking the scheduler again (it is asked at
 #: once after a failure, which may mean a worker left).
 THREADS_SECONDS = 2.0
@@ -225,18 +234,34 @@ class _Running:
     started: float | None = None
 
 
+def _fetch(future: Any, wait: float) -> tuple[dict[str, Any] | None, str | None] | None:
+    """The summary of a finished task, or its failure reason; None if not fetched within ``wait``
+    seconds (its worker is not answering, or its lost result is being computed again)."""
+    from distributed.client import FutureCancelledError
+
+    try:
+        return future.result(timeout=wait), None
+    except TimeoutError:
+        return None
+    except FutureCancelledError:
+        return None, _failure_reason(future)
+    except Exception:  # the task, computed again after its worker left, failed this time
+        return None, _failure_reason(future)
+
+
 def run_jobs(client: Any, jobs: list[Job], task: Task, options: dict[str, Any], *, timeout: float,
              on_outcome: Callable[[Outcome], None]) -> None:
     """Run ``task(job.input, job.output, options)`` for every job; call ``on_outcome`` as each ends.
 
     ``on_outcome`` runs in this (the client) process, in completion order; it is where the index is
-    written, so the index has a single writer. When tasks end, the freed worker threads get their
-    next jobs first; fetching the summaries and recording them follow while those run.
+    written, so the index has a single writer. When tasks end, their summaries are fetched, the freed
+    worker threads get their next jobs, and the outcomes are recorded while those run.
     """
     from distributed import wait
 
     todo = deque(jobs)
     running: dict[Any, _Running] = {}
+    unfetched: dict[Any, _Running] = {}  # finished, summary not fetched yet
     threads, asked = 0, -math.inf
 
     def top_up(refresh: bool) -> None:
@@ -245,29 +270,41 @@ def run_jobs(client: Any, jobs: list[Job], task: Task, options: dict[str, Any], 
             return
         if refresh or monotonic() - asked > THREADS_SECONDS:
             threads, asked = max(1, sum(client.nthreads().values())), monotonic()
-        while todo and len(running) < threads:
+        while todo and len(running) + len(unfetched) < threads:
             job = todo.popleft()
             future = client.submit(task, job.input, job.output, options, pure=False,
                                    key=f"cadedge-batch-{uuid.uuid4().hex}")
             running[future] = _Running(job, monotonic())
 
+    def elapsed(run: _Running, now: float) -> float:
+        return now - (run.started if run.started is not None else run.submitted)
+
     top_up(True)
-    while todo or running:
+    while todo or running or unfetched:
         try:
             wait(list(running), timeout=POLL_SECONDS, return_when="FIRST_COMPLETED")
         except TimeoutError:
             pass
         ended = {future: running.pop(future) for future in [f for f in running if f.done()]}
-        # a failure may mean a worker left: ask for the threads again rather than queue on a busy one
-        top_up(any(future.status != "finished" for future in ended))
-        now = monotonic()
-        for future, run in ended.items():
-            elapsed = now - (run.started if run.started is not None else run.submitted)
-            if future.status == "finished":
-                summary = future.result()
-                on_outcome(Outcome(run.job, "ok", summary, None, float(summary.get("seconds", elapsed))))
+        failed = {future: run for future, run in ended.items() if future.status != "finished"}
+        fetched = []
+        for future, run in [*unfetched.items(), *((f, r) for f, r in ended.items() if f not in failed)]:
+            got = _fetch(future, REFETCH_SECONDS if future in unfetched else FETCH_SECONDS)
+            if got is None:
+                unfetched[future] = run
             else:
-                on_outcome(Outcome(run.job, "failed", None, _failure_reason(future), elapsed))
+                unfetched.pop(future, None)
+                fetched.append((future, run, *got))
+        # a failure may mean a worker left: ask for the threads again rather than queue on a busy one
+        top_up(bool(failed) or any(error is not None for *_, error in fetched))
+        now = monotonic()
+        for future, run, summary, error in fetched:
+            if error is None:
+                on_outcome(Outcome(run.job, "ok", summary, None, float(summary.get("seconds", elapsed(run, now)))))
+            else:
+                on_outcome(Outcome(run.job, "failed", None, error, elapsed(run, now)))
+        for future, run in failed.items():
+            on_outcome(Outcome(run.job, "failed", None, _failure_reason(future), elapsed(run, now)))
         if any(run.started is None for run in running.values()):
             processing = set().union(*client.processing().values())
             for future, run in running.items():
