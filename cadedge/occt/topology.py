@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import functools
 
+import numpy as np
+
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.Standard import Standard_Failure
@@ -17,6 +19,7 @@ from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
 
 from ..errors import GeometryError
+from . import shapedump
 from .compat import (TopoDS, TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape,
                      TopTools_ListOfShape)
 
@@ -67,10 +70,27 @@ class Topology:
     is (first, last) vertex id in that edge's parameter direction. Methods take 0-based indices.
     """
 
-    def __init__(self, shape: TopoDS_Shape):
+    def __init__(self, shape: TopoDS_Shape, *, dump: bool = True):
         if shape is None or shape.IsNull():
             raise GeometryError("null shape: nothing to take the topology of")
         self.shape = shape
+        self._seam: list[bool] | None = None  # computed on first use: refining does not need it
+        #: The shape read in one call (:mod:`cadedge.occt.shapedump`), or None where it was walked through OCP.
+        self.dump = shapedump.read(shape) if dump else None
+        if self.dump is None:
+            self._walk(shape)
+            return
+        d = self.dump
+        self.edges, self.vertices, self.faces = d.edges, d.vertices, d.faces
+        self.edge_faces: list[list[int]] = d.edge_faces
+        missing = np.flatnonzero(~d.edge_vertices.all(axis=1))
+        if len(missing):
+            raise GeometryError(f"edge {missing[0] + 1} has no vertex at one end; cannot anchor its grid")
+        self.edge_vertices: list[tuple[int, int]] = list(map(tuple, d.edge_vertices.tolist()))
+        self._degenerate = d.degenerate.tolist()
+
+    def _walk(self, shape: TopoDS_Shape) -> None:
+        """The topology through OCP calls (about 10 per edge), for the shapes the dump does not take."""
         vmap, fmap = (_indexed(shape, k) for k in (TopAbs_VERTEX, TopAbs_FACE))
         ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
         TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
@@ -87,7 +107,7 @@ class Topology:
         self.faces: list[TopoDS_Face] = [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
         self.edge_faces: list[list[int]] = []
         self.edge_vertices: list[tuple[int, int]] = []
-        self._seam: list[bool] | None = None  # computed on first use: refining does not need it
+        self._degenerate: list[bool] | None = None
         first, last = TopoDS_Vertex(), TopoDS_Vertex()  # filled by TopExp::Vertices for each edge
         for i in range(1, ancestors.Extent() + 1):
             edge = forward(key(i))
@@ -117,6 +137,8 @@ class Topology:
 
     def is_degenerate(self, i: int) -> bool:
         """True for an edge collapsed to a point (``BRep_Tool::Degenerated``)."""
+        if self._degenerate is not None:
+            return self._degenerate[i]
         return bool(BRep_Tool.Degenerated_s(self.edges[i]))
 
     def is_closed(self, i: int) -> bool:
