@@ -66,10 +66,10 @@ def breakdown(path: Path, eps: float, repeats: int, clock=time.perf_counter) -> 
         timed("refine_shape", lambda: refine_shape(shape, ald=eps))
         topo = timed("topology", lambda: Topology(shape))
         rows = [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)]
-        table = timed("edge table", lambda: EdgeTable(topo.edges, rows))
+        table = timed("edge table", lambda: EdgeTable(topo.edges, rows, topo.dump))
         timed("check", table._check)
-        timed("lengths", lambda: [GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL)
-                                  for ad, (a, b) in zip(table.adaptors, table.domain.tolist())])
+        timed("lengths", lambda: [GCPnts_AbscissaPoint.Length_s(table.adaptor(r), a, b, LENGTH_TOL)
+                                  for r, (a, b) in enumerate(table.domain.tolist())])
         n = len(table)
         ends = np.zeros((n, 3))
         timed("compiled refine", lambda: refine_table(table, slice(0, n), np.full(n, eps), ends, ends))

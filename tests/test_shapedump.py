@@ -151,3 +151,15 @@ def test_a_corrupt_or_foreign_stream_is_refused_never_read_past_its_end():
             parse_shapes(bytes(noisy), root, 0)
         except ValueError:
             pass
+
+
+@pytest.mark.parametrize("path", sorted(FIXTURES.glob("*.step")) + corpus_params(), ids=lambda p: getattr(p, "name", p))
+def test_edge_table_rows_from_the_dump_equal_those_read_through_adaptors(path):
+    from cadedge.occt.edgetable import EdgeTable
+
+    topo = Topology(load_shape(path).shape)
+    rows = [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)]
+    a, b = EdgeTable(topo.edges, rows, topo.dump), EdgeTable(topo.edges, rows)
+    assert a.rows == b.rows and a.kinds == b.kinds
+    for name in ("kind", "gofs", "ints", "gdata", "domain", "hofs", "hdata", "exact"):
+        assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=True), name

@@ -14,7 +14,7 @@ by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
@@ -29,8 +29,23 @@ from .. import explore, kernels, target
 from .curvedump import CIRCLE, DEGREE, DIM, KIND, KNOTS, PERIODIC, TYPE, CurveSet
 from .edgecurve import CONIC_ROOTS, LENGTH_TOL, SPAN_ROOTS, EdgeCurve
 from .fasteval import CHECK_POINTS, RTOL
+from .shapedump import ShapeDump
 
 LINE, CONIC, SPLINE = 0, 1, 2
+#: The adaptor's curve type of each curve type the table reads, by BinTools type code.
+GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 6: GeomAbs_BezierCurve, 7: GeomAbs_BSplineCurve}
+
+
+def _from_dump(dump: ShapeDump, indices: np.ndarray) -> np.ndarray:
+    """Which of the edges ``indices`` the dump gives a row as their adaptor would: a 3-D curve of a type the
+    table reads, not periodic (the per-edge path makes a periodic spline's non-periodic copy), not
+    wrapped in a trimmed curve (the adaptor unwraps it), and a range the adaptor accepts (first <= last)."""
+    c = dump.edge_curve[indices]
+    if not len(dump.curves.meta):
+        return np.zeros(len(indices), dtype=bool)
+    meta = dump.curves.meta[np.maximum(c, 1) - 1]
+    first, last = dump.edge_range[indices].T
+    return (c > 0) & (meta[:, KIND] >= 0) & (meta[:, PERIODIC] == 0) & (first <= last)
 
 
 class EdgeTable:
@@ -41,8 +56,26 @@ class EdgeTable:
     exploration starts from) go with them. ``adaptors[k]`` and ``kinds[k]`` belong to row ``k``.
     """
 
-    def __init__(self, edges: list, indices: list[int]):
+    def __init__(self, edges: Sequence, indices: list[int], dump: ShapeDump | None = None):
+        self._edges = edges
         rows, adaptors, kinds, lengths, domain, ids, splines = [], [], [], [], [], [], {}
+        parts = [dump.curves] if dump is not None else []
+        base = len(dump.curves.meta) if dump is not None else 0  # the curves' indices continue after the dump's
+        if dump is not None:  # the rows the dump holds, without an OCP call
+            indices = np.asarray(indices, dtype=np.int64)
+            taken = _from_dump(dump, indices)
+            rows, ids = indices[taken].tolist(), dump.edge_curve[indices[taken]].tolist()
+            domain = dump.edge_range[indices[taken]].tolist()
+            kinds = [GEOMABS[t] for t in dump.curves.meta[np.asarray(ids, dtype=np.int64) - 1, TYPE].tolist()]
+            adaptors, lengths = [None] * len(rows), [math.nan] * len(rows)
+            for k, t in enumerate(kinds):  # OCCT's length, as the per-edge path below takes it
+                if t != GeomAbs_Line and t != GeomAbs_Circle:
+                    try:
+                        adaptors[k] = ad = BRepAdaptor_Curve(edges[rows[k]])
+                        lengths[k] = float(GCPnts_AbscissaPoint.Length_s(ad, *domain[k], LENGTH_TOL))
+                    except Standard_Failure:
+                        rows[k] = -1  # left to the per-edge path, as below
+            indices = indices[~taken].tolist()
         curves = CurveSet()
         add = curves.add
         for i in indices:
@@ -65,7 +98,7 @@ class EdgeTable:
                     continue
                 if t != GeomAbs_Line and t != GeomAbs_Circle:  # (a line's and a circle's are set below)
                     length = float(GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL))
-                index = add(curve)
+                index = base + add(curve)
             except Standard_Failure:
                 continue  # the per-edge path reports what OCCT cannot do
             if t == GeomAbs_BSplineCurve:
@@ -76,9 +109,16 @@ class EdgeTable:
             ids.append(index)
             domain.append((a, b))
             lengths.append(length)
-        parsed = curves.curves()
-        meta, numbers = parsed.meta, parsed.numbers
-        begin, end = parsed.offsets[:-1].copy(), parsed.offsets[1:].copy()
+        if dump is not None:  # both kinds of rows in edge order, without the failed ones
+            order = [k for k in sorted(range(len(rows)), key=rows.__getitem__) if rows[k] >= 0]
+            rows, adaptors, kinds, ids, domain, lengths = ([x[k] for k in order] for x in
+                                                           (rows, adaptors, kinds, ids, domain, lengths))
+        parts.append(curves.curves())
+        meta = np.concatenate([p.meta for p in parts])
+        shift = np.cumsum([0] + [len(p.numbers) for p in parts])
+        begin = np.concatenate([p.offsets[:-1] + at for p, at in zip(parts, shift)])
+        end = np.concatenate([p.offsets[1:] + at for p, at in zip(parts, shift)])
+        numbers = np.concatenate([p.numbers for p in parts])
         periodic = {}  # curve index -> (period, the same curve made non-periodic)
         for index, curve in splines.items():
             if meta[index - 1, PERIODIC]:
@@ -107,7 +147,7 @@ class EdgeTable:
                 hint = _periodic_knots(splines[index], *domain[r])
                 hints += hint
                 hint_sizes[r] = len(hint)
-        self.rows, self.adaptors, self.kinds = rows, adaptors, kinds
+        self.rows, self.adaptors, self.kinds = rows, adaptors, kinds  # adaptors[k] None until needed
         self.kind = meta[c, KIND].copy()
         self.gofs = gofs
         self.ints = meta[c][:, [DEGREE, KNOTS, DIM]].copy()
@@ -123,6 +163,13 @@ class EdgeTable:
 
     def __len__(self) -> int:
         return len(self.rows)
+
+    def adaptor(self, r: int) -> BRepAdaptor_Curve:
+        """Row ``r``'s ``BRepAdaptor_Curve``, built on first use."""
+        ad = self.adaptors[r]
+        if ad is None:
+            ad = self.adaptors[r] = BRepAdaptor_Curve(self._edges[self.rows[r]])
+        return ad
 
     def evaluate(self, row: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Points (len(u), 3) of the edges of table rows ``row`` (grouped, any order) at ``u``."""
@@ -144,8 +191,8 @@ class EdgeTable:
         rows: list[tuple[float, float, float]] = []
         point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
         coord = point.Coord
-        for r, ad in enumerate(self.adaptors):
-            d0 = ad.D0
+        for r in range(n):
+            d0 = self.adaptor(r).D0
             try:
                 for x in values[r * CHECK_POINTS:(r + 1) * CHECK_POINTS]:
                     d0(x, point)
@@ -204,7 +251,7 @@ class TableCurves(Mapping):
             r = self._row[eid]  # KeyError for an id with no curve
             t = self._table
             rows = np.full(1, r, dtype=np.int64)
-            curve = EdgeCurve.from_parts(self._edges[t.rows[r]], eid, t.adaptors[r], tuple(t.domain[r].tolist()),
+            curve = EdgeCurve.from_parts(self._edges[t.rows[r]], eid, t.adaptor(r), tuple(t.domain[r].tolist()),
                                          t.kinds[r], lambda u: t.evaluate(np.broadcast_to(rows, len(u)), u))
             self._ready[eid] = curve
         return curve

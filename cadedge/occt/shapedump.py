@@ -72,9 +72,9 @@ class ShapeDump:
         self.edge_vertices = edges[:, 2:4]
         self.degenerate = edges[:, 4].astype(bool)
         self.edge_tolerance = ereal[:, 0]
-        self.edge_range = ereal[:, 1:]
+        self.edge_range = np.ascontiguousarray(ereal[:, 1:])
         self.vertex_tolerance = vreal[:, 0]
-        self.vertex_points = vreal[:, 1:]
+        self.vertex_points = np.ascontiguousarray(vreal[:, 1:])
         ids, bounds = np.frombuffer(fids, dtype=np.int64).tolist(), np.frombuffer(fofs, dtype=np.int64).tolist()
         self.edge_faces = [ids[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
         self.edges = LazyShapes(shape_set, edges[:, 0].tolist(), [int(TopAbs_FORWARD)] * len(edges), TopoDS.Edge_s)

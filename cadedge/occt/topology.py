@@ -124,6 +124,18 @@ class Topology:
                 raise GeometryError(f"edge {i} has no vertex at one end; cannot anchor its grid")
             self.edge_vertices.append((v1, v2))
 
+    def vertex_points(self) -> np.ndarray:
+        """The vertices' points (n, 3), as ``BRep_Tool::Pnt`` gives them."""
+        if self.dump is not None:
+            return self.dump.vertex_points
+        return np.array([BRep_Tool.Pnt_s(v).Coord() for v in self.vertices], dtype=float).reshape(-1, 3)
+
+    def tolerances(self) -> tuple[list[float], list[float]]:
+        """The edges' and the vertices' tolerances (``BRep_Tool::Tolerance``)."""
+        if self.dump is not None:
+            return self.dump.edge_tolerance.tolist(), self.dump.vertex_tolerance.tolist()
+        return ([BRep_Tool.Tolerance_s(e) for e in self.edges], [BRep_Tool.Tolerance_s(v) for v in self.vertices])
+
     def curve_type(self, i: int) -> str:
         """OCCT's curve type name of edge ``i`` (0-based), e.g. "Line", "BSplineCurve".
 
