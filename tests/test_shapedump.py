@@ -163,3 +163,43 @@ def test_edge_table_rows_from_the_dump_equal_those_read_through_adaptors(path):
     assert a.rows == b.rows and a.kinds == b.kinds
     for name in ("kind", "gofs", "ints", "gdata", "domain", "hofs", "hdata", "exact"):
         assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=True), name
+
+
+def _table(name: str):
+    from cadedge.occt.edgetable import EdgeTable
+
+    topo = Topology(load_shape(FIXTURES / name).shape)
+    table = EdgeTable(topo.edges, [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)], topo.dump)
+    assert table.dumped.all()
+    return table
+
+
+def test_a_dump_row_whose_curve_is_not_occts_is_dropped_even_with_its_ends_on_its_vertices():
+    from cadedge.occt.edgetable import CONIC
+
+    table = _table("cylinder.step")
+    circles = [r for r in range(len(table)) if table.kind[r] == CONIC]
+    assert circles
+    r = circles[0]
+    edge = table.rows[r]
+    y = table.gdata[table.gofs[r] + 6:table.gofs[r] + 9]
+    y *= -1.0  # the circle run the other way round: the same ends on a full circle, other interior points
+    table._check()
+    assert edge not in table.rows
+
+
+def test_a_dump_row_off_its_vertices_gets_the_full_check():
+    from cadedge.occt.edgetable import LINE
+
+    table = _table("bracket.step")
+    lines = [r for r in range(len(table)) if table.kind[r] == LINE]
+    n = len(table)
+    got = table.evaluate(np.repeat(np.arange(n), 9), np.linspace(table.domain[:, 0], table.domain[:, 1], 9, axis=1).ravel())
+    assert table._ends_on_vertices(got.reshape(n, 9, 3)).all()
+    r = lines[0]
+    edge = table.rows[r]
+    table.gdata[table.gofs[r]] += 1e-3  # the line moved off its vertices
+    got = table.evaluate(np.repeat(np.arange(n), 9), np.linspace(table.domain[:, 0], table.domain[:, 1], 9, axis=1).ravel())
+    assert not table._ends_on_vertices(got.reshape(n, 9, 3))[r]
+    table._check()
+    assert edge not in table.rows and len(table) == n - 1

@@ -32,6 +32,8 @@ from .fasteval import CHECK_POINTS, RTOL
 from .shapedump import ShapeDump
 
 LINE, CONIC, SPLINE = 0, 1, 2
+#: The check points (of ``CHECK_POINTS``) a row read from the dump is evaluated at by OCCT: two interior ones.
+PROBES = (2, 6)
 #: The adaptor's curve type of each curve type the table reads, by BinTools type code.
 GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 6: GeomAbs_BezierCurve, 7: GeomAbs_BSplineCurve}
 
@@ -76,6 +78,7 @@ class EdgeTable:
                     except Standard_Failure:
                         rows[k] = -1  # left to the per-edge path, as below
             indices = indices[~taken].tolist()
+        dumped = [True] * len(rows)
         curves = CurveSet()
         add = curves.add
         for i in indices:
@@ -110,9 +113,13 @@ class EdgeTable:
             domain.append((a, b))
             lengths.append(length)
         if dump is not None:  # both kinds of rows in edge order, without the failed ones
+            dumped += [False] * (len(rows) - len(dumped))
             order = [k for k in sorted(range(len(rows)), key=rows.__getitem__) if rows[k] >= 0]
-            rows, adaptors, kinds, ids, domain, lengths = ([x[k] for k in order] for x in
-                                                           (rows, adaptors, kinds, ids, domain, lengths))
+            rows, adaptors, kinds, ids, domain, lengths, dumped = (
+                [x[k] for k in order] for x in (rows, adaptors, kinds, ids, domain, lengths, dumped))
+        #: Row k came from the dump (its ends are checked against its vertices, see _check).
+        self.dumped = np.array(dumped if dump is not None else [False] * len(rows), dtype=bool)
+        self._dump = dump
         parts.append(curves.curves())
         meta = np.concatenate([p.meta for p in parts])
         shift = np.cumsum([0] + [len(p.numbers) for p in parts])
@@ -176,8 +183,16 @@ class EdgeTable:
         return kernels.evaluate_edges(self.kind, self.gofs, self.ints, self.gdata, row, u)
 
     def _check(self) -> None:
-        """Drop the rows whose evaluation differs from OCCT's (as ``fasteval.fast_evaluator`` does), and
-        set line lengths from the evaluated ends (as ``EdgeCurve.exact_length``)."""
+        """Drop the rows whose evaluation differs from OCCT's, and set line lengths from the evaluated ends
+        (as ``EdgeCurve.exact_length``).
+
+        A row read through its adaptor is checked as ``fasteval.fast_evaluator`` checks an edge: at
+        ``CHECK_POINTS`` parameters against ``BRepAdaptor_Curve::D0``, to ``RTOL`` of the curve's size. A row
+        read from the dump holds the numbers OCCT itself wrote, in a stream whose every size and count was
+        checked; its evaluated ends must lie on its vertices (within their tolerances: that the curve, its
+        range and its placement are the edge's) and two interior points must agree with OCCT's as above
+        (that the table evaluates that curve as OCCT does). A dump row whose ends miss its vertices (a
+        loose vertex) gets the full check."""
         n = len(self.rows)
         if not n:
             return
@@ -186,22 +201,20 @@ class EdgeTable:
         u[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]  # off the knots, as fast_evaluator
         flat = u.ravel()
         got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
-        values = flat.tolist()
+        probe = self.dumped & self._ends_on_vertices(got)
+        ref = got.copy()  # OCCT's points where checked
+        values, full = u.tolist(), list(range(CHECK_POINTS))
         ok = np.ones(n, dtype=bool)
-        rows: list[tuple[float, float, float]] = []
         point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
         coord = point.Coord
-        for r in range(n):
-            d0 = self.adaptor(r).D0
+        for r, probed in enumerate(probe.tolist()):
+            d0, at, out = self.adaptor(r).D0, values[r], ref[r]
             try:
-                for x in values[r * CHECK_POINTS:(r + 1) * CHECK_POINTS]:
-                    d0(x, point)
-                    rows.append(coord())
+                for k in PROBES if probed else full:
+                    d0(at[k], point)
+                    out[k] = coord()
             except Standard_Failure:
                 ok[r] = False
-                del rows[r * CHECK_POINTS:]
-                rows += got[r].tolist()
-        ref = np.array(rows, dtype=float).reshape(n, CHECK_POINTS, 3)
         size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
         size = np.maximum(size, math.ulp(1.0))
         ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
@@ -210,6 +223,15 @@ class EdgeTable:
             self.exact[r] = float(np.linalg.norm(np.diff(got[r, [0, -1]], axis=0)))
         if not ok.all():
             self._keep(np.flatnonzero(ok))
+
+    def _ends_on_vertices(self, got: np.ndarray) -> np.ndarray:
+        """Rows whose evaluated first and last points lie within their vertices' tolerances of them."""
+        if self._dump is None:
+            return np.zeros(len(got), dtype=bool)
+        d = self._dump
+        ends = d.edge_vertices[self.rows] - 1
+        gap = np.linalg.norm(got[:, [0, -1]] - d.vertex_points[ends], axis=2)
+        return np.all(gap <= d.vertex_tolerance[ends], axis=1)
 
     def _keep(self, keep: np.ndarray) -> None:
         """Only the rows ``keep`` (increasing)."""
@@ -222,6 +244,7 @@ class EdgeTable:
         self.rows = [self.rows[r] for r in keep]
         self.adaptors = [self.adaptors[r] for r in keep]
         self.kinds = [self.kinds[r] for r in keep]
+        self.dumped = self.dumped[keep]
 
 
 def _periodic_knots(bs, a: float, b: float) -> list[float]:
