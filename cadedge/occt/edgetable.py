@@ -60,7 +60,7 @@ class EdgeTable:
 
     def __init__(self, edges: Sequence, indices: list[int], dump: ShapeDump | None = None):
         self._edges = edges
-        rows, adaptors, kinds, lengths, domain, ids, splines = [], [], [], [], [], [], {}
+        rows, adaptors, kinds, lengths, domain, ids, dumped, splines = [], [], [], [], [], [], [], {}
         parts = [dump.curves] if dump is not None else []
         base = len(dump.curves.meta) if dump is not None else 0  # the curves' indices continue after the dump's
         if dump is not None:  # the rows the dump holds, without an OCP call
@@ -78,7 +78,7 @@ class EdgeTable:
                     except Standard_Failure:
                         rows[k] = -1  # left to the per-edge path, as below
             indices = indices[~taken].tolist()
-        dumped = [True] * len(rows)
+            dumped = [True] * len(rows)
         curves = CurveSet()
         add = curves.add
         for i in indices:
@@ -112,13 +112,13 @@ class EdgeTable:
             ids.append(index)
             domain.append((a, b))
             lengths.append(length)
-        if dump is not None:  # both kinds of rows in edge order, without the failed ones
+        if dump is not None and (len(rows) > len(dumped) or -1 in rows):  # rows in edge order, none failed
             dumped += [False] * (len(rows) - len(dumped))
             order = [k for k in sorted(range(len(rows)), key=rows.__getitem__) if rows[k] >= 0]
             rows, adaptors, kinds, ids, domain, lengths, dumped = (
                 [x[k] for k in order] for x in (rows, adaptors, kinds, ids, domain, lengths, dumped))
         #: Row k came from the dump (its ends are checked against its vertices, see _check).
-        self.dumped = np.array(dumped if dump is not None else [False] * len(rows), dtype=bool)
+        self.dumped = np.array(dumped + [False] * (len(rows) - len(dumped)), dtype=bool)
         self._dump = dump
         parts.append(curves.curves())
         meta = np.concatenate([p.meta for p in parts])
