@@ -450,23 +450,26 @@ static uint8_t compose(uint8_t parent, uint8_t child)
 }
 
 /* Ids in MapShapes order: a depth-first walk from root numbering faces, edges and vertices (id[s], 1-based)
- * at their first visit, with the orientation they have there; a subtree walked to its end is not walked
+ * at their first visit, with the orientation they have there (ori), and every TShape's orientation as the
+ * shape set stores it (stored: the raw one at its first visit); a subtree walked to its end is not walked
  * again (it holds nothing new). order[0], [1], [2] list the faces', edges' and vertices' TShapes by id. */
-static int walk(const Shapes *s, Py_ssize_t root, uint8_t root_ori, int64_t *id, uint8_t *ori, int64_t **order,
-                Py_ssize_t *count)
+static int walk(const Shapes *s, Py_ssize_t root, uint8_t root_ori, int64_t *id, uint8_t *ori, uint8_t *stored,
+                int64_t **order, Py_ssize_t *count)
 {
     Py_ssize_t n = s->n, top = 0;
     int64_t *node = malloc((n + 1) * sizeof(int64_t)), *next = malloc((n + 1) * sizeof(int64_t));
-    uint8_t *node_ori = malloc(n + 1), *done = calloc(n + 1, 1);
-    if (!node || !next || !node_ori || !done) {
-        free(node), free(next), free(node_ori), free(done);
+    uint8_t *node_ori = malloc(n + 1), *node_raw = malloc(n + 1), *done = calloc(n + 1, 1), *seen = calloc(n + 1, 1);
+    if (!node || !next || !node_ori || !node_raw || !done || !seen) {
+        free(node), free(next), free(node_ori), free(node_raw), free(done), free(seen);
         return -1;
     }
-    node[0] = root, next[0] = s->sub_ofs[root], node_ori[0] = root_ori;
+    node[0] = root, next[0] = s->sub_ofs[root], node_ori[0] = node_raw[0] = root_ori;
     for (;;) {
         if (next[top] == s->sub_ofs[node[top]]) { /* first step into this node: a visit */
             Py_ssize_t t = node[top];
             int type = s->type[t];
+            if (!seen[t]) /* as stored by BinTools_ShapeSet::Add, which meets the shapes in this order */
+                seen[t] = 1, stored[t] = node_raw[top];
             int slot = type == FACE ? 0 : type == EDGE ? 1 : type == VERTEX ? 2 : -1;
             if (slot >= 0 && !id[t]) {
                 order[slot][count[slot]] = t;
@@ -480,6 +483,7 @@ static int walk(const Shapes *s, Py_ssize_t root, uint8_t root_ori, int64_t *id,
                 if (top + 1 > n) /* deeper than there are shapes: a cycle */
                     break;
                 node_ori[top + 1] = compose(node_ori[top], s->sub_ori[k]);
+                node_raw[top + 1] = s->sub_ori[k];
                 node[++top] = child, next[top] = s->sub_ofs[child];
             }
             continue;
@@ -489,7 +493,7 @@ static int walk(const Shapes *s, Py_ssize_t root, uint8_t root_ori, int64_t *id,
             break;
     }
     int ok = top < 0;
-    free(node), free(next), free(node_ori), free(done);
+    free(node), free(next), free(node_ori), free(node_raw), free(done), free(seen);
     return ok;
 }
 
@@ -525,7 +529,8 @@ static int face_edges(const Shapes *s, Py_ssize_t t, int64_t f, const int64_t *i
  * vertex ids edges[e, 2:4] (first, last; 0 if missing), degenerate flag edges[e, 4]; edge_real[e] is
  * (tolerance, first, last); its face ids are edge_face_ids[face_offsets[e]:face_offsets[e + 1]]
  * (increasing). vertices[v] is its TShape, vertex_real[v] (tolerance, x, y, z); faces[f] its TShape.
- * orientations[k] is the orientation at first visit of the TShape k + 1 (faces and vertices). */
+ * orientations[k] is the orientation at first visit of the TShape k + 1 (faces, edges and vertices), and
+ * orientations[n + k] the one BinTools_ShapeSet::Shape(k + 1) has (n TShapes). */
 PyObject *ck_parse_shapes(PyObject *self, PyObject *args)
 {
     Py_buffer buf;
@@ -594,12 +599,12 @@ PyObject *ck_parse_shapes(PyObject *self, PyObject *args)
         fail(&r, "the root is not in the shape set");
         goto refuse;
     }
-    id = calloc(s.n + 1, sizeof(int64_t)), ori = calloc(s.n + 1, 1);
+    id = calloc(s.n + 1, sizeof(int64_t)), ori = calloc(2 * s.n + 1, 1);
     for (int t = 0; t < 3; t++)
         order[t] = malloc((s.n + 1) * sizeof(int64_t));
     if (!id || !ori || !order[0] || !order[1] || !order[2])
         goto nomem;
-    if ((ok = walk(&s, root - 1, (uint8_t)root_ori, id, ori, order, count)) <= 0) {
+    if ((ok = walk(&s, root - 1, (uint8_t)root_ori, id, ori, ori + s.n, order, count)) <= 0) {
         if (ok == 0)
             fail(&r, "the shapes contain a cycle");
         goto end;
@@ -648,10 +653,10 @@ PyObject *ck_parse_shapes(PyObject *self, PyObject *args)
     for (Py_ssize_t e = ne; e > 0; e--) /* the fill advanced each start to the next one's */
         fofs[e] = fofs[e - 1];
     fofs[0] = 0;
-    uint8_t *orient = malloc(s.n + 1);
+    uint8_t *orient = malloc(2 * s.n + 1);
     if (!orient)
         goto nomem;
-    memcpy(orient, ori, s.n);
+    memcpy(orient, ori, 2 * s.n);
     int64_t *faces = order[0], *verts = order[2];
     for (Py_ssize_t f = 0; f < nf; f++)
         faces[f] += 1;
@@ -660,7 +665,7 @@ PyObject *ck_parse_shapes(PyObject *self, PyObject *args)
     result = Py_BuildValue("(NNNNNNNNNNN)", as_bytes(meta, 6 * ncurves * 8), as_bytes(offsets, (ncurves + 1) * 8),
                            as_bytes(out.d, out.n * 8), as_bytes(edges, 5 * ne * 8), as_bytes(ereal, 3 * ne * 8),
                            as_bytes(fofs, (ne + 1) * 8), as_bytes(fids, fofs[ne] * 8), as_bytes(verts, nv * 8),
-                           as_bytes(vreal, 4 * nv * 8), as_bytes(faces, nf * 8), as_bytes(orient, s.n));
+                           as_bytes(vreal, 4 * nv * 8), as_bytes(faces, nf * 8), as_bytes(orient, 2 * s.n));
     free(orient);
     goto end;
 nomem:

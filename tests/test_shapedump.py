@@ -50,6 +50,8 @@ def same_data(topo: Topology) -> None:
         assert (d.edge_curve[i] > 0) == BRep_Tool.IsGeometric_s(edge) or d.degenerate[i]
         if d.edge_curve[i]:
             assert tuple(d.edge_range[i]) == tuple(BRep_Tool.Range_s(edge))
+    for lazy in (d.edges, d.vertices, d.faces):  # the orientation the shape set holds each with
+        assert all(d.shape_set.Shape(k).Orientation() == o for k, o in zip(lazy._index, lazy._stored))
     for k, vertex in enumerate(topo.vertices):
         assert d.vertex_tolerance[k] == BRep_Tool.Tolerance_s(vertex)
         assert tuple(d.vertex_points[k]) == BRep_Tool.Pnt_s(vertex).Coord()

@@ -29,24 +29,33 @@ from .compat import TopoDS
 from .curvedump import Curves
 
 
+#: TopAbs_Orientation by value (building one from an int costs as much as an OCP call).
+ORIENTATIONS = [TopAbs_Orientation(k) for k in range(4)]
+
+
 class LazyShapes(Sequence):
     """OCCT shapes by position, built on first access from a shape set: ``cast(set.Shape(index[i]))`` with
-    orientation ``orientation[i]``."""
+    orientation ``orientation[i]`` (``stored[i]`` is the one the set holds it with)."""
 
-    def __init__(self, shape_set: BinTools_ShapeSet, index: list[int], orientation: list[int], cast):
-        self._set, self._index, self._orientation, self._cast = shape_set, index, orientation, cast
+    def __init__(self, shape_set: BinTools_ShapeSet, index: list[int], orientation: list[int], stored: list[int],
+                 cast):
+        self._set, self._index, self._orientation, self._stored, self._cast = (shape_set, index, orientation,
+                                                                                stored, cast)
         self._built: list = [None] * len(index)
 
     def __len__(self) -> int:
         return len(self._index)
 
     def __getitem__(self, i):
-        if isinstance(i, slice):
+        try:
+            shape = self._built[i]
+        except TypeError:  # a slice
             return [self[k] for k in range(*i.indices(len(self)))]
-        shape = self._built[i]
         if shape is None:
-            raw = self._set.Shape(self._index[i])
-            shape = self._built[i] = self._cast(raw.Oriented(TopAbs_Orientation(self._orientation[i])))
+            shape = self._set.Shape(self._index[i])
+            if self._orientation[i] != self._stored[i]:
+                shape = shape.Oriented(ORIENTATIONS[self._orientation[i]])
+            shape = self._built[i] = self._cast(shape)
         return shape
 
 
@@ -77,9 +86,14 @@ class ShapeDump:
         self.vertex_points = np.ascontiguousarray(vreal[:, 1:])
         ids, bounds = np.frombuffer(fids, dtype=np.int64).tolist(), np.frombuffer(fofs, dtype=np.int64).tolist()
         self.edge_faces = [ids[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
-        self.edges = LazyShapes(shape_set, edges[:, 0].tolist(), [int(TopAbs_FORWARD)] * len(edges), TopoDS.Edge_s)
-        self.vertices = LazyShapes(shape_set, verts.tolist(), orient[verts - 1].tolist(), TopoDS.Vertex_s)
-        self.faces = LazyShapes(shape_set, faces.tolist(), orient[faces - 1].tolist(), TopoDS.Face_s)
+        n = len(orient) // 2
+        stored = orient[n:]
+        self.edges = LazyShapes(shape_set, edges[:, 0].tolist(), [int(TopAbs_FORWARD)] * len(edges),
+                                stored[edges[:, 0] - 1].tolist(), TopoDS.Edge_s)
+        self.vertices = LazyShapes(shape_set, verts.tolist(), orient[verts - 1].tolist(), stored[verts - 1].tolist(),
+                                   TopoDS.Vertex_s)
+        self.faces = LazyShapes(shape_set, faces.tolist(), orient[faces - 1].tolist(), stored[faces - 1].tolist(),
+                                TopoDS.Face_s)
         self.shape_set = shape_set
 
 
