@@ -93,24 +93,31 @@ def test_multi_solid_compounds_shared_and_reversed_parts_and_loose_edges():
         same_topology(topo, Topology(shape, dump=False))
 
 
-def test_located_shapes_and_an_instanced_assembly_take_the_ocp_path(tmp_path):
+def test_a_located_shape_takes_the_ocp_path():
+    box = BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape()
+    trsf = gp_Trsf()
+    trsf.SetTranslation(gp_Vec(1, 2, 3))
+    moved = box.Moved(TopLoc_Location(trsf))
+    for shape in (moved, _compound(box, moved)):
+        assert shapedump.read(shape) is None
+        topo = Topology(shape)
+        assert topo.dump is None and len(topo.edges) == 12 * (1 if shape is moved else 2)
+        same_topology(topo, Topology(shape, dump=False))
+
+
+def test_an_xde_assembly_with_an_instanced_part_takes_the_ocp_path(tmp_path):
     pytest.importorskip("cadquery")
     sys.path.insert(0, str(ROOT / "scripts"))
     try:
         import hard_models
     finally:
         sys.path.remove(str(ROOT / "scripts"))
-
-    moved = BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape()
-    trsf = gp_Trsf()
-    trsf.SetTranslation(gp_Vec(1, 2, 3))
-    moved = moved.Moved(TopLoc_Location(trsf))
     path = tmp_path / "assembly.step"
     hard_models.write_xde_assembly(path)
-    for shape in (moved, load_shape(path).shape):
-        assert shapedump.read(shape) is None
-        topo = Topology(shape)
-        assert topo.dump is None and len(topo.edges) > 0
+    shape = load_shape(path).shape
+    assert shapedump.read(shape) is None
+    topo = Topology(shape)
+    assert topo.dump is None and len(topo.edges) > 0
 
 
 def test_iges_input(tmp_path):
