@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import functools
 
-import numpy as np
-
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.Standard import Standard_Failure
@@ -19,7 +17,6 @@ from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
 
 from ..errors import GeometryError
-from . import shapedump
 from .compat import (TopoDS, TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape,
                      TopTools_ListOfShape)
 
@@ -75,15 +72,19 @@ class Topology:
             raise GeometryError("null shape: nothing to take the topology of")
         self.shape = shape
         self._seam: list[bool] | None = None  # computed on first use: refining does not need it
-        #: The shape read in one call (:mod:`cadedge.occt.shapedump`), or None where it was walked through OCP.
-        self.dump = shapedump.read(shape) if dump else None
+        #: The shape read in one call (:mod:`cadedge.occt.shapedump`, which needs numpy: ``dump=False`` walks
+        #: it through OCP, as for the shapes the dump does not take), or None where it was walked.
+        self.dump = None
+        if dump:
+            from . import shapedump
+            self.dump = shapedump.read(shape)
         if self.dump is None:
             self._walk(shape)
             return
         d = self.dump
         self.edges, self.vertices, self.faces = d.edges, d.vertices, d.faces
         self.edge_faces: list[list[int]] = d.edge_faces
-        missing = np.flatnonzero(~d.edge_vertices.all(axis=1))
+        missing = (d.edge_vertices == 0).any(axis=1).nonzero()[0]
         if len(missing):
             raise GeometryError(f"edge {missing[0] + 1} has no vertex at one end; cannot anchor its grid")
         self.edge_vertices: list[tuple[int, int]] = list(map(tuple, d.edge_vertices.tolist()))
@@ -124,10 +125,12 @@ class Topology:
                 raise GeometryError(f"edge {i} has no vertex at one end; cannot anchor its grid")
             self.edge_vertices.append((v1, v2))
 
-    def vertex_points(self) -> np.ndarray:
+    def vertex_points(self) -> "np.ndarray":
         """The vertices' points (n, 3), as ``BRep_Tool::Pnt`` gives them."""
         if self.dump is not None:
             return self.dump.vertex_points
+        import numpy as np
+
         return np.array([BRep_Tool.Pnt_s(v).Coord() for v in self.vertices], dtype=float).reshape(-1, 3)
 
     def tolerances(self) -> tuple[list[float], list[float]]:
