@@ -1,14 +1,15 @@
 """The geometry of many edges read once into flat arrays, for refining them all in one compiled call.
 
-Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve is read through its
-``BRepAdaptor_Curve`` (which applies the edge's location) into :class:`EdgeTable`'s arrays, with the
-fewest OCP calls: the adaptors' curve handles are written by OCCT in one call and parsed in C
-(:mod:`cadedge.occt.curvedump`), so a spline costs no call per knot or pole, and no numpy work is done
-per edge. The table's evaluation (``cadedge/_batch.c``, the same formulas as
-:mod:`cadedge.occt.fasteval`) is then checked against OCCT's own (``BRepAdaptor_Curve.D0``, the point
-``Value`` returns) at ``fasteval.CHECK_POINTS`` parameters of every edge in one batch; an edge that
-disagrees by more than ``fasteval.RTOL`` of its size, or that OCCT cannot read, is left out and refined
-by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
+Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve gets a row of
+:class:`EdgeTable`'s arrays. Where the shape was read in one call (:mod:`cadedge.occt.shapedump`) the row
+is the curve OCCT wrote for the edge, with no OCP call but OCCT's length integration (ellipses and
+splines). Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
+trimmed curves), the row is read through the edge's ``BRepAdaptor_Curve`` (which applies the edge's
+location), the adaptors' curve handles written by OCCT in one call and parsed in C
+(:mod:`cadedge.occt.curvedump`). The table's evaluation (``cadedge/_batch.c``, the same formulas as
+:mod:`cadedge.occt.fasteval`) is then checked against OCCT's (``BRepAdaptor_Curve.D0``, see
+:meth:`EdgeTable._check`); an edge that disagrees by more than ``fasteval.RTOL`` of its size, or that
+OCCT cannot read, is left out and refined by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
 """
 
 from __future__ import annotations
