@@ -42,6 +42,10 @@ Py_ssize_t bt_header(Reader *r, const char *name)
         return -1;
     }
     r->pos++;
+    if (count > r->size - r->pos) { /* every item takes at least a byte */
+        fail(r, "a section counts more items than the stream holds");
+        return -1;
+    }
     return count;
 }
 
@@ -185,10 +189,12 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
             for (Py_ssize_t k = 0; k < nk; k++) {
                 double knot = le_double(kp + 12 * k);
                 int32_t mult = (int32_t)le(kp + 12 * k + 8, 4);
+                if (mult < 0 || knots + mult > n + degree + 1) /* at most poles + degree + 1 in all */
+                    return fail(r, "a spline's knot multiplicities exceed its poles");
                 for (int32_t j = 0; j < mult; j++)
                     if (push(out, &knot, 1) < 0)
                         return -1;
-                knots += mult > 0 ? mult : 0;
+                knots += mult;
             }
         } else {
             double ends[2] = {0.0, 1.0};

@@ -151,6 +151,8 @@ def test_a_corrupt_or_foreign_stream_is_refused_never_read_past_its_end():
         parse_shapes(data.replace(b"Topology V4", b"Topology V9", 1), root, 0)
     with pytest.raises(ValueError, match="root"):
         parse_shapes(data, 10**6, 0)
+    with pytest.raises(ValueError, match="counts more items"):  # refused before allocating for them
+        parse_shapes(data.replace(b"Curves ", b"Curves 999999", 1), root, 0)
     for _ in range(200):  # random bytes flipped: refused or read, never a crash
         noisy = bytearray(data)
         at = rng.integers(0, len(data), 4)
