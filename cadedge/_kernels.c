@@ -664,6 +664,7 @@ static PyMethodDef methods[] = {
     {"evaluate_edges", ck_evaluate_edges, METH_VARARGS, "Points of many edges' curves from a geometry table."},
     {"refine_edges", ck_refine_edges, METH_VARARGS, "Target-mode grids of many edges in one call."},
     {"parse_curves", ck_parse_curves, METH_VARARGS, "Curves written by OCCT's BinTools_CurveSet as geometry table rows."},
+    {"parse_shapes", ck_parse_shapes, METH_VARARGS, "A shape written by OCCT's BinTools_ShapeSet: topology and edges."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -1,4 +1,4 @@
-"""numpy-facing wrappers of the refiner's compiled inner loops (``cadedge/_kernels.c``, ``cadedge/_batch.c``).
+"""numpy-facing wrappers of the compiled inner loops (``cadedge/_kernels.c``, ``_batch.c``, ``_shapedump.c``).
 
 A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
 dominated; :func:`refine_edges` runs the whole target mode of many edges in one call. They are plain C
@@ -119,3 +119,10 @@ def parse_curves(data: bytes, start: int, count: int) -> tuple[np.ndarray, np.nd
     meta, offsets, numbers, end = _kernels.parse_curves(data, start, count)
     return (np.frombuffer(meta, dtype=np.int64).reshape(-1, 6), np.frombuffer(offsets, dtype=np.int64),
             np.frombuffer(numbers, dtype=float), end)
+
+
+def parse_shapes(data: bytes, root: int, orientation: int) -> tuple:
+    """A shape written by OCCT's ``BinTools_ShapeSet`` (its set index ``root``, its orientation): the raw
+    arrays of ``cadedge/_shapedump.c``'s ``parse_shapes`` (read by :mod:`cadedge.occt.shapedump`);
+    ValueError where the stream is not one it takes."""
+    return _kernels.parse_shapes(data, root, orientation)

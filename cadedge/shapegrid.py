@@ -61,7 +61,8 @@ def vertex_spacings(edges: list[ShapeEdgeGrid]) -> dict[int, float]:
     live = [e for e in edges if not e.degenerate and len(e.points) >= 2]
     if not live:
         return {}
-    ends = np.array([(e.points[0], e.points[1], e.points[-2], e.points[-1]) for e in live], dtype=float)
+    ends = np.concatenate([p for e in live for p in (e.points[:2], e.points[-2:])]).astype(float, copy=False)
+    ends = ends.reshape(-1, 4, ends.shape[-1])
     lengths = row_norms((ends[:, [1, 3]] - ends[:, [0, 2]]).reshape(-1, 3)).reshape(-1, 2).tolist()
     spacing: dict[int, float] = {}
     for e, hs in zip(live, lengths):

@@ -11,10 +11,11 @@ jobs, wall time mostly measures the wait for a core):
 - **OCCT**: one ``GCPnts_TangentialDeflection`` pass at that angle over every non-degenerate edge
   (adaptors included), as *OCCT s* in ``scripts/bench.py``;
 - **refine_shape**: the whole call on the loaded shape, as *cadedge s* there;
-- its phases, each run again on its own: **topology** (``Topology``), **edge table** (reading every edge's
-  geometry, its length and the check against OCCT, ``EdgeTable``), of which **check** and **lengths** are
-  also timed alone, and **compiled refine** (``refine_table`` on all rows); **rest** is the whole call
-  minus topology, table and compiled refine (the shape's tolerance scan on loading, vertex points, the
+- its phases, each run again on its own: **topology** (``Topology``), of which **dump** (OCCT writing the
+  shape and ``cadedge/_shapedump.c`` parsing it, ``shapedump.read``) is also timed alone; **edge table**
+  (every edge's curve row, its length and the check against OCCT, ``EdgeTable``), of which **check** and
+  **lengths** are also timed alone; and **compiled refine** (``refine_table`` on all rows); **rest** is
+  the whole call minus topology, table and compiled refine (the shape's tolerance scan on loading, the
   per-edge grid objects, vertex spacings).
 """
 
@@ -34,12 +35,13 @@ import corpus_path
 from corpus_path import require_corpus
 
 from cadedge.occt.edgecurve import LENGTH_TOL
+from cadedge.occt import shapedump
 from cadedge.occt.edgetable import EdgeTable, refine_table
 from cadedge.occt.shape import refine_shape
 from cadedge.occt.topology import Topology
 
 LARGEST = ("live-clones__gmsh__917_fusee.stp", "LLNL__axom_data__boxed_sphere.step")
-PHASES = ("OCCT", "refine_shape", "topology", "edge table", "check", "lengths", "compiled refine")
+PHASES = ("OCCT", "refine_shape", "topology", "dump", "edge table", "check", "lengths", "compiled refine")
 
 
 def breakdown(path: Path, eps: float, repeats: int, clock=time.perf_counter) -> tuple[int, dict[str, float]]:
@@ -65,11 +67,12 @@ def breakdown(path: Path, eps: float, repeats: int, clock=time.perf_counter) -> 
         timed("OCCT", occt)
         timed("refine_shape", lambda: refine_shape(shape, ald=eps))
         topo = timed("topology", lambda: Topology(shape))
+        timed("dump", lambda: shapedump.read(shape))
         rows = [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)]
-        table = timed("edge table", lambda: EdgeTable(topo.edges, rows))
+        table = timed("edge table", lambda: EdgeTable(topo.edges, rows, topo.dump))
         timed("check", table._check)
-        timed("lengths", lambda: [GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL)
-                                  for ad, (a, b) in zip(table.adaptors, table.domain.tolist())])
+        timed("lengths", lambda: [GCPnts_AbscissaPoint.Length_s(table.adaptor(r), a, b, LENGTH_TOL)
+                                  for r, (a, b) in enumerate(table.domain.tolist())])
         n = len(table)
         ends = np.zeros((n, 3))
         timed("compiled refine", lambda: refine_table(table, slice(0, n), np.full(n, eps), ends, ends))

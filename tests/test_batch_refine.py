@@ -23,7 +23,7 @@ LARGE = {"live-clones__gmsh__917_fusee.stp", "LLNL__axom_data__boxed_sphere.step
 def _per_edge(monkeypatch, shape, **options):
     """refine_shape with an empty edge table: every edge through EdgeCurve and refine_curve."""
     with monkeypatch.context() as m:
-        m.setattr(shape_module, "EdgeTable", lambda edges, indices: EdgeTable(edges, []))
+        m.setattr(shape_module, "EdgeTable", lambda edges, indices, dump=None: EdgeTable(edges, []))
         return refine_shape(shape, **options)
 
 

@@ -87,7 +87,7 @@ def test_a_truncated_stream_is_an_error_not_a_read_past_its_end():
     data = buf.getvalue()
     start = data.index(b"\n") + 1
     for cut in (start + 1, start + 13, len(data) - 1):
-        with pytest.raises(ValueError, match="ends inside a curve"):
+        with pytest.raises(ValueError, match="ends inside an item"):
             parse_curves(data[:cut], start, 1)
 
 

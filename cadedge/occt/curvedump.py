@@ -2,7 +2,7 @@
 
 Reading a B-spline's knots and poles from Python is one OCP call per number (a few microseconds
 each). ``BinTools_CurveSet`` writes every curve added to it, exactly (IEEE doubles, little-endian),
-in one C++ call, and ``cadedge/_batch.c`` parses that stream straight into rows of the edge table's
+in one C++ call, and ``cadedge/_shapedump.c`` parses that stream straight into rows of the edge table's
 geometry (``parse_curves``). A curve handle added twice (edges sharing one curve) is written once.
 Only the types the edge table evaluates are read: lines, circles, ellipses, Bezier and B-spline curves
 (``BinTools_CurveSet.cxx`` fixes their layout).
@@ -26,7 +26,7 @@ KIND, DEGREE, KNOTS, DIM, PERIODIC, TYPE = range(6)
 class Curves:
     """Parsed curves: curve ``c`` (0-based: index ``c + 1`` in the set) is the geometry table row
     ``numbers[offsets[c]:offsets[c + 1]]``, and ``meta[c]`` is (table kind, degree, number of knots, dim,
-    periodic, BinTools type); see ``parse_curves`` in ``cadedge/_batch.c`` for the layout."""
+    periodic, BinTools type); see ``parse_curve`` in ``cadedge/_shapedump.c`` for the layout."""
 
     def __init__(self, meta: np.ndarray, offsets: np.ndarray, numbers: np.ndarray):
         self.meta, self.offsets, self.numbers = meta, offsets, numbers

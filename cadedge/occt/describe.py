@@ -85,7 +85,7 @@ def describe_shape(source: Any, *, allow_partial: bool = False) -> ShapeDescript
     """Load ``source`` (anything :func:`cadedge.occt.reader.load_shape` accepts, with ``allow_partial``)
     and describe its edges."""
     loaded = load_shape(source, allow_partial=allow_partial)
-    topo = Topology(loaded.shape)
+    topo = Topology(loaded.shape, dump=False)  # (the dump would import numpy: start-up)
     edges = [describe_edge(topo, i) for i in range(len(topo.edges))]
     return ShapeDescription(source=loaded.source, units=loaded.units, edges=edges, vertices=len(topo.vertices),
                             faces=len(topo.faces), shells=_count(loaded.shape, TopAbs_SHELL),

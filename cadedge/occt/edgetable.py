@@ -1,20 +1,21 @@
 """The geometry of many edges read once into flat arrays, for refining them all in one compiled call.
 
-Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve is read through its
-``BRepAdaptor_Curve`` (which applies the edge's location) into :class:`EdgeTable`'s arrays, with the
-fewest OCP calls: the adaptors' curve handles are written by OCCT in one call and parsed in C
-(:mod:`cadedge.occt.curvedump`), so a spline costs no call per knot or pole, and no numpy work is done
-per edge. The table's evaluation (``cadedge/_batch.c``, the same formulas as
-:mod:`cadedge.occt.fasteval`) is then checked against OCCT's own (``BRepAdaptor_Curve.D0``, the point
-``Value`` returns) at ``fasteval.CHECK_POINTS`` parameters of every edge in one batch; an edge that
-disagrees by more than ``fasteval.RTOL`` of its size, or that OCCT cannot read, is left out and refined
-by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
+Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve gets a row of
+:class:`EdgeTable`'s arrays. Where the shape was read in one call (:mod:`cadedge.occt.shapedump`) the row
+is the curve OCCT wrote for the edge, with no OCP call but OCCT's length integration (ellipses and
+splines). Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
+trimmed curves), the row is read through the edge's ``BRepAdaptor_Curve`` (which applies the edge's
+location), the adaptors' curve handles written by OCCT in one call and parsed in C
+(:mod:`cadedge.occt.curvedump`). The table's evaluation (``cadedge/_batch.c``, the same formulas as
+:mod:`cadedge.occt.fasteval`) is then checked against OCCT's (``BRepAdaptor_Curve.D0``, see
+:meth:`EdgeTable._check`); an edge that disagrees by more than ``fasteval.RTOL`` of its size, or that
+OCCT cannot read, is left out and refined by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
@@ -29,8 +30,25 @@ from .. import explore, kernels, target
 from .curvedump import CIRCLE, DEGREE, DIM, KIND, KNOTS, PERIODIC, TYPE, CurveSet
 from .edgecurve import CONIC_ROOTS, LENGTH_TOL, SPAN_ROOTS, EdgeCurve
 from .fasteval import CHECK_POINTS, RTOL
+from .shapedump import ShapeDump
 
 LINE, CONIC, SPLINE = 0, 1, 2
+#: The check points (of ``CHECK_POINTS``) a row read from the dump is evaluated at by OCCT: two interior ones.
+PROBES = (2, 6)
+#: The adaptor's curve type of each curve type the table reads, by BinTools type code.
+GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 6: GeomAbs_BezierCurve, 7: GeomAbs_BSplineCurve}
+
+
+def _from_dump(dump: ShapeDump, indices: np.ndarray) -> np.ndarray:
+    """Which of the edges ``indices`` the dump gives a row as their adaptor would: a 3-D curve of a type the
+    table reads, not periodic (the per-edge path makes a periodic spline's non-periodic copy), not
+    wrapped in a trimmed curve (the adaptor unwraps it), and a range the adaptor accepts (first <= last)."""
+    c = dump.edge_curve[indices]
+    if not len(dump.curves.meta):
+        return np.zeros(len(indices), dtype=bool)
+    meta = dump.curves.meta[np.maximum(c, 1) - 1]
+    first, last = dump.edge_range[indices].T
+    return (c > 0) & (meta[:, KIND] >= 0) & (meta[:, PERIODIC] == 0) & (first <= last)
 
 
 class EdgeTable:
@@ -41,8 +59,27 @@ class EdgeTable:
     exploration starts from) go with them. ``adaptors[k]`` and ``kinds[k]`` belong to row ``k``.
     """
 
-    def __init__(self, edges: list, indices: list[int]):
-        rows, adaptors, kinds, lengths, domain, ids, splines = [], [], [], [], [], [], {}
+    def __init__(self, edges: Sequence, indices: list[int], dump: ShapeDump | None = None):
+        self._edges = edges
+        rows, adaptors, kinds, lengths, domain, ids, dumped, splines = [], [], [], [], [], [], [], {}
+        parts = [dump.curves] if dump is not None else []
+        base = len(dump.curves.meta) if dump is not None else 0  # the curves' indices continue after the dump's
+        if dump is not None:  # the rows the dump holds, without an OCP call
+            indices = np.asarray(indices, dtype=np.int64)
+            taken = _from_dump(dump, indices)
+            rows, ids = indices[taken].tolist(), dump.edge_curve[indices[taken]].tolist()
+            domain = dump.edge_range[indices[taken]].tolist()
+            kinds = [GEOMABS[t] for t in dump.curves.meta[np.asarray(ids, dtype=np.int64) - 1, TYPE].tolist()]
+            adaptors, lengths = [None] * len(rows), [math.nan] * len(rows)
+            for k, t in enumerate(kinds):  # OCCT's length, as the per-edge path below takes it
+                if t != GeomAbs_Line and t != GeomAbs_Circle:
+                    try:
+                        adaptors[k] = ad = BRepAdaptor_Curve(edges[rows[k]])
+                        lengths[k] = float(GCPnts_AbscissaPoint.Length_s(ad, *domain[k], LENGTH_TOL))
+                    except Standard_Failure:
+                        rows[k] = -1  # left to the per-edge path, as below
+            indices = indices[~taken].tolist()
+            dumped = [True] * len(rows)
         curves = CurveSet()
         add = curves.add
         for i in indices:
@@ -65,7 +102,7 @@ class EdgeTable:
                     continue
                 if t != GeomAbs_Line and t != GeomAbs_Circle:  # (a line's and a circle's are set below)
                     length = float(GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL))
-                index = add(curve)
+                index = base + add(curve)
             except Standard_Failure:
                 continue  # the per-edge path reports what OCCT cannot do
             if t == GeomAbs_BSplineCurve:
@@ -76,9 +113,20 @@ class EdgeTable:
             ids.append(index)
             domain.append((a, b))
             lengths.append(length)
-        parsed = curves.curves()
-        meta, numbers = parsed.meta, parsed.numbers
-        begin, end = parsed.offsets[:-1].copy(), parsed.offsets[1:].copy()
+        if dump is not None and (len(rows) > len(dumped) or -1 in rows):  # rows in edge order, none failed
+            dumped += [False] * (len(rows) - len(dumped))
+            order = [k for k in sorted(range(len(rows)), key=rows.__getitem__) if rows[k] >= 0]
+            rows, adaptors, kinds, ids, domain, lengths, dumped = (
+                [x[k] for k in order] for x in (rows, adaptors, kinds, ids, domain, lengths, dumped))
+        #: Row k came from the dump (its ends are checked against its vertices, see _check).
+        self.dumped = np.array(dumped + [False] * (len(rows) - len(dumped)), dtype=bool)
+        self._dump = dump
+        parts.append(curves.curves())
+        meta = np.concatenate([p.meta for p in parts])
+        shift = np.cumsum([0] + [len(p.numbers) for p in parts])
+        begin = np.concatenate([p.offsets[:-1] + at for p, at in zip(parts, shift)])
+        end = np.concatenate([p.offsets[1:] + at for p, at in zip(parts, shift)])
+        numbers = np.concatenate([p.numbers for p in parts])
         periodic = {}  # curve index -> (period, the same curve made non-periodic)
         for index, curve in splines.items():
             if meta[index - 1, PERIODIC]:
@@ -107,7 +155,7 @@ class EdgeTable:
                 hint = _periodic_knots(splines[index], *domain[r])
                 hints += hint
                 hint_sizes[r] = len(hint)
-        self.rows, self.adaptors, self.kinds = rows, adaptors, kinds
+        self.rows, self.adaptors, self.kinds = rows, adaptors, kinds  # adaptors[k] None until needed
         self.kind = meta[c, KIND].copy()
         self.gofs = gofs
         self.ints = meta[c][:, [DEGREE, KNOTS, DIM]].copy()
@@ -124,13 +172,28 @@ class EdgeTable:
     def __len__(self) -> int:
         return len(self.rows)
 
+    def adaptor(self, r: int) -> BRepAdaptor_Curve:
+        """Row ``r``'s ``BRepAdaptor_Curve``, built on first use."""
+        ad = self.adaptors[r]
+        if ad is None:
+            ad = self.adaptors[r] = BRepAdaptor_Curve(self._edges[self.rows[r]])
+        return ad
+
     def evaluate(self, row: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Points (len(u), 3) of the edges of table rows ``row`` (grouped, any order) at ``u``."""
         return kernels.evaluate_edges(self.kind, self.gofs, self.ints, self.gdata, row, u)
 
     def _check(self) -> None:
-        """Drop the rows whose evaluation differs from OCCT's (as ``fasteval.fast_evaluator`` does), and
-        set line lengths from the evaluated ends (as ``EdgeCurve.exact_length``)."""
+        """Drop the rows whose evaluation differs from OCCT's, and set line lengths from the evaluated ends
+        (as ``EdgeCurve.exact_length``).
+
+        A row read through its adaptor is checked as ``fasteval.fast_evaluator`` checks an edge: at
+        ``CHECK_POINTS`` parameters against ``BRepAdaptor_Curve::D0``, to ``RTOL`` of the curve's size. A row
+        read from the dump holds the numbers OCCT itself wrote, in a stream whose every size and count was
+        checked; its evaluated ends must lie on its vertices (within their tolerances: that the curve, its
+        range and its placement are the edge's) and two interior points must agree with OCCT's as above
+        (that the table evaluates that curve as OCCT does). A dump row whose ends miss its vertices (a
+        loose vertex) gets the full check."""
         n = len(self.rows)
         if not n:
             return
@@ -139,22 +202,20 @@ class EdgeTable:
         u[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]  # off the knots, as fast_evaluator
         flat = u.ravel()
         got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
-        values = flat.tolist()
+        probe = self.dumped & self._ends_on_vertices(got)
+        ref = got.copy()  # OCCT's points where checked
+        values, full = u.tolist(), list(range(CHECK_POINTS))
         ok = np.ones(n, dtype=bool)
-        rows: list[tuple[float, float, float]] = []
         point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
         coord = point.Coord
-        for r, ad in enumerate(self.adaptors):
-            d0 = ad.D0
+        for r, probed in enumerate(probe.tolist()):
+            d0, at, out = self.adaptor(r).D0, values[r], ref[r]
             try:
-                for x in values[r * CHECK_POINTS:(r + 1) * CHECK_POINTS]:
-                    d0(x, point)
-                    rows.append(coord())
+                for k in PROBES if probed else full:
+                    d0(at[k], point)
+                    out[k] = coord()
             except Standard_Failure:
                 ok[r] = False
-                del rows[r * CHECK_POINTS:]
-                rows += got[r].tolist()
-        ref = np.array(rows, dtype=float).reshape(n, CHECK_POINTS, 3)
         size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
         size = np.maximum(size, math.ulp(1.0))
         ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
@@ -163,6 +224,15 @@ class EdgeTable:
             self.exact[r] = float(np.linalg.norm(np.diff(got[r, [0, -1]], axis=0)))
         if not ok.all():
             self._keep(np.flatnonzero(ok))
+
+    def _ends_on_vertices(self, got: np.ndarray) -> np.ndarray:
+        """Rows whose evaluated first and last points lie within their vertices' tolerances of them."""
+        if self._dump is None:
+            return np.zeros(len(got), dtype=bool)
+        d = self._dump
+        ends = d.edge_vertices[self.rows] - 1
+        gap = np.linalg.norm(got[:, [0, -1]] - d.vertex_points[ends], axis=2)
+        return np.all(gap <= d.vertex_tolerance[ends], axis=1)
 
     def _keep(self, keep: np.ndarray) -> None:
         """Only the rows ``keep`` (increasing)."""
@@ -175,6 +245,7 @@ class EdgeTable:
         self.rows = [self.rows[r] for r in keep]
         self.adaptors = [self.adaptors[r] for r in keep]
         self.kinds = [self.kinds[r] for r in keep]
+        self.dumped = self.dumped[keep]
 
 
 def _periodic_knots(bs, a: float, b: float) -> list[float]:
@@ -204,7 +275,7 @@ class TableCurves(Mapping):
             r = self._row[eid]  # KeyError for an id with no curve
             t = self._table
             rows = np.full(1, r, dtype=np.int64)
-            curve = EdgeCurve.from_parts(self._edges[t.rows[r]], eid, t.adaptors[r], tuple(t.domain[r].tolist()),
+            curve = EdgeCurve.from_parts(self._edges[t.rows[r]], eid, t.adaptor(r), tuple(t.domain[r].tolist()),
                                          t.kinds[r], lambda u: t.evaluate(np.broadcast_to(rows, len(u)), u))
             self._ready[eid] = curve
         return curve

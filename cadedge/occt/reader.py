@@ -19,13 +19,13 @@ from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Builder, BRep_Tool
 from OCP.BRepBndLib import BRepBndLib
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
-from OCP.TopExp import TopExp
+from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS_Compound, TopoDS_Shape
 
 from ..errors import InputError
 from ..formats import INPUT_FORMATS
 from .compat import TopoDS, TopTools_IndexedMapOfShape
-from .loading import LoadedShape, count, quiet_occt
+from .loading import LoadedShape, quiet_occt
 
 __all__ = ["LoadedShape", "load_shape", "quiet_occt", "tolerance_warnings", "SUFFIXES"]
 
@@ -119,7 +119,7 @@ def _from_object(source: Any) -> LoadedShape:
     else:
         raise InputError(f"cannot refine a {kind}: expected a STEP, IGES or BREP file path, a cadquery "
                          "Workplane/Shape, a build123d shape or a TopoDS_Shape")
-    if shape.IsNull() or count(shape, TopAbs_EDGE) == 0:
+    if shape.IsNull() or not TopExp_Explorer(shape, TopAbs_EDGE).More():  # (no map of every edge)
         raise InputError(f"{desc}: empty shape (no edges)")
     return LoadedShape(shape=shape, source=desc, units="mm", warnings=tolerance_warnings(shape, "mm"))
 

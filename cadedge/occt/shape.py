@@ -57,14 +57,14 @@ def _anchor(points: np.ndarray, first: np.ndarray, last: np.ndarray, estimate: f
 
 
 def _refine_edge(topo: Topology, i: int, vpoints: np.ndarray, src: str, opts: dict[str, Any],
-                 notes: list[str], curves: dict[int, EdgeCurve]) -> ShapeEdgeGrid:
+                 notes: list[str], curves: dict[int, EdgeCurve], tolerance: float) -> ShapeEdgeGrid:
     eid = i + 1
     edge = topo.edges[i]
     v1, v2 = topo.edge_vertices[i]
     p1, p2 = vpoints[v1 - 1], vpoints[v2 - 1]
     degenerate = topo.is_degenerate(i)
     common = dict(id=eid, vertices=(v1, v2), degenerate=degenerate, closed=topo.is_closed(i),
-                  faces=list(topo.edge_faces[i]), tolerance=float(BRep_Tool.Tolerance_s(edge)))
+                  faces=list(topo.edge_faces[i]), tolerance=tolerance)
     if degenerate:
         try:
             kind = topo.curve_type(i)
@@ -104,15 +104,13 @@ def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np
 
 
 def _table_edge(topo: Topology, i: int, kind, k: int, chunk: tuple, ald: float,
-                notes: list[str]) -> ShapeEdgeGrid | None:
+                notes: list[str], tolerance: float) -> ShapeEdgeGrid | None:
     """Edge ``i``'s grid from row ``k`` of a compiled chunk, or None where the per-edge path must refine it."""
     _, status, offsets, params, points, estimate, raw_estimate, evaluations = chunk
     if status[k]:
         return None
-    edge = topo.edges[i]
     v1, v2 = topo.edge_vertices[i]
     lo, hi = offsets[k], offsets[k + 1]
-    tolerance = float(BRep_Tool.Tolerance_s(edge))
     if estimate[k] > ald and raw_estimate[k] <= ald:
         notes.append(f"edge {i + 1}: ald {estimate[k]:.3g} after snapping the ends to the vertices "
                      f"(vertices lie off the curve by up to {tolerance:.3g})")
@@ -150,10 +148,12 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
         targets, local_records, notes = edge_targets(local, topo, opts["ald"])
     except InputError as exc:
         raise InputError(f"{loaded.source}: {exc}") from exc
-    vpoints = np.array([BRep_Tool.Pnt_s(v).Coord() for v in topo.vertices], dtype=float).reshape(-1, 3)
+    vpoints = topo.vertex_points()
+    edge_tolerance, vertex_tolerance = topo.tolerances()
     total = len(topo.edges)
     batched = opts["min_length"] is None and opts["max_length"] is None and opts["max_growth"] is None
-    table = EdgeTable(topo.edges, [i for i in range(total) if not topo.is_degenerate(i)] if batched else [])
+    table = EdgeTable(topo.edges, [i for i in range(total) if not topo.is_degenerate(i)] if batched else [],
+                      topo.dump)
     row_of = {i: r for r, i in enumerate(table.rows)}
     edges: list[ShapeEdgeGrid] = []
     curves: dict[int, EdgeCurve] = {}  # built by the per-edge path; the table's are built on demand
@@ -167,11 +167,11 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
             if r is not None and r >= done:  # refine the next rows of the table in one compiled call
                 start, done = r, min(r + CHUNK, len(table))
                 chunk = (start, *_refine_rows(table, slice(start, done), targets, vpoints, topo))
-            grid = (_table_edge(topo, i, table.kinds[r], r - chunk[0], chunk, targets[i], notes)
+            grid = (_table_edge(topo, i, table.kinds[r], r - chunk[0], chunk, targets[i], notes, edge_tolerance[i])
                     if r is not None else None)
             if grid is None:
                 edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
-                grid = _refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes, curves)
+                grid = _refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes, curves, edge_tolerance[i])
             edges.append(grid)
             segments += len(edges[-1].params) - 1
             if segments > MAX_MODEL_SEGMENTS:
@@ -187,9 +187,8 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
         except GeometryError as exc:
             raise GeometryError(f"{loaded.source}: grading edge ends at vertices: {exc}") from exc
     spacing = vertex_spacings(edges)
-    vertices = [VertexGrid(id=k + 1, point=p, spacing=spacing.get(k + 1),
-                           tolerance=float(BRep_Tool.Tolerance_s(topo.vertices[k])))
-                for k, p in enumerate(vpoints)]
+    vertices = [VertexGrid(id=k + 1, point=p, spacing=spacing.get(k + 1), tolerance=tol)
+                for k, (p, tol) in enumerate(zip(vpoints, vertex_tolerance))]
     return ShapeGrid(source=loaded.source, units=loaded.units,
                      options={**opts, "ald_for": local_records} if local_records else dict(opts),
                      vertices=vertices, edges=edges, faces=len(topo.faces),

@@ -67,10 +67,31 @@ class Topology:
     is (first, last) vertex id in that edge's parameter direction. Methods take 0-based indices.
     """
 
-    def __init__(self, shape: TopoDS_Shape):
+    def __init__(self, shape: TopoDS_Shape, *, dump: bool = True):
         if shape is None or shape.IsNull():
             raise GeometryError("null shape: nothing to take the topology of")
         self.shape = shape
+        self._seam: list[bool] | None = None  # computed on first use: refining does not need it
+        #: The shape read in one call (:mod:`cadedge.occt.shapedump`, which needs numpy: ``dump=False`` walks
+        #: it through OCP, as for the shapes the dump does not take), or None where it was walked.
+        self.dump = None
+        if dump:
+            from . import shapedump
+            self.dump = shapedump.read(shape)
+        if self.dump is None:
+            self._walk(shape)
+            return
+        d = self.dump
+        self.edges, self.vertices, self.faces = d.edges, d.vertices, d.faces
+        self.edge_faces: list[list[int]] = d.edge_faces
+        missing = (d.edge_vertices == 0).any(axis=1).nonzero()[0]
+        if len(missing):
+            raise GeometryError(f"edge {missing[0] + 1} has no vertex at one end; cannot anchor its grid")
+        self.edge_vertices: list[tuple[int, int]] = list(map(tuple, d.edge_vertices.tolist()))
+        self._degenerate = d.degenerate.tolist()
+
+    def _walk(self, shape: TopoDS_Shape) -> None:
+        """The topology through OCP calls (about 10 per edge), for the shapes the dump does not take."""
         vmap, fmap = (_indexed(shape, k) for k in (TopAbs_VERTEX, TopAbs_FACE))
         ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
         TopExp.MapShapesAndAncestors_s(shape, TopAbs_EDGE, TopAbs_FACE, ancestors)
@@ -87,7 +108,7 @@ class Topology:
         self.faces: list[TopoDS_Face] = [TopoDS.Face_s(fmap.FindKey(i)) for i in range(1, fmap.Extent() + 1)]
         self.edge_faces: list[list[int]] = []
         self.edge_vertices: list[tuple[int, int]] = []
-        self._seam: list[bool] | None = None  # computed on first use: refining does not need it
+        self._degenerate: list[bool] | None = None
         first, last = TopoDS_Vertex(), TopoDS_Vertex()  # filled by TopExp::Vertices for each edge
         for i in range(1, ancestors.Extent() + 1):
             edge = forward(key(i))
@@ -104,6 +125,20 @@ class Topology:
                 raise GeometryError(f"edge {i} has no vertex at one end; cannot anchor its grid")
             self.edge_vertices.append((v1, v2))
 
+    def vertex_points(self) -> "np.ndarray":
+        """The vertices' points (n, 3), as ``BRep_Tool::Pnt`` gives them."""
+        if self.dump is not None:
+            return self.dump.vertex_points
+        import numpy as np
+
+        return np.array([BRep_Tool.Pnt_s(v).Coord() for v in self.vertices], dtype=float).reshape(-1, 3)
+
+    def tolerances(self) -> tuple[list[float], list[float]]:
+        """The edges' and the vertices' tolerances (``BRep_Tool::Tolerance``)."""
+        if self.dump is not None:
+            return self.dump.edge_tolerance.tolist(), self.dump.vertex_tolerance.tolist()
+        return ([BRep_Tool.Tolerance_s(e) for e in self.edges], [BRep_Tool.Tolerance_s(v) for v in self.vertices])
+
     def curve_type(self, i: int) -> str:
         """OCCT's curve type name of edge ``i`` (0-based), e.g. "Line", "BSplineCurve".
 
@@ -117,6 +152,8 @@ class Topology:
 
     def is_degenerate(self, i: int) -> bool:
         """True for an edge collapsed to a point (``BRep_Tool::Degenerated``)."""
+        if self._degenerate is not None:
+            return self._degenerate[i]
         return bool(BRep_Tool.Degenerated_s(self.edges[i]))
 
     def is_closed(self, i: int) -> bool:
