@@ -27,6 +27,20 @@ def grids() -> dict[str, cadedge.ShapeGrid]:
             for name in CLOSED_FIXTURES + ["open_face"]}
 
 
+@pytest.fixture(scope="module")
+def meshed(grids):
+    """``mesh_shape(grids[name])`` with the default options, run once per module for the tests that only
+    read the result (each gmsh run costs seconds)."""
+    cache: dict[str, object] = {}
+
+    def get(name: str):
+        if name not in cache:
+            cache[name] = mesh_shape(grids[name])
+        return cache[name]
+
+    return get
+
+
 def _assert_watertight(result) -> None:
     assert not result.failures, [f.line() for f in result.failures]
     assert result.check.ok, result.check.problems
@@ -44,20 +58,20 @@ def _assert_watertight(result) -> None:
 
 
 @pytest.mark.parametrize("name", CLOSED_FIXTURES)
-def test_closed_fixtures_are_watertight_and_carry_every_grid_node(grids, name):
-    result = mesh_shape(grids[name])
+def test_closed_fixtures_are_watertight_and_carry_every_grid_node(meshed, name):
+    result = meshed(name)
     _assert_watertight(result)
     assert result.check.min_angle_deg > 5.0
 
 
-def test_shells_match_solids(grids):
-    result = mesh_shape(grids["two_solids"])
+def test_shells_match_solids(grids, meshed):
+    result = meshed("two_solids")
     assert len(result.check.shells) == 2
     assert sum(len(s.faces) for s in result.check.shells) == grids["two_solids"].faces
 
 
-def test_open_shell_boundary_is_reported_not_failed(grids):
-    result = mesh_shape(grids["open_face"])
+def test_open_shell_boundary_is_reported_not_failed(meshed):
+    result = meshed("open_face")
     assert not result.failures and result.check.ok
     (shell,) = result.check.shells
     assert not shell.watertight and shell.bad_edges == 0
@@ -72,10 +86,10 @@ def test_sizes_mode_is_watertight_without_imposed_nodes(grids):
     assert result.check.grid_nodes == 0  # nodes are gmsh's own in this mode
 
 
-def test_interior_is_graded_not_overrefined(grids):
+def test_interior_is_graded_not_overrefined(grids, meshed):
     """Triangle sizes follow the edge spacings: far fewer triangles than a uniform mesh at the finest spacing."""
     grid = grids["bracket"]
-    result = mesh_shape(grid)
+    result = meshed("bracket")
     area = trimesh.Trimesh(result.nodes, result.triangles, process=False).area
     finest = min(min(e.spacing) for e in grid.edges if not e.degenerate)
     uniform = area / (np.sqrt(3) / 4 * finest ** 2)
@@ -135,8 +149,8 @@ def test_a_folded_grid_fails_its_faces_until_gmsh_meshes_that_edge_itself(grids)
     assert set(np.unique(result.triangle_faces)) == set(range(1, g.faces + 1))
 
 
-def test_check_finds_cracks_and_holes(grids):
-    result = mesh_shape(grids["cylinder"])
+def test_check_finds_cracks_and_holes(grids, meshed):
+    result = meshed("cylinder")
     nodes, tris = result.nodes, result.triangles
     holed = check_triangles(nodes, tris[1:])
     assert not holed.ok and any(not s.watertight for s in holed.shells)
