@@ -4,6 +4,7 @@ angles in order, on a real part (real OCCT, real gmsh)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from cadedge.mesh import mesh_shape
 from cadedge.mesh.optimize import _Face
@@ -36,3 +37,27 @@ def test_cylinder_caps_at_1e3_beat_gmsh_tuned():
     rep = result.report
     assert rep.min_angle >= 39.9 and rep.worst_deficit <= 1e-3
     assert all(f.min_angle >= 39.9 and f.status == "ok" for f in rep.faces)
+
+
+def test_a_straight_bspline_edge_is_split_like_a_line():
+    # STEP files often carry lines as B-splines (LLNL boxed_sphere's fillet edges): a cylinder converted
+    # to NURBS has a straight B-spline seam, which must be split to the face's curvature size as its Line
+    # is, not left as one segment beside small triangles.
+    cq = pytest.importorskip("cadquery")
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+
+    import cadedge
+    from cadedge.mesh.fidelity import fit_boundaries
+
+    line = cq.Workplane().cylinder(10.0, 2.0).val().wrapped
+    nurbs = BRepBuilderAPI_NurbsConvert(line).Shape()
+    seams = []
+    for shape in (line, nurbs):
+        grid = cadedge.refine_shape(shape, ald=1e-2)
+        fitted = fit_boundaries(grid, 1e-2)
+        pair = [(a, b) for a, b in zip(grid.edges, fitted.edges)
+                if not a.degenerate and np.ptp(a.points[:, :2], axis=0).max() < 1e-9]
+        assert len(pair) == 1 and pair[0][0].segments == 1  # the ALD leaves a straight edge one segment
+        seams.append(pair[0][1])
+    assert seams[0].curve == "Line" and seams[1].curve == "BSplineCurve"
+    assert seams[0].segments > 5 and abs(seams[1].segments - seams[0].segments) <= 0.2 * seams[0].segments
