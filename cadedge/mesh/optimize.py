@@ -57,9 +57,10 @@ LATER_STAGES = ((2, True), (2, False))
 #: rounds: each round starts from the last one's result, whose collapses and
 #: moves open new ones (the cylinder fixture's caps at 1e-3: 39.7 after one round, 41.2 after three).
 STAGE_ROUNDS = 4
-#: The second sweep's rounds go to the faces within this many degrees of the mesh's smallest angle: the
-#: faces that set it (the cylinder fixture's 41.5-degree side at 1e-3 spent 40% of the optimiser's time
-#: on rounds that did not change the mesh's 38.7).
+#: The second sweep's rounds go to the faces within this many degrees of the mesh's smallest angle (the
+#: faces that set it: the cylinder fixture's 41.5-degree side at 1e-3 spent 40% of the optimiser's time on
+#: rounds that did not change the mesh's 38.7) and still under
+#: :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW` degrees (about what gmsh alone reaches on such faces).
 SWEEP_MARGIN = 2.0
 #: A stage is kept when the face's :data:`WORST` smallest angles rise, compared in order (the smallest
 #: first): where the worst triangle is stuck the next ones can still rise, and the next round lift it.
@@ -282,8 +283,8 @@ def after_generate(ctx) -> None:
     angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`, in CPU time;
     on a slow machine a large model gets part of the faces: the worst go first). A first sweep gives each
     face one round of the later stages, a second the rest of :data:`STAGE_ROUNDS` to the faces it
-    changed that set the mesh's smallest angle (within :data:`SWEEP_MARGIN`), so one large face does
-    not take the time of the others. The faces whose mesh changed land in ``ctx.smoothed``."""
+    changed that set the mesh's smallest angle (within :data:`SWEEP_MARGIN`, under
+    :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW`), so one large face does not take the time of the others. The faces whose mesh changed land in ``ctx.smoothed``."""
     import time
 
     import gmsh
@@ -319,5 +320,5 @@ def after_generate(ctx) -> None:
                 kept.append(f)
                 ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
         floor = min((_face_min_angle(s) for s, o in ctx.outcomes.items() if o.ok), default=180.0)
-        todo = [s for s in changed if _face_min_angle(s) < floor + SWEEP_MARGIN]
+        todo = [s for s in changed if _face_min_angle(s) < min(floor + SWEEP_MARGIN, COLLAPSE_BELOW)]
     ctx.smoothed = sorted(set(kept))
