@@ -167,10 +167,11 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     """Improve one meshed gmsh surface: ``passes`` times edge swaps (:func:`flip_edges`, never a curve
     segment) then smoothing of its interior nodes (:func:`smooth_nodes`, :func:`climb_nodes`); then the
     :data:`LATER_STAGES` (with edge collapses while its smallest angle is under
-    :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW`, then without), each kept only if it raises the
-    smallest angle. A result replaces the face's mesh only if its
+    :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW`, then without), each kept only if it improves the
+    face (:meth:`_Face.better_than`), repeated for up to ``rounds`` rounds while a round improves it
+    (``passes=0``: the later stages only). A result replaces the face's mesh only if its
     smallest angle does not fall and its area deficit (against ``brep_area``) stays within ``target`` or
-    does not grow; a face that lost nodes is written again (its interior nodes and triangles; its curves'
+    does not grow (by more than ``slack``); a face that lost nodes is written again (its interior nodes and triangles; its curves'
     nodes stay). No pass or move starts after ``deadline`` (``time.time()``) or ``cpu_deadline``
     (``time.process_time()``). Returns whether the face's mesh changed."""
     import time
