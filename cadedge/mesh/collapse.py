@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .quality import triangle_angles
+from .quality import cross, triangle_angles
 
 #: Edges of triangles whose smallest angle is under this many degrees are tried (42 lifted two_solids'
 #: and red_cube_blue_cylinder's cylinder faces 1-1.5 degrees over 38; 45 collapsed too much).
@@ -37,7 +37,7 @@ PRE_SLACK = 2.0
 
 
 def _normal(p: np.ndarray) -> np.ndarray:
-    return np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    return cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
 
 
 def _trial_min(x: np.ndarray, new: np.ndarray, a: int, pos: np.ndarray) -> float:

@@ -75,6 +75,10 @@ CURVATURE_RATIO = 2.0
 #: (38 once split to the interior size, as gmsh alone gets). Curved edges keep 2: their ALD spacing is
 #: already near the size, and splitting circles too cost the bracket 30% more triangles.
 STRAIGHT_RATIO = 1.0
+#: An edge is straight when it is a line or its curve stays within this share of each segment's length
+#: of the chord (STEP files often carry lines as B-splines: LLNL boxed_sphere's 3.2 mm straight B-spline
+#: edges along its fillets kept one segment beside 0.12 mm triangles, 23.6 degrees).
+STRAIGHT_TOL = 1e-6
 #: A face meshed again aims at this share of the target (the deficit does not fall exactly as ``h**2``).
 AIM = 0.7
 
@@ -185,7 +189,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     nodes only added, so both faces of an edge still share its nodes):
 
     - its face is curved across it: longer than ``ratio`` times the face's curvature size there (see
-      :func:`per_circle`; :data:`STRAIGHT_RATIO` times on a straight edge);
+      :func:`per_circle`; :data:`STRAIGHT_RATIO` times on a straight edge, see :data:`STRAIGHT_TOL`);
     - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
       ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
       loses nothing to the cylinder, all to a planar cap), summed over the face's boundary, must stay
@@ -234,7 +238,8 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
         except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
             continue
         chord = e.segment_lengths
-        edge_ratio = min(ratio, STRAIGHT_RATIO) if e.curve == "Line" else ratio
+        straight = e.curve == "Line" or bool(np.all(np.linalg.norm(sagitta, axis=1) <= STRAIGHT_TOL * chord))
+        edge_ratio = min(ratio, STRAIGHT_RATIO) if straight else ratio
         pieces = np.ones(len(chord), dtype=int)
         for f, normals, curv in probed:
             tangential = sagitta - np.sum(sagitta * normals, axis=1)[:, None] * normals

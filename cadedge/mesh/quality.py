@@ -16,17 +16,29 @@ import numpy as np
 SLIVER_DEG = 5.0
 #: The share of triangles at or above this many degrees is the quality figure (target: 99%).
 GOOD_DEG = 20.0
+#: A triangle under :data:`SLIVER_DEG` in the wedge of a sharper face corner is forced when no triangle on
+#: its boundary segment there can get over this many degrees (see :func:`small_angles`): its apex would
+#: have to lie beyond the face's other side.
+WEDGE_BOUND = 2 * SLIVER_DEG
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (m, 3) arrays, by components (``np.cross`` spends most of its time
+    rearranging axes on the optimiser's many small arrays)."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
 
 
 def triangle_angles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Interior angles (m, 3) in degrees; column ``k`` is the angle at corner ``k``."""
     p = np.asarray(nodes, dtype=float)[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)]
+    e = [p[:, 1] - p[:, 0], p[:, 2] - p[:, 1], p[:, 0] - p[:, 2]]  # edge k leaves corner k
+    c = cross(e[0], e[1])
+    twice_area = np.sqrt(np.einsum("ij,ij->i", c, c))  # the same |a x b| at every corner
     out = np.empty((len(p), 3))
     for k in range(3):
-        a = p[:, (k + 1) % 3] - p[:, k]
-        b = p[:, (k + 2) % 3] - p[:, k]
-        cross = np.linalg.norm(np.cross(a, b), axis=1)
-        out[:, k] = np.degrees(np.arctan2(cross, np.einsum("ij,ij->i", a, b)))
+        out[:, k] = np.degrees(np.arctan2(twice_area, -np.einsum("ij,ij->i", e[k], e[k - 1])))
     return out
 
 
@@ -45,9 +57,12 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     """Every triangle under :data:`SLIVER_DEG`, worst first.
 
     Forced: its face narrows to a corner sharper than :data:`SLIVER_DEG` at a B-rep vertex (a node at one
-    of ``vertex_points`` where the sum of that face's triangle angles is that small), and the triangle
-    stands on the face's boundary only (all three nodes on it): it spans the two sides of the wedge,
-    which no node placement inside the face can avoid.
+    of ``vertex_points`` where the sum of that face's triangle angles is that small), and either the
+    triangle stands on the face's boundary only (all three nodes on it: it spans the two sides of the
+    wedge, which no node placement inside the face can avoid), or it stands on a boundary segment inside
+    that wedge where the face is so narrow that no triangle on that segment gets much over
+    :data:`WEDGE_BOUND` degrees (``atan(2 width / length)``, the width over the segment's middle; the
+    segments are the edge grids', which stay).
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     ang = triangle_angles(nodes, tris) if angles is None else angles
@@ -57,25 +72,42 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     faces = np.asarray(triangle_faces, dtype=np.int64)
     nodes = np.asarray(nodes, dtype=float)
     vpts = np.asarray(vertex_points, dtype=float).reshape(-1, 3)
-    wedges: dict[int, tuple[float, set[int]]] = {}
+    wedges: dict[int, tuple[float, set[int], set[tuple[int, int]], np.ndarray | None]] = {}
     for f in np.unique(faces[low]).tolist():
         mine = faces == f
         ftri, fang = tris[mine], ang[mine]
         edges = np.sort(np.concatenate([ftri[:, [0, 1]], ftri[:, [1, 2]], ftri[:, [2, 0]]]), axis=1)
         uniq, counts = np.unique(edges, axis=0, return_counts=True)
         boundary = set(np.unique(uniq[counts == 1]).tolist())
-        sharpest = 180.0
+        sides = {(int(a), int(b)) for a, b in uniq[counts == 1]}
+        sharpest, corner = 180.0, None
         if len(vpts):
             for node in boundary:
                 if np.min(np.linalg.norm(vpts - nodes[node], axis=1)) <= 1e-9 * (1.0 + np.abs(nodes[node]).max()):
-                    sharpest = min(sharpest, float(np.sum(fang[ftri == node])))
-        wedges[f] = (sharpest, boundary)
+                    total = float(np.sum(fang[ftri == node]))
+                    if total < sharpest:
+                        sharpest, corner = total, nodes[node]
+        wedges[f] = (sharpest, boundary, sides, corner)
     out = []
     for t in low[np.argsort(ang[low].min(axis=1))]:
         f = int(faces[t])
-        sharpest, boundary = wedges[f]
+        sharpest, boundary, sides, corner = wedges[f]
         forced = sharpest < SLIVER_DEG and all(int(n) in boundary for n in tris[t])
         reason = (f"the face narrows to a {sharpest:.2g}-degree corner at a B-rep vertex and the triangle spans "
                   "its two sides" if forced else "not forced by the B-rep")
+        if not forced and sharpest < SLIVER_DEG:
+            p = nodes[tris[t]]
+            k = int(np.argmax(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1)))  # longest edge: k -> k+1
+            a, b = int(tris[t, k]), int(tris[t, (k + 1) % 3])
+            if (min(a, b), max(a, b)) in sides:  # a boundary segment
+                length = float(np.linalg.norm(nodes[a] - nodes[b]))
+                reach = float(np.linalg.norm(0.5 * (nodes[a] + nodes[b]) - corner))
+                width = 2.0 * reach * np.tan(np.radians(sharpest) / 2.0)  # the wedge's width over its middle
+                bound = float(np.degrees(np.arctan(2.0 * width / length)))
+                if bound < WEDGE_BOUND:
+                    forced = True
+                    reason = (f"the face narrows to a {sharpest:.2g}-degree corner at a B-rep vertex and the "
+                              f"triangle stands on a {length:.2g} boundary segment in its wedge, about "
+                              f"{width:.2g} wide there (no triangle on it gets much over {bound:.2g} degrees)")
         out.append(SmallAngle(face=f, angle=float(ang[t].min()), forced=forced, reason=reason))
     return out

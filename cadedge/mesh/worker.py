@@ -80,6 +80,7 @@ class JobContext:
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
     deliver: Any = None  # deliver(dim, id, corners): hand mesh to the parent as it is made (see run_job)
     started: float = field(default_factory=time.time)  # time.time() when the child took the job
+    cpu_started: float = field(default_factory=time.process_time)  # the child's CPU time then
 
 
 @dataclass
