@@ -181,6 +181,14 @@ def table(records: list[dict]) -> list[str]:
     return out
 
 
+def _selects(name: str, path: Path, models: list[tuple[str, Path]]) -> bool:
+    """``--only NAME``: the model whose file name or stem is NAME if there is one (``sphere`` is not
+    ``boxed_sphere``), else every model whose file name contains NAME."""
+    if any(name in (p.name, p.stem) for _, p in models):
+        return name in (path.name, path.stem)
+    return name in path.name
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("models", nargs="*", type=Path, help="STEP files (default: corpus, fixtures, hard models)")
@@ -191,7 +199,8 @@ def main() -> int:
     parser.add_argument("--jsonl", type=Path, help="append each run's record here as it finishes")
     parser.add_argument("--table", type=Path, help="print the table of an earlier run's JSON lines and stop")
     parser.add_argument("--only", nargs="+", metavar="NAME",
-                        help="run only the default models whose file name contains one of these (e.g. spring)")
+                        help="run only these default models: a file name or stem selects that model, anything else "
+                        "every model whose file name contains it (e.g. T106)")
     parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
@@ -205,7 +214,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="hard-models-") as hard:
         models = [("", p) for p in args.models] if args.models else default_models(Path(hard))
         if args.only:
-            models = [(g, p) for g, p in models if any(n in p.name for n in args.only)]
+            models = [(g, p) for g, p in models if any(_selects(n, p, models) for n in args.only)]
         records = []
         for ald in args.ald:
             for mode in args.mode:

@@ -8,9 +8,12 @@ one lacks: a threaded bolt (helical thread, build123d), fillets and chamfers on 
 primitives, a drafted and shelled box, a non-planar sweep, a sphere-cylinder-cone union with tangent
 seams, a knurled cylinder (110 faces), a plate with a sliver slot and a tiny hole, an XDE assembly
 with one part instanced three times, a faceted solid (an STL mesh sewn into 228 planar faces) and a
-tube swept along a polyline with round bends.
+tube swept along a polyline with round bends. A third set: a non-manifold general fuse (inner faces
+shared by two solids), a STEP sewn across real gaps between its faces, disjoint bodies with a free
+polyline and tolerances wider than a slot (OCCT BREP: STEP keeps no per-entity tolerances) and an IGES
+file of unsewn trimmed surfaces.
 
-    python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step for every model
+    python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
 ``MODELS`` maps each name to a builder returning an OCP ``TopoDS_Shape``; ``write_model(name, folder)``
 writes one STEP file (``XDE_WRITERS`` through XDE, the others through cadquery's exporter).
@@ -239,6 +242,67 @@ def pipe_bends() -> object:
     return cq.Workplane("YZ").circle(2.0).circle(1.6).sweep(cq.Workplane().add(path), transition="round").val().wrapped
 
 
+def nonmanifold() -> object:
+    """A box and a cylinder through it joined by OCCT's general fuse (``BOPAlgo_Builder``), not fused:
+    the shared inner faces bound two solids, and their edges have three or four faces (non-manifold)."""
+    from OCP.BOPAlgo import BOPAlgo_Builder
+
+    builder = BOPAlgo_Builder()
+    builder.AddArgument(cq.Workplane().box(10, 10, 10).val().wrapped)
+    builder.AddArgument(cq.Workplane().cylinder(14, 3).translate((5, 0, 0)).val().wrapped)
+    builder.Perform()
+    if builder.HasErrors():
+        raise RuntimeError("the general fuse failed")
+    return builder.Shape()
+
+
+def gapped_sewn() -> object:
+    """A drilled, filleted box whose faces were moved apart by up to 0.02 and sewn back at tolerance 0.1:
+    real gaps between faces; written as STEP, OCCT reads it back with tolerances of about 0.04."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing
+
+    solid = cq.Workplane().box(12, 8, 5).edges("|Z").fillet(2).faces(">Z").workplane().hole(3).val()
+    sew = BRepBuilderAPI_Sewing(0.1)
+    for i, face in enumerate(solid.Faces()):
+        d = 0.01 * ((i * 7919) % 5 - 2)
+        sew.Add(face.translate(cq.Vector(d, -0.5 * d, 0.7 * d)).wrapped)
+    sew.Perform()
+    return sew.SewedShape()
+
+
+def write_very_loose(path: Path) -> None:
+    """Three disjoint bodies (a block with a 0.4-wide slot, a chamfered cylinder, a sphere) and a free
+    polyline, every tolerance forced to 0.5, wider than the slot: written as OCCT BREP, since STEP keeps no
+    per-entity tolerances (a STEP file read back has OCCT's own)."""
+    from OCP.BRepTools import BRepTools
+    from OCP.ShapeFix import ShapeFix_ShapeTolerance
+    from OCP.TopAbs import TopAbs_SHAPE
+
+    block = cq.Workplane().box(10, 6, 3).faces(">Z").workplane().rect(0.4, 4).cutBlind(-0.3).val()
+    cylinder = cq.Workplane().cylinder(4, 1.5).translate((12, 0, 0)).edges(">Z").chamfer(0.3).val()
+    ball = cq.Workplane().sphere(1.0).translate((0, 9, 0)).val()
+    wire = cq.Wire.makePolygon([cq.Vector(-5, -6, 0), cq.Vector(5, -6, 0), cq.Vector(5, -8, 2)])
+    shape = cq.Compound.makeCompound([block, cylinder, ball, wire]).wrapped
+    ShapeFix_ShapeTolerance().SetTolerance(shape, 0.5, TopAbs_SHAPE)
+    if not BRepTools.Write_s(shape, str(path)):
+        raise RuntimeError(f"OCCT could not write {path}")
+
+
+def write_iges_trimmed(path: Path) -> None:
+    """A filleted, drilled block fused with a lofted spline boss, written as IGES trimmed surfaces (faces
+    mode: no shared edges, every face its own shell, each seam two coinciding edges of its face)."""
+    from OCP.IGESControl import IGESControl_Writer
+
+    body = cq.Workplane().box(20, 14, 6).edges("|Z").fillet(2.5).faces(">Z").workplane().hole(3).val()
+    boss = (cq.Workplane().workplane(offset=3).spline([(4, -3), (8, -1), (7, 3), (3, 2)], includeCurrent=False)
+            .close().workplane(offset=4).circle(1.5).loft().val())
+    writer = IGESControl_Writer("MM", 0)
+    writer.AddShape(body.fuse(boss).clean().wrapped)
+    writer.ComputeModel()
+    if not writer.Write(str(path)):
+        raise RuntimeError(f"OCCT could not write {path}")
+
+
 def write_xde_assembly(path: Path) -> None:
     """A STEP assembly through XDE: a drilled plate and one chamfered bolt placed three times (one shared
     product, three instances under a sub-assembly)."""
@@ -317,14 +381,24 @@ MODELS: dict[str, Callable[[], object]] = {
     "threaded_bolt": threaded_bolt, "filleted_boolean": filleted_boolean, "shelled_drafted": shelled_drafted,
     "swept_nonplanar": swept_nonplanar, "tangent_union": tangent_union, "knurled": knurled,
     "sliver_hole": sliver_hole, "faceted": faceted, "pipe_bends": pipe_bends,
+    "nonmanifold": nonmanifold, "gapped_sewn": gapped_sewn,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
-NAMES = list(MODELS) + list(XDE_WRITERS)
+#: Models written in another format, by their own writer: name -> (suffix, writer).
+OTHER_FORMATS: dict[str, tuple[str, Callable[[Path], None]]] = {
+    "very_loose": (".brep", write_very_loose), "iges_trimmed": (".igs", write_iges_trimmed)}
+NAMES = list(MODELS) + list(XDE_WRITERS) + list(OTHER_FORMATS)
 
 
 def write_model(name: str, folder: Path) -> Path:
-    """Write model ``name`` as ``folder/<name>.step``; returns the path."""
+    """Write model ``name`` as ``folder/<name>.step`` (``.brep``, ``.igs`` for ``OTHER_FORMATS``); returns
+    the path."""
+    if name in OTHER_FORMATS:
+        suffix, writer = OTHER_FORMATS[name]
+        path = Path(folder) / f"{name}{suffix}"
+        writer(path)
+        return path
     path = Path(folder) / f"{name}.step"
     if name in XDE_WRITERS:
         XDE_WRITERS[name](path)

@@ -78,15 +78,15 @@ def test_the_whole_run_is_bounded_by_the_timeout(cylinder, tmp_path):
                         timeout=4, face_timeout=100)
     assert time.monotonic() - t0 < 20
     assert not result.ok
-    # Out of time either with nothing delivered (the job's error) or, when the hung attempt was killed
-    # before the end, with the faces meshed so far: then face 2 is named as out of time and only a
-    # partial mesh is written.
+    # Out of time either with nothing delivered (the job's error) or with the faces meshed so far (face 1,
+    # in its own first batch, before face 2 hung): then face 2 is named as out of time (killed at the
+    # soft deadline) or not finished at the hard timeout, and only a partial mesh is written.
     if result.error is not None:
         assert "no result within 4 s" in result.error
         assert not (tmp_path / "c.msh").exists()
     else:
         failed = {f.face: f.reason for f in result.failures}
-        assert "out of time" in failed[2]
+        assert "out of time" in failed[2] or "no result within 4 s (--timeout)" in failed[2]
         assert (tmp_path / "c.msh").exists() == (len(result.triangles) > 0)
 
 

@@ -4,8 +4,9 @@ Per connected shell of triangles (trimesh's face-adjacency components): every tr
 shared by exactly two triangles, except edges on B-rep edges that bound fewer or more faces (free
 boundaries of open shells are expected once; non-manifold edges as often as they have faces). Nodes at
 identical coordinates under different tags within one shell are a hidden crack and fail the check
-(separate shells may touch). Every edge-grid point must be a node of some triangle, at exactly its
-coordinates. Quality is reported, not judged: the minimum angle, the share of triangles under
+(separate shells may touch; nodes that all lie on free-boundary segments of B-rep edges are a gap of the
+input itself, as where an IGES face's seam is two edges). Every edge-grid point must be a node of some
+triangle, at exactly its coordinates. Quality is reported, not judged: the minimum angle, the share of triangles under
 :data:`SMALL_ANGLE` degrees and the faces that hold them (worst first).
 """
 
@@ -145,11 +146,18 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
                             "edges not shared by the expected number of triangles (not watertight/conforming)")
     used_nodes = np.unique(tris)
     keys = _row_keys(nodes[used_nodes])
+    # nodes on free-boundary segments of B-rep edges: where two such edges coincide the B-rep itself is open
+    # (an IGES face whose seam is two edges), so their coinciding nodes are the input's gap, not a crack
+    on_free = np.zeros(len(nodes), dtype=bool)
+    on_free[uniq[boundary].ravel()] = True
     n_dup = 0
     for comp in labels:  # separate shells may touch (an assembly); within one shell it is a crack
-        comp_keys = _row_keys(nodes[np.unique(tris[np.asarray(comp)])])
-        _, dup_counts = np.unique(comp_keys, return_counts=True)
-        n_dup += int((dup_counts > 1).sum())
+        comp_nodes = np.unique(tris[np.asarray(comp)])
+        _, dup_inverse, dup_counts = np.unique(_row_keys(nodes[comp_nodes]), return_inverse=True,
+                                               return_counts=True)
+        inner = np.zeros(len(dup_counts), dtype=bool)  # a copy not on a free boundary: a crack of the mesh
+        np.logical_or.at(inner, dup_inverse.ravel(), ~on_free[comp_nodes])
+        n_dup += int(((dup_counts > 1) & inner).sum())
     if n_dup:
         problems.append(f"{n_dup} coordinates carry more than one mesh node within a shell (a crack between faces)")
     n_grid = n_missing = 0

@@ -2,9 +2,9 @@
 
 Every surface is meshed on its own (``Mesh.MeshOnlyVisible`` with only that surface visible), so one face
 that gmsh cannot mesh, or that hangs or crashes it, is known by name. The first attempt meshes faces in
-batches of :data:`BATCH_FACES` (one ``generate`` call each: every call re-walks the whole model's mesh, so
-one call per face grows quadratically with the model, 15-25% of the time on a 192-face model); a batch
-that hangs or crashes gmsh is done again face by face. A face passes when it carries
+batches of 1, 2, 4, ... up to :data:`BATCH_FACES` faces (one ``generate`` call each: every call re-walks the
+whole model's mesh, so one call per face grows quadratically with the model, 15-25% of the time on a
+192-face model); a batch that hangs or crashes gmsh is done again face by face. A face passes when it carries
 triangles whose edges on its boundary curves are exactly the curve segments, each used as often as the
 curve bounds the face (seams twice), and whose other edges are shared by two triangles. A face that
 fails is cleared and retried through :data:`STRATEGIES`: other 2-D algorithms, finer and coarser local
@@ -296,14 +296,27 @@ BATCH_FACES = 24
 FACE_OPTIONS = ("Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeMin", "Mesh.MeshSizeMax", "Mesh.MeshSizeFactor")
 
 
+def _chunks(surfaces: list[int]) -> list[list[int]]:
+    """``surfaces`` in chunks of 1, 2, 4, ... faces, then :data:`BATCH_FACES`: a chunk stopped as hung
+    loses the time of all its faces, so the first chunks are small (on mesh_T106_V3 in sizes mode at ALD
+    1e-3, face 1 alone takes about 50 s of CPU: the 8 faces in one chunk were stopped at the bound of one
+    attempt, and meshed one by one after it only 1 face was done by the soft deadline); large models
+    still get chunks of :data:`BATCH_FACES` after the first few."""
+    out, i, size = [], 0, 1
+    while i < len(surfaces):
+        out.append(surfaces[i:i + size])
+        i += size
+        size = min(2 * size, BATCH_FACES)
+    return out
+
+
 def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
                   batch_started: Callable[[list[int]], None], prepare: Callable[[int, int], None],
                   finished: Callable[[int, int, str | None], None]) -> None:
-    """The first strategy on ``surfaces`` in chunks of :data:`BATCH_FACES`, one gmsh call per group of
+    """The first strategy on ``surfaces`` in :func:`_chunks`, one gmsh call per group of
     faces whose ``prepare`` leaves the same :data:`FACE_OPTIONS`; outcomes go into ``out``."""
     first = STRATEGIES[0]
-    for i in range(0, len(surfaces), BATCH_FACES):
-        chunk = surfaces[i:i + BATCH_FACES]
+    for chunk in _chunks(surfaces):
         batch_started([out[s].face for s in chunk])
         groups: dict[tuple[float, ...], list[int]] = {}
         for s in chunk:

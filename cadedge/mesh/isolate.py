@@ -216,6 +216,8 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                     _write(delivered, output)
                 return delivered.result
             words = run.last.split()
+            if words[:1] == ["batch"] and len(words) == 2:  # a batch of one face: that face's first attempt
+                words = ["face", words[1], "0"]
             if words[:1] == ["batch"] and len(words) > 1:
                 _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
                 faces = [int(w) for w in words[1:]]
