@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "_bintools.h"
 #include "_kernels.h"
 
 enum { LINE = 0, CONIC = 1, SPLINE = 2 };
@@ -31,33 +32,7 @@ typedef struct {
 
 /* ---------------------------------------------------------------- growable arrays */
 
-typedef struct {
-    double *d;
-    Py_ssize_t n, cap;
-} Vec;
-
-static int reserve(Vec *v, Py_ssize_t extra)
-{
-    if (v->n + extra <= v->cap)
-        return 0;
-    Py_ssize_t cap = v->cap ? v->cap : 64;
-    while (cap < v->n + extra)
-        cap *= 2;
-    double *d = realloc(v->d, cap * sizeof(double));
-    if (!d)
-        return -1;
-    v->d = d, v->cap = cap;
-    return 0;
-}
-
-static int push(Vec *v, const double *x, Py_ssize_t k)
-{
-    if (reserve(v, k) < 0)
-        return -1;
-    memcpy(v->d + v->n, x, k * sizeof(double));
-    v->n += k;
-    return 0;
-}
+/* Vec, vec_reserve and vec_push: _bintools.h */
 
 /* ---------------------------------------------------------------- numpy's arithmetic */
 
@@ -382,7 +357,7 @@ static int explore(const Geometry *g, Py_ssize_t e, const Job *job, const Settin
         return PYTHON_PATH;
     }
     Py_ssize_t live = nr - 1, nfirst = 2 * nr - 1;
-    TRY(reserve(&U, nfirst) == 0 && reserve(&P, 3 * nfirst) == 0);
+    TRY(vec_reserve(&U, nfirst) == 0 && vec_reserve(&P, 3 * nfirst) == 0);
     memcpy(U.d, ua, nr * sizeof(double));
     for (Py_ssize_t i = 0; i < live; i++)
         U.d[nr + i] = 0.5 * (ua[i] + ua[i + 1]);
@@ -415,7 +390,7 @@ static int explore(const Geometry *g, Py_ssize_t e, const Job *job, const Settin
                                          s->asymptotic, corners, &n_corners, split, gains, &rem);
         TRY(n_split >= 0);
         remainder += rem;
-        TRY(push(&C, corners, n_corners) == 0);
+        TRY(vec_push(&C, corners, n_corners) == 0);
         free(corners), corners = NULL;
         if (!n_split)
             break;
@@ -432,7 +407,7 @@ static int explore(const Geometry *g, Py_ssize_t e, const Job *job, const Settin
         }
         TRY(evaluate(g, e, q, 2 * n_split, pq) == 0);
         samples += 2 * n_split, x->evaluations += 2 * n_split;
-        TRY(push(&U, q, 2 * n_split) == 0 && push(&P, pq, 6 * n_split) == 0);
+        TRY(vec_push(&U, q, 2 * n_split) == 0 && vec_push(&P, pq, 6 * n_split) == 0);
         Py_ssize_t next = 2 * n_split;
         TRY(c = malloc(13 * next * sizeof(double)));
         double *cu = c, *cm = c + next, *cb = c + 2 * next, *cr = c + 3 * next, *cpa = c + 4 * next,
@@ -736,7 +711,7 @@ static int refine_one(const Geometry *g, Py_ssize_t e, const Job *job, const Set
         goto fail;
     }
     r->raw_estimate = estimate;
-    TRY(push(&r->params, params_out, size) == 0 && push(&r->points, points_out, 3 * size) == 0);
+    TRY(vec_push(&r->params, params_out, size) == 0 && vec_push(&r->points, points_out, 3 * size) == 0);
     double *anchored = r->points.d + r->points.n - 3 * size;
     memcpy(anchored, job->first, 3 * sizeof(double));
     memcpy(anchored + 3 * (size - 1), job->last, 3 * sizeof(double));
@@ -751,8 +726,6 @@ fail:
     free(cum), free(scratch), free(eq_u), free(eq_p), free(pts), free(cidx), free(stops), free(nodes), free(fixed);
     return status;
 }
-
-static PyObject *as_bytes(const void *data, Py_ssize_t size) { return PyByteArray_FromStringAndSize(data, size); }
 
 /* refine_edges(kind, gofs, ints, gdata, hofs, hdata, domain, ald, exact, first, last, settings)
  *   -> (status, offsets, params, points, estimate, raw_estimate, evaluations), each a bytearray of int64 or float64

@@ -9,17 +9,24 @@ enum { BT_LINE = 1, BT_CIRCLE, BT_ELLIPSE, BT_PARABOLA, BT_HYPERBOLA, BT_BEZIER,
 enum { S_PLANE = 1, S_CYLINDER, S_CONE, S_SPHERE, S_TORUS, S_EXTRUSION, S_REVOLUTION, S_BEZIER, S_BSPLINE,
        S_RECTANGULAR, S_OFFSET };
 
-static int push(Vec *v, const double *x, Py_ssize_t k)
+int vec_reserve(Vec *v, Py_ssize_t extra)
 {
-    if (v->n + k > v->cap) {
-        Py_ssize_t cap = v->cap ? v->cap : 256;
-        while (cap < v->n + k)
-            cap *= 2;
-        double *d = realloc(v->d, cap * sizeof(double));
-        if (!d)
-            return -1;
-        v->d = d, v->cap = cap;
-    }
+    if (v->n + extra <= v->cap)
+        return 0;
+    Py_ssize_t cap = v->cap ? v->cap : 64;
+    while (cap < v->n + extra)
+        cap *= 2;
+    double *d = realloc(v->d, cap * sizeof(double));
+    if (!d)
+        return -1;
+    v->d = d, v->cap = cap;
+    return 0;
+}
+
+int vec_push(Vec *v, const double *x, Py_ssize_t k)
+{
+    if (vec_reserve(v, k) < 0)
+        return -1;
     memcpy(v->d + v->n, x, k * sizeof(double));
     v->n += k;
     return 0;
@@ -148,7 +155,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
         for (int k = 0; k < 6; k++)
             v[k] = f64(r);
         m[0] = LINE;
-        return push(out, v, 6) < 0 ? -1 : 1;
+        return vec_push(out, v, 6) < 0 ? -1 : 1;
     }
     if (type == BT_CIRCLE || type == BT_ELLIPSE) {
         int radii = type == BT_CIRCLE ? 1 : 2;
@@ -164,7 +171,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
         v[10] = radii == 2 ? le_double(p + 104) : v[9];
         r->pos += 96 + 8 * radii;
         m[0] = CONIC;
-        return push(out, v, 11) < 0 ? -1 : 1;
+        return vec_push(out, v, 11) < 0 ? -1 : 1;
     }
     if (type == BT_BEZIER || type == BT_BSPLINE) {
         int spline = type == BT_BSPLINE;
@@ -181,7 +188,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
             return 0;
         const unsigned char *p = r->d + r->pos;
         double nan = NAN;
-        if (push(out, &nan, 1) < 0)
+        if (vec_push(out, &nan, 1) < 0)
             return -1;
         Py_ssize_t knots = 0;
         if (spline) {
@@ -192,7 +199,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
                 if (mult < 0 || knots + mult > n + degree + 1) /* at most poles + degree + 1 in all */
                     return fail(r, "a spline's knot multiplicities exceed its poles");
                 for (int32_t j = 0; j < mult; j++)
-                    if (push(out, &knot, 1) < 0)
+                    if (vec_push(out, &knot, 1) < 0)
                         return -1;
                 knots += mult;
             }
@@ -200,7 +207,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
             double ends[2] = {0.0, 1.0};
             for (int e = 0; e < 2; e++)
                 for (long j = 0; j <= degree; j++)
-                    if (push(out, ends + e, 1) < 0)
+                    if (vec_push(out, ends + e, 1) < 0)
                         return -1;
             knots = 2 * (degree + 1);
         }
@@ -210,7 +217,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
                 v[k] = le_double(p + 8 * (dim * i + k));
             if (rational)
                 v[0] *= v[3], v[1] *= v[3], v[2] *= v[3];
-            if (push(out, v, dim) < 0)
+            if (vec_push(out, v, dim) < 0)
                 return -1;
         }
         r->pos += n * 8 * dim + nk * 12;

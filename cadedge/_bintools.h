@@ -22,6 +22,10 @@ typedef struct {
     Py_ssize_t n, cap;
 } Vec;
 
+/* A growable array of doubles: room for ``extra`` more, or ``k`` values appended (-1 when out of memory). */
+int vec_reserve(Vec *v, Py_ssize_t extra);
+int vec_push(Vec *v, const double *x, Py_ssize_t k);
+
 static inline PyObject *as_bytes(const void *data, Py_ssize_t size)
 {
     return PyByteArray_FromStringAndSize(data, size);
