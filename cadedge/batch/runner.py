@@ -237,15 +237,11 @@ class _Running:
 def _fetch(future: Any, wait: float) -> tuple[dict[str, Any] | None, str | None] | None:
     """The summary of a finished task, or its failure reason; None if not fetched within ``wait``
     seconds (its worker is not answering, or its lost result is being computed again)."""
-    from distributed.client import FutureCancelledError
-
     try:
         return future.result(timeout=wait), None
     except TimeoutError:
         return None
-    except FutureCancelledError:
-        return None, _failure_reason(future)
-    except Exception:  # the task, computed again after its worker left, failed this time
+    except Exception:  # cancelled, or computed again after its worker left and failed this time
         return None, _failure_reason(future)
 
 
