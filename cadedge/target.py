@@ -34,6 +34,10 @@ EXACT_MARGIN = 1e-3
 AGREEMENT = 0.25
 #: Most placements measured while searching for the fewest equidistributed segments.
 MAX_TRIALS = 10
+#: Fewest segments on a closed curve: one has no length and two retrace each other, neither bounds a face.
+MIN_CLOSED_SEGMENTS = 3
+#: Ends closer than this share of the length make a curve closed.
+CLOSED = 1e-9
 #: Samples per max_length that a max_length placement can choose among.
 MAX_LENGTH_SAMPLES = 8
 #: Most segments ``max_length`` may force on one curve (each takes ``MAX_LENGTH_SAMPLES`` samples): past
@@ -127,6 +131,12 @@ def refine_target(ev, a: float, b: float, *, ald: float, min_length: float | Non
         if eq is not None and (len(eq[0]) < len(params) or (
                 len(eq[0]) == len(params) and polyline_length(eq[1]) > chord_length(p, nodes))):
             params, points = eq
+    if len(params) <= MIN_CLOSED_SEGMENTS and row_norms(p[-1:] - p[:1])[0] <= CLOSED * total:
+        params = equidistribute(u, ex.cumulative, ex.cumulative, MIN_CLOSED_SEGMENTS, corner_idx)
+        points = evaluate_new(ev, u, params, p)
+        if min_length is not None:
+            notes.append(f"min_length {min_length:g} would leave this closed curve fewer than "
+                         f"{MIN_CLOSED_SEGMENTS} segments (no polygon); it has {len(params) - 1}")
     if max_growth is not None and min_length is None and len(params) > 2 and worst_growth(points) > max_growth:
         params, points = regrade(ev, ex, corner_idx, params, points, max_growth, ald, total, limit)
     length = polyline_length(points)

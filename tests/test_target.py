@@ -122,3 +122,20 @@ def test_max_growth_too_tight_warns_instead_of_looping():
     worst = np.max(np.maximum(s[1:] / s[:-1], s[:-1] / s[1:]))
     assert worst <= 1.05 or any("max_growth" in str(w.message) for w in caught)
     assert g.segments < 20_000
+
+
+def test_a_closed_curve_keeps_a_polygon_whatever_the_options(fixtures_dir):
+    """One segment on a closed curve has no length and two retrace each other: neither bounds a face.
+    A closed curve keeps at least 3 segments, whether min_length or a coarse target would leave fewer
+    (with min_length, a note says so), in the per-edge and the compiled path alike."""
+    circle = lambda u: np.c_[np.cos(u), np.sin(u), np.zeros_like(u)]  # noqa: E731
+    grid = cadedge.refine_curve(circle, (0.0, 2 * np.pi), ald=1e-2, min_length=5.0)
+    assert len(grid.params) == 4 and np.allclose(np.diff(grid.params), 2 * np.pi / 3, rtol=1e-3)
+    assert any("fewer than 3 segments" in w for w in grid.warnings)
+    assert len(cadedge.refine_curve(circle, (0.0, 2 * np.pi), ald=0.5).params) == 4
+    pytest.importorskip("OCP")
+    from cadedge import refine_shape
+
+    for opts in (dict(ald=0.5), dict(ald=1e-2, min_length=20.0)):
+        shape = refine_shape(fixtures_dir / "cylinder.step", **opts)
+        assert [e.segments for e in shape.edges if e.closed] == [3, 3]

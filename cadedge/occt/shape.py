@@ -26,6 +26,7 @@ from ..grid import polyline_length
 from ..options import refine_options
 from ..refine import refine_curve
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
+from ..target import MIN_CLOSED_SEGMENTS
 from .edgecurve import EdgeCurve
 from .edgetable import EdgeTable, TableCurves, refine_table
 from .localald import check_ald_for, edge_targets
@@ -107,10 +108,10 @@ def _table_edge(topo: Topology, i: int, kind, k: int, chunk: tuple, ald: float,
                 notes: list[str], tolerance: float) -> ShapeEdgeGrid | None:
     """Edge ``i``'s grid from row ``k`` of a compiled chunk, or None where the per-edge path must refine it."""
     _, status, offsets, params, points, estimate, raw_estimate, evaluations = chunk
-    if status[k]:
-        return None
     v1, v2 = topo.edge_vertices[i]
     lo, hi = offsets[k], offsets[k + 1]
+    if status[k] or (v1 == v2 and hi - lo - 1 < MIN_CLOSED_SEGMENTS):  # (a closed edge: see refine_target)
+        return None
     if estimate[k] > ald and raw_estimate[k] <= ald:
         notes.append(f"edge {i + 1}: ald {estimate[k]:.3g} after snapping the ends to the vertices "
                      f"(vertices lie off the curve by up to {tolerance:.3g})")
