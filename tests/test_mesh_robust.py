@@ -215,6 +215,34 @@ def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
     assert not (tmp_path / "c.msh").exists()
 
 
+def test_the_gmsh_child_dies_with_its_caller(tmp_path):
+    """A caller killed outright (SIGKILL: no handler, no cleanup) takes its gmsh child with it, even one hung
+    in a face: an orphan would go on meshing or hanging with nobody to time it."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]))
+    code = ("import functools, sys; import cadedge.mesh as m; from cadedge.cli import main; "
+            "m.mesh_shape = functools.partial(m.mesh_shape, hooks={'before_face': ['mesh_faults:hang']}); "
+            "sys.exit(main(['mesh', 'cyl.step', '--ald', '1e-2', '-o', 'c.msh']))")
+    (tmp_path / "cyl.step").write_bytes(CYL.read_bytes())
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    parent = psutil.Process(proc.pid)
+    deadline = time.monotonic() + 120
+    child = None
+    while child is None and time.monotonic() < deadline and proc.poll() is None:
+        child = next((c for c in parent.children() if "cadedge.mesh.worker" in " ".join(c.cmdline())), None)
+        time.sleep(0.05)
+    if child is None:
+        proc.kill()
+        pytest.fail("the gmsh child never started")
+    proc.kill()
+    proc.communicate(timeout=60)
+    try:
+        child.wait(timeout=30)
+    except psutil.TimeoutExpired:
+        child.kill()
+        pytest.fail("the gmsh child outlived its caller")
+
+
 def _hard_models():
     sys.path.insert(0, str(ROOT / "scripts"))
     try:

@@ -45,7 +45,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from .generate import STRATEGIES
-from .worker import JobResult, MeshJob, empty_result
+from .worker import PARENT_ENV, JobResult, MeshJob, empty_result
 
 #: Default bound on one mesh job (all faces, all retries, restarts included), in seconds.
 DEFAULT_TIMEOUT = 300.0
@@ -138,7 +138,7 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
             os.remove(p)
     with open(job_path, "wb") as f:
         pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p), **{PARENT_ENV: str(os.getpid())})
     with open(os.path.join(tmp, "stderr"), "w+") as err:
         proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path,
                                  os.path.join(tmp, "faces")],
