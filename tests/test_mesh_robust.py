@@ -189,7 +189,8 @@ def test_cli_internal_error_on_a_valid_file_is_one_line_exit_1(tmp_path, monkeyp
     assert err == ["cadedge mesh: part.step: internal error: ValueError: injected fault"]
 
 
-def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
+def _cli_hung_in_gmsh(tmp_path):
+    """``cadedge mesh`` in a new process whose gmsh child hangs in a face: (the process, the child)."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]))
     code = ("import functools, sys; import cadedge.mesh as m; from cadedge.cli import main; "
             "m.mesh_shape = functools.partial(m.mesh_shape, hooks={'before_face': ['mesh_faults:hang']}); "
@@ -206,6 +207,11 @@ def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
     if child is None:
         proc.kill()
         pytest.fail("the gmsh child never started")
+    return proc, child
+
+
+def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
+    proc, child = _cli_hung_in_gmsh(tmp_path)
     time.sleep(1.0)  # into the hung face attempt
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
@@ -218,22 +224,7 @@ def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
 def test_the_gmsh_child_dies_with_its_caller(tmp_path):
     """A caller killed outright (SIGKILL: no handler, no cleanup) takes its gmsh child with it, even one hung
     in a face: an orphan would go on meshing or hanging with nobody to time it."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]))
-    code = ("import functools, sys; import cadedge.mesh as m; from cadedge.cli import main; "
-            "m.mesh_shape = functools.partial(m.mesh_shape, hooks={'before_face': ['mesh_faults:hang']}); "
-            "sys.exit(main(['mesh', 'cyl.step', '--ald', '1e-2', '-o', 'c.msh']))")
-    (tmp_path / "cyl.step").write_bytes(CYL.read_bytes())
-    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    parent = psutil.Process(proc.pid)
-    deadline = time.monotonic() + 120
-    child = None
-    while child is None and time.monotonic() < deadline and proc.poll() is None:
-        child = next((c for c in parent.children() if "cadedge.mesh.worker" in " ".join(c.cmdline())), None)
-        time.sleep(0.05)
-    if child is None:
-        proc.kill()
-        pytest.fail("the gmsh child never started")
+    proc, child = _cli_hung_in_gmsh(tmp_path)
     proc.kill()
     proc.communicate(timeout=60)
     try:
