@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -221,9 +222,12 @@ def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
     assert not (tmp_path / "c.msh").exists()
 
 
-def test_the_gmsh_child_dies_with_its_caller(tmp_path):
+def test_the_gmsh_child_dies_with_its_caller(cylinder, tmp_path):
     """A caller killed outright (SIGKILL: no handler, no cleanup) takes its gmsh child with it, even one hung
-    in a face: an orphan would go on meshing or hanging with nobody to time it."""
+    in a face: an orphan would go on meshing or hanging with nobody to time it. The job folder it leaves is
+    removed by the next mesh job, and a live caller's folder is not."""
+    import tempfile
+
     proc, child = _cli_hung_in_gmsh(tmp_path)
     proc.kill()
     proc.communicate(timeout=60)
@@ -232,6 +236,15 @@ def test_the_gmsh_child_dies_with_its_caller(tmp_path):
     except psutil.TimeoutExpired:
         child.kill()
         pytest.fail("the gmsh child outlived its caller")
+    root = Path(tempfile.gettempdir())
+    left = list(root.glob(f"cadedge-mesh-{proc.pid}-*"))
+    assert left  # killed outright, the caller could not clean up
+    live = Path(tempfile.mkdtemp(prefix=f"cadedge-mesh-{os.getpid()}-"))
+    try:
+        assert mesh_shape(cylinder).ok
+        assert not any(p.exists() for p in left) and live.exists()
+    finally:
+        live.rmdir()
 
 
 def _hard_models():

@@ -77,7 +77,7 @@ def shape_to_brep(shape: object) -> bytes:
     """The OCCT shape as BREP text (the form in which it crosses to gmsh and to a child process)."""
     from OCP.BRepTools import BRepTools
 
-    with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="cadedge-brep-") as tmp:
         path = os.path.join(tmp, "shape.brep")
         if not BRepTools.Write_s(shape, path):
             raise GeometryError("OCCT could not write the shape as BREP for gmsh")

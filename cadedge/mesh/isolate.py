@@ -44,8 +44,9 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
+from ..childproc import child_env
 from .generate import STRATEGIES
-from .worker import PARENT_ENV, JobResult, MeshJob, empty_result
+from .worker import JobResult, MeshJob, empty_result
 
 #: Default bound on one mesh job (all faces, all retries, restarts included), in seconds.
 DEFAULT_TIMEOUT = 300.0
@@ -61,6 +62,8 @@ WALL_SLACK = 3.0
 #: Restarts after hung or crashed face attempts, at most.
 MAX_RESTARTS = 12
 _POLL = 0.05
+#: A job's private folder: this prefix, the caller's pid, a dash (see :func:`_remove_orphaned_folders`).
+FOLDER_PREFIX = "cadedge-mesh-"
 #: Progress lines that mark work the watchdog bounds: one face attempt, a batch of them, a finer re-mesh.
 _ATTEMPT_LINES = ("face ", "batch ", "refine ")
 
@@ -138,7 +141,7 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
             os.remove(p)
     with open(job_path, "wb") as f:
         pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p), **{PARENT_ENV: str(os.getpid())})
+    env = child_env()
     with open(os.path.join(tmp, "stderr"), "w+") as err:
         proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path,
                                  os.path.join(tmp, "faces")],
@@ -192,7 +195,8 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     events: list[str] = []
     skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
     known_ok: dict[int, int] = dict(job.known_ok)
-    with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
+    _remove_orphaned_folders()
+    with tempfile.TemporaryDirectory(prefix=f"{FOLDER_PREFIX}{os.getpid()}-") as tmp:
         job.output = os.path.join(tmp, "mesh" + output.suffix.lower()) if output is not None else None
         for _ in range(MAX_RESTARTS + 1):
             job.skip, job.known_ok = skip, known_ok
@@ -248,6 +252,37 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                           "process")
         return _failed(f"gave up after {MAX_RESTARTS} restarts of the mesh process", events)
+
+
+def _remove_orphaned_folders() -> None:
+    """Remove the job folders of callers that ended without cleaning up (killed outright, or by a signal
+    Python does not handle): a hung or killed job leaves its shape, progress and delivered faces there,
+    megabytes on a large model. Only this user's folders whose process is gone are touched."""
+    root = tempfile.gettempdir()
+    try:
+        names = [n for n in os.listdir(root) if n.startswith(FOLDER_PREFIX)]
+    except OSError:
+        return
+    for name in names:
+        pid = name[len(FOLDER_PREFIX):].split("-", 1)[0]
+        path = os.path.join(root, name)
+        try:  # (os.getuid first: where it is missing, os.kill(pid, 0) would end the process)
+            if not pid.isdigit() or os.stat(path).st_uid != os.getuid() or _alive(int(pid)):
+                continue
+        except (OSError, AttributeError):  # gone meanwhile, or no uids on this platform
+            continue
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (a process of another user counts as alive)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
 
 
 @dataclass

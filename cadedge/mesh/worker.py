@@ -27,14 +27,11 @@ size fields, physical groups and per-face measurements plug in without touching 
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import importlib
 import os
 import pickle
-import signal
 import sys
 import tempfile
-import threading
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -42,16 +39,12 @@ from typing import Any
 
 import numpy as np
 
+from ..childproc import die_with_parent
 from ..shapegrid import ShapeGrid
 
 #: Address space a mesh child may use, as a share of physical memory: beyond it allocations fail inside
 #: the child (gmsh reports or crashes there) before the system's out-of-memory killer picks a process.
 MEMORY_SHARE = 0.8
-#: Environment variable naming the process that started this child (set by :mod:`cadedge.mesh.isolate`).
-PARENT_ENV = "CADEDGE_MESH_PARENT"
-#: Linux's prctl option for a signal on the parent's death; seconds between checks where it is missing.
-PR_SET_PDEATHSIG = 1
-PARENT_POLL = 1.0
 HOOK_STAGES = ("before_generate", "before_face", "after_generate", "before_write", "after_mesh")
 
 
@@ -143,7 +136,7 @@ def _import(brep: bytes, notes: list[str]) -> tuple[str | None, str | None]:
     from .gmsh_model import IMPORT_ATTEMPTS, import_brep
 
     errors = []
-    with tempfile.TemporaryDirectory(prefix="cadedge-mesh-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="cadedge-brep-") as tmp:
         path = os.path.join(tmp, "shape.brep")
         with open(path, "wb") as f:
             f.write(brep)
@@ -377,29 +370,6 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                      written=written)
 
 
-def _die_with_parent() -> None:
-    """End this child when the process that started it ends, however it ends (SIGKILL, SIGTERM without
-    cleanup, a crash): an orphan would go on meshing, or hanging, with nobody to time it or read its
-    result. On Linux the kernel sends SIGKILL (``PR_SET_PDEATHSIG``); elsewhere a thread watches the
-    parent's id."""
-    parent = int(os.environ.get(PARENT_ENV) or 0)
-    if not parent:
-        return
-    try:
-        armed = ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL) == 0
-    except (OSError, AttributeError):  # no prctl on this platform
-        armed = False
-    if os.getppid() != parent:  # the parent ended before the signal was armed
-        os._exit(1)
-    if not armed:
-        def watch() -> None:
-            while os.getppid() == parent:
-                time.sleep(PARENT_POLL)
-            os._exit(1)
-
-        threading.Thread(target=watch, name="cadedge-parent-watch", daemon=True).start()
-
-
 def _limit_memory() -> None:
     try:
         import resource
@@ -417,7 +387,7 @@ def main(argv: list[str]) -> int:
     :func:`run_job`)."""
     job_path, result_path, progress_path = argv[:3]
     faces_path = argv[3] if len(argv) > 3 else os.devnull
-    _die_with_parent()
+    die_with_parent()
     _limit_memory()
     with open(job_path, "rb") as f:
         job = pickle.load(f)

@@ -5,7 +5,7 @@ references, such as a file cut short with a trailer appended. The readers send o
 (see :func:`cadedge.occt.loading.damaged`): the child (``python -m cadedge.occt.isolate``) reads and
 transfers the file and hands the shape back as an OCCT BREP file, with the completeness, units and
 warnings as JSON. A crash, a hang past ``TIMEOUT`` or any other death of the child becomes one
-:class:`~cadedge.errors.InputError` naming the file.
+:class:`~cadedge.errors.InputError` naming the file; the child ends with its caller (:mod:`cadedge.childproc`).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from OCP.BRep import BRep_Builder
 from OCP.BRepTools import BRepTools
 from OCP.TopoDS import TopoDS_Shape
 
+from ..childproc import child_env, die_with_parent
 from ..errors import CadedgeError, GeometryError, InputError
 from .loading import Completeness, Transferred, quiet_occt
 
@@ -43,7 +44,7 @@ def isolated(kind: str, path: Path, given: str, *, cut: bool = False) -> Transfe
     """``transfer_step``/``transfer_iges`` of ``path`` run in a child process; InputError if it dies."""
     with tempfile.TemporaryDirectory(prefix="cadedge-") as tmp:
         cmd = [sys.executable, "-m", "cadedge.occt.isolate", kind, os.fspath(path), given, tmp]
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+        env = child_env()
         try:
             proc = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL, timeout=TIMEOUT, env=env)
@@ -78,6 +79,7 @@ def _pair(value: list[int] | None) -> tuple[int, int] | None:
 
 def main(argv: list[str]) -> int:
     """The child: transfer ``argv = [kind, path, given, folder]``, write ``shape.brep`` and ``result.json``."""
+    die_with_parent()
     kind, path, given, folder = argv
     out = Path(folder)
     try:
