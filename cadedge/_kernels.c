@@ -311,6 +311,8 @@ static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps
     }
 }
 
+enum { MEMO = 8 };
+
 typedef struct {
     const double *p, *cum;
     Py_ssize_t n;
@@ -319,16 +321,35 @@ typedef struct {
     const uint8_t *fixed;
     int64_t *buf;
     uint8_t *dirty;
+    /* The last MEMO plans: each one's cover (raw, raw_count) and what polishing it gave (polished, miss).
+     * The caps of a bisection often give a cover met before, whose polished grid is then copied instead of
+     * made again (the same nodes: polishing depends on the cover alone). */
+    int64_t *raw[MEMO], *polished[MEMO];
+    Py_ssize_t raw_count[MEMO];
+    double miss[MEMO];
+    int next;
 } Cover;
 
 /* Greedy cover under cap, polished, into nodes: returns the count; *miss gets the deficit. */
-static Py_ssize_t plan(const Cover *c, double cap, int64_t *nodes, double *miss)
+static Py_ssize_t plan(Cover *c, double cap, int64_t *nodes, double *miss)
 {
     Py_ssize_t count = cover(c->p, c->n, c->cum, cap, c->min_length, c->max_length, c->stops, c->buf);
+    for (int k = 0; k < MEMO; k++) {
+        if (count == c->raw_count[k] && !memcmp(c->buf, c->raw[k], count * sizeof(int64_t))) {
+            memcpy(nodes, c->polished[k], count * sizeof(int64_t));
+            *miss = c->miss[k];
+            return count;
+        }
+    }
     memcpy(nodes, c->buf, count * sizeof(int64_t));
     if (count > 2)
         polish(c->p, nodes, count, 4, c->fixed, c->dirty);
     *miss = c->cum[c->n - 1] - chords(c->p, nodes, count);
+    int k = c->next;
+    c->next = (k + 1) % MEMO;
+    memcpy(c->raw[k], c->buf, count * sizeof(int64_t));
+    memcpy(c->polished[k], nodes, count * sizeof(int64_t));
+    c->raw_count[k] = count, c->miss[k] = *miss;
     return count;
 }
 
@@ -337,7 +358,7 @@ static Py_ssize_t plan(const Cover *c, double cap, int64_t *nodes, double *miss)
 Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int64_t *stops, const uint8_t *fixed,
                      int64_t *out, double budget, double min_length, double max_length)
 {
-    int64_t *work = malloc(3 * n * sizeof(int64_t));
+    int64_t *work = malloc((3 + 2 * MEMO) * n * sizeof(int64_t));
     uint8_t *dirty = malloc(n);
     if (!work || !dirty) {
         free(work), free(dirty);
@@ -345,6 +366,8 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
     }
     int64_t *buf = work, *tmp = work + n, *best = out;
     Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf, dirty};
+    for (int k = 0; k < MEMO; k++)
+        c.raw[k] = work + (3 + 2 * k) * n, c.polished[k] = work + (4 + 2 * k) * n, c.raw_count[k] = -1;
     double total = cum[n - 1], miss;
     Py_ssize_t best_count = plan(&c, dmax(budget, 0.0), best, &miss);
     if (miss > budget) { /* the per-segment cap equal to the whole budget is too loose: bisect it down */
