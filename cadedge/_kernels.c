@@ -598,6 +598,27 @@ static PyObject *place(PyObject *self, PyObject *args)
 
 /* ---------------------------------------------------------------- splines */
 
+/* de Boor's algorithm for one point x on the span's degree + 1 coefficients, copied into d (degree + 1, dim),
+ * writing the point to out. Inlined with dim a constant (3, or 4 for rational curves), the loops unroll. */
+static inline void de_boor_point(const double *knots, const double *coef, Py_ssize_t span, long degree,
+                                 Py_ssize_t dim, double x, double *d, double *out)
+{
+    for (long j = 0; j <= degree; j++)
+        for (Py_ssize_t c = 0; c < dim; c++)
+            d[j * dim + c] = coef[(j + span - degree) * dim + c];
+    for (long r = 1; r <= degree; r++) {
+        for (long j = degree; j >= r; j--) {
+            double k0 = knots[j + span - degree];
+            double width = knots[j + 1 + span - r] - k0;
+            double alpha = width > 0 ? (x - k0) / width : 0.0;
+            for (Py_ssize_t c = 0; c < dim; c++)
+                d[j * dim + c] = (1.0 - alpha) * d[(j - 1) * dim + c] + alpha * d[j * dim + c];
+        }
+    }
+    for (Py_ssize_t c = 0; c < dim; c++)
+        out[c] = d[degree * dim + c];
+}
+
 /* Points of the spline (knots (nk), coef (n, dim), degree) at u (nu) into out (nu, dim); outside the knots
  * the end pieces are extended. 0 on success, -1 if out of memory. */
 int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_t n, Py_ssize_t dim,
@@ -622,20 +643,12 @@ int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_
             span = degree;
         if (span > n - 1)
             span = n - 1;
-        for (long j = 0; j <= degree; j++)
-            for (Py_ssize_t c = 0; c < dim; c++)
-                d[j * dim + c] = coef[(j + span - degree) * dim + c];
-        for (long r = 1; r <= degree; r++) {
-            for (long j = degree; j >= r; j--) {
-                double k0 = knots[j + span - degree];
-                double width = knots[j + 1 + span - r] - k0;
-                double alpha = width > 0 ? (x - k0) / width : 0.0;
-                for (Py_ssize_t c = 0; c < dim; c++)
-                    d[j * dim + c] = (1.0 - alpha) * d[(j - 1) * dim + c] + alpha * d[j * dim + c];
-            }
-        }
-        for (Py_ssize_t c = 0; c < dim; c++)
-            out[m * dim + c] = d[degree * dim + c];
+        if (dim == 3)
+            de_boor_point(knots, coef, span, degree, 3, x, d, out + m * 3);
+        else if (dim == 4)
+            de_boor_point(knots, coef, span, degree, 4, x, d, out + m * 4);
+        else
+            de_boor_point(knots, coef, span, degree, dim, x, d, out + m * dim);
     }
     free(d);
     return 0;
