@@ -204,18 +204,25 @@ class EdgeTable:
         got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
         probe = self.dumped & self._ends_on_vertices(got)
         ref = got.copy()  # OCCT's points where checked
-        values, full = u.tolist(), list(range(CHECK_POINTS))
+        values, full = flat.tolist(), range(CHECK_POINTS)
         ok = np.ones(n, dtype=bool)
         point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
         coord = point.Coord
+        at, coords = [], []  # flat indices into (n * CHECK_POINTS) and OCCT's points there, set in one go
+        adaptor, adaptors = self.adaptor, self.adaptors
         for r, probed in enumerate(probe.tolist()):
-            d0, at, out = self.adaptor(r).D0, values[r], ref[r]
+            ad = adaptors[r]
+            d0 = (adaptor(r) if ad is None else ad).D0
+            base = r * CHECK_POINTS
             try:
                 for k in PROBES if probed else full:
-                    d0(at[k], point)
-                    out[k] = coord()
+                    d0(values[base + k], point)
+                    coords.append(coord())
+                    at.append(base + k)
             except Standard_Failure:
                 ok[r] = False
+        if at:
+            ref.reshape(-1, 3)[at] = coords
         size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
         size = np.maximum(size, math.ulp(1.0))
         ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
