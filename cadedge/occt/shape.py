@@ -1,8 +1,8 @@
 """``refine_shape``: edge grids for every edge of a B-rep shape, anchored on its vertices.
 
-Each non-degenerate edge is refined in target mode. Lines, circles, ellipses, B-splines and Bezier
-curves are read once into flat arrays (:class:`~cadedge.occt.edgetable.EdgeTable`) and refined a chunk
-of edges per compiled call (``cadedge/_batch.c``), with the same results as the per-edge path; every
+Each non-degenerate edge is refined in target mode. Lines, circles, ellipses, hyperbolas, B-splines and
+Bezier curves are read once into flat arrays (:class:`~cadedge.occt.edgetable.EdgeTable`) and refined a
+chunk of edges per compiled call (``cadedge/_batch.c``), with the same results as the per-edge path; every
 other edge, any edge that path cannot finish alike (it would add a note) and every run with
 ``min_length``, ``max_length`` or ``max_growth`` takes the per-edge path: a black box
 (:class:`~cadedge.occt.edgecurve.EdgeCurve`) refined by :func:`cadedge.refine_curve`. Either way the
