@@ -256,12 +256,43 @@ typedef struct {
     Py_ssize_t at;
 } Sample;
 
-static int cmp_sample(const void *x, const void *y)
+/* a before b: by parameter, then by position (a total order: any sort gives the same result) */
+static inline int sample_before(const Sample *a, const Sample *b)
 {
-    const Sample *a = x, *b = y;
-    if (a->u != b->u)
-        return (a->u > b->u) - (a->u < b->u);
-    return (a->at > b->at) - (a->at < b->at);
+    return a->u < b->u || (a->u == b->u && a->at < b->at);
+}
+
+/* Sort s[0:n] (tmp: room for n more): runs of 8 by insertion, then merged bottom-up. qsort's comparison
+ * through a function pointer cost more than the rest of the exploration's bookkeeping. */
+static void sort_samples(Sample *s, Sample *tmp, Py_ssize_t n)
+{
+    for (Py_ssize_t lo = 0; lo < n; lo += 8) {
+        Py_ssize_t hi = lo + 8 < n ? lo + 8 : n;
+        for (Py_ssize_t i = lo + 1; i < hi; i++) {
+            Sample x = s[i];
+            Py_ssize_t j = i;
+            for (; j > lo && sample_before(&x, &s[j - 1]); j--)
+                s[j] = s[j - 1];
+            s[j] = x;
+        }
+    }
+    Sample *from = s, *to = tmp;
+    for (Py_ssize_t width = 8; width < n; width *= 2) {
+        for (Py_ssize_t lo = 0; lo < n; lo += 2 * width) {
+            Py_ssize_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
+            Py_ssize_t i = lo, j = mid, k = lo;
+            while (i < mid && j < hi)
+                to[k++] = sample_before(&from[j], &from[i]) ? from[j++] : from[i++];
+            while (i < mid)
+                to[k++] = from[i++];
+            while (j < hi)
+                to[k++] = from[j++];
+        }
+        Sample *t = from;
+        from = to, to = t;
+    }
+    if (from != s)
+        memcpy(s, from, n * sizeof(Sample));
 }
 
 /* The roots of the exploration (cadedge.explore.root_params with EdgeCurve.initial_params) into *out. */
@@ -429,10 +460,10 @@ static int explore(const Geometry *g, Py_ssize_t e, const Job *job, const Settin
     }
     /* sorted by parameter, the first of a repeated parameter kept (explore._sorted_unique) */
     Py_ssize_t total = U.n;
-    TRY(order = malloc(total * sizeof(Sample)));
+    TRY(order = malloc(2 * total * sizeof(Sample)));
     for (Py_ssize_t i = 0; i < total; i++)
         order[i].u = U.d[i], order[i].at = i;
-    qsort(order, total, sizeof(Sample), cmp_sample);
+    sort_samples(order, order + total, total);
     TRY(x->u = malloc(total * sizeof(double)));
     TRY(x->p = malloc(3 * total * sizeof(double)));
     Py_ssize_t n = 0;
