@@ -9,9 +9,11 @@
  * Python path would (a zero-length curve, the sampling cap, a missed target: all cases that add a note)
  * is reported back and refined by the Python path.
  *
- * Geometry table (cadedge/occt/edgetable.py): kind[e] (LINE, CONIC, SPLINE), its data at gdata[gofs[e]:]:
+ * Geometry table (cadedge/occt/edgetable.py): kind[e] (LINE, CONIC, SPLINE, HYPERBOLA), its data at gdata[gofs[e]:]:
  *   line:   location (3), direction (3)                     point = loc + u dir
  *   conic:  location, x, y (3 each), rx, ry                 point = loc + rx cos(u) x + ry sin(u) y
+ *   hyperbola: as a conic                                   point = rx cosh(u) x + ry sinh(u) y + loc
+ *           (in OCCT's order of operations, ElCLib::HyperbolaValue: the per-edge path evaluates it by OCCT)
  *   spline: period (NaN if none), knots (nk), coefficients ((nk - degree - 1) x dim), dim 3 or 4 (rational,
  *           homogeneous), with ints[e] = (degree, nk, dim); a periodic spline is wrapped into its first period.
  */
@@ -22,7 +24,7 @@
 #include "_bintools.h"
 #include "_kernels.h"
 
-enum { LINE = 0, CONIC = 1, SPLINE = 2 };
+enum { LINE = 0, CONIC = 1, SPLINE = 2, HYPERBOLA = 3 };
 enum { OK = 0, PYTHON_PATH = 1 };
 
 typedef struct {
@@ -154,6 +156,13 @@ static int evaluate(const Geometry *g, Py_ssize_t e, const double *u, Py_ssize_t
                 out[3 * i + c] = d[c] + cu * d[3 + c] + su * d[6 + c];
         }
         return 0;
+    case HYPERBOLA:
+        for (Py_ssize_t i = 0; i < m; i++) {
+            double a1 = d[9] * cosh(u[i]), a2 = d[10] * sinh(u[i]);
+            for (int c = 0; c < 3; c++)
+                out[3 * i + c] = a1 * d[3 + c] + a2 * d[6 + c] + d[c];
+        }
+        return 0;
     default: {
         long degree = (long)g->ints[3 * e];
         Py_ssize_t nk = g->ints[3 * e + 1], dim = g->ints[3 * e + 2];
@@ -226,7 +235,7 @@ done:
 
 typedef struct {
     double explore_share, margin, exact_margin, agreement, straight, asymptotic, noise_share;
-    Py_ssize_t max_trials, max_samples, conic_roots, span_roots;
+    Py_ssize_t max_trials, max_samples, conic_roots, span_roots, default_roots;
 } Settings;
 
 typedef struct {
@@ -247,12 +256,43 @@ typedef struct {
     Py_ssize_t at;
 } Sample;
 
-static int cmp_sample(const void *x, const void *y)
+/* a before b: by parameter, then by position (a total order: any sort gives the same result) */
+static inline int sample_before(const Sample *a, const Sample *b)
 {
-    const Sample *a = x, *b = y;
-    if (a->u != b->u)
-        return (a->u > b->u) - (a->u < b->u);
-    return (a->at > b->at) - (a->at < b->at);
+    return a->u < b->u || (a->u == b->u && a->at < b->at);
+}
+
+/* Sort s[0:n] (tmp: room for n more): runs of 8 by insertion, then merged bottom-up. qsort's comparison
+ * through a function pointer cost more than the rest of the exploration's bookkeeping. */
+static void sort_samples(Sample *s, Sample *tmp, Py_ssize_t n)
+{
+    for (Py_ssize_t lo = 0; lo < n; lo += 8) {
+        Py_ssize_t hi = lo + 8 < n ? lo + 8 : n;
+        for (Py_ssize_t i = lo + 1; i < hi; i++) {
+            Sample x = s[i];
+            Py_ssize_t j = i;
+            for (; j > lo && sample_before(&x, &s[j - 1]); j--)
+                s[j] = s[j - 1];
+            s[j] = x;
+        }
+    }
+    Sample *from = s, *to = tmp;
+    for (Py_ssize_t width = 8; width < n; width *= 2) {
+        for (Py_ssize_t lo = 0; lo < n; lo += 2 * width) {
+            Py_ssize_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
+            Py_ssize_t i = lo, j = mid, k = lo;
+            while (i < mid && j < hi)
+                to[k++] = sample_before(&from[j], &from[i]) ? from[j++] : from[i++];
+            while (i < mid)
+                to[k++] = from[i++];
+            while (j < hi)
+                to[k++] = from[j++];
+        }
+        Sample *t = from;
+        from = to, to = t;
+    }
+    if (from != s)
+        memcpy(s, from, n * sizeof(Sample));
 }
 
 /* The roots of the exploration (cadedge.explore.root_params with EdgeCurve.initial_params) into *out. */
@@ -266,9 +306,9 @@ static Py_ssize_t roots(const Geometry *g, Py_ssize_t e, const Job *job, const S
         if (!r)
             return -1;
         r[n++] = a, r[n++] = b;
-    } else if (g->kind[e] == CONIC) {
+    } else if (g->kind[e] == CONIC || g->kind[e] == HYPERBOLA) { /* uniform steps: a few per turn, or default_roots */
         double steps = ceil((double)s->conic_roots * (b - a) / (2 * M_PI));
-        Py_ssize_t num = (Py_ssize_t)(steps > 2 ? steps : 2) + 1;
+        Py_ssize_t num = g->kind[e] == HYPERBOLA ? s->default_roots + 1 : (Py_ssize_t)(steps > 2 ? steps : 2) + 1;
         r = malloc((num + 2) * sizeof(double));
         if (!r)
             return -1;
@@ -420,10 +460,10 @@ static int explore(const Geometry *g, Py_ssize_t e, const Job *job, const Settin
     }
     /* sorted by parameter, the first of a repeated parameter kept (explore._sorted_unique) */
     Py_ssize_t total = U.n;
-    TRY(order = malloc(total * sizeof(Sample)));
+    TRY(order = malloc(2 * total * sizeof(Sample)));
     for (Py_ssize_t i = 0; i < total; i++)
         order[i].u = U.d[i], order[i].at = i;
-    qsort(order, total, sizeof(Sample), cmp_sample);
+    sort_samples(order, order + total, total);
     TRY(x->u = malloc(total * sizeof(double)));
     TRY(x->p = malloc(3 * total * sizeof(double)));
     Py_ssize_t n = 0;
@@ -757,12 +797,12 @@ PyObject *ck_refine_edges(PyObject *self, PyObject *args)
     const double *set = ck_arg(&b, args, 11, F64, 0, &n_settings);
     if (!set)
         goto done;
-    if (n_settings != 11) {
-        PyErr_SetString(PyExc_ValueError, "refine_edges: 11 settings expected");
+    if (n_settings != 12) {
+        PyErr_SetString(PyExc_ValueError, "refine_edges: 12 settings expected");
         goto done;
     }
     Settings s = {set[0], set[1], set[2], set[3], set[4], set[5], set[6],
-                  (Py_ssize_t)set[7], (Py_ssize_t)set[8], (Py_ssize_t)set[9], (Py_ssize_t)set[10]};
+                  (Py_ssize_t)set[7], (Py_ssize_t)set[8], (Py_ssize_t)set[9], (Py_ssize_t)set[10], (Py_ssize_t)set[11]};
     status = calloc(n_edges + 1, sizeof(int64_t));
     offsets = calloc(n_edges + 1, sizeof(int64_t));
     evaluations = calloc(n_edges + 1, sizeof(int64_t));

@@ -4,7 +4,7 @@
  * OCCT 7.6-8.0). See cadedge/_shapedump.c for the whole shape. */
 #include "_bintools.h"
 
-enum { LINE = 0, CONIC = 1, SPLINE = 2, SKIPPED = -1 };
+enum { LINE = 0, CONIC = 1, SPLINE = 2, HYPERBOLA = 3, SKIPPED = -1 };
 enum { BT_LINE = 1, BT_CIRCLE, BT_ELLIPSE, BT_PARABOLA, BT_HYPERBOLA, BT_BEZIER, BT_BSPLINE, BT_TRIMMED, BT_OFFSET };
 enum { S_PLANE = 1, S_CYLINDER, S_CONE, S_SPHERE, S_TORUS, S_EXTRUSION, S_REVOLUTION, S_BEZIER, S_BSPLINE,
        S_RECTANGULAR, S_OFFSET };
@@ -142,7 +142,7 @@ int bt_skip_surface(Reader *r, int depth)
 }
 
 /* One curve as a geometry table row (cadedge/_batch.c): meta = (kind, degree, knots, dim, periodic, type);
- * kind SKIPPED for the types the table does not evaluate (parabola, hyperbola, trimmed, offset). */
+ * kind SKIPPED for the types the table does not evaluate (parabola, trimmed, offset). */
 static int parse_curve(Reader *r, int64_t *m, Vec *out)
 {
     Py_ssize_t at = r->pos;
@@ -157,7 +157,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
         m[0] = LINE;
         return vec_push(out, v, 6) < 0 ? -1 : 1;
     }
-    if (type == BT_CIRCLE || type == BT_ELLIPSE) {
+    if (type == BT_CIRCLE || type == BT_ELLIPSE || type == BT_HYPERBOLA) { /* (a hyperbola as an ellipse) */
         int radii = type == BT_CIRCLE ? 1 : 2;
         double v[11]; /* location, (axis skipped), X direction, Y direction, radii */
         if (!need(r, 96 + 8 * radii))
@@ -170,7 +170,7 @@ static int parse_curve(Reader *r, int64_t *m, Vec *out)
         v[9] = le_double(p + 96);
         v[10] = radii == 2 ? le_double(p + 104) : v[9];
         r->pos += 96 + 8 * radii;
-        m[0] = CONIC;
+        m[0] = type == BT_HYPERBOLA ? HYPERBOLA : CONIC;
         return vec_push(out, v, 11) < 0 ? -1 : 1;
     }
     if (type == BT_BEZIER || type == BT_BSPLINE) {

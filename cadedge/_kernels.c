@@ -311,6 +311,8 @@ static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps
     }
 }
 
+enum { MEMO = 8 };
+
 typedef struct {
     const double *p, *cum;
     Py_ssize_t n;
@@ -319,16 +321,35 @@ typedef struct {
     const uint8_t *fixed;
     int64_t *buf;
     uint8_t *dirty;
+    /* The last MEMO plans: each one's cover (raw, raw_count) and what polishing it gave (polished, miss).
+     * The caps of a bisection often give a cover met before, whose polished grid is then copied instead of
+     * made again (the same nodes: polishing depends on the cover alone). */
+    int64_t *raw[MEMO], *polished[MEMO];
+    Py_ssize_t raw_count[MEMO];
+    double miss[MEMO];
+    int next;
 } Cover;
 
 /* Greedy cover under cap, polished, into nodes: returns the count; *miss gets the deficit. */
-static Py_ssize_t plan(const Cover *c, double cap, int64_t *nodes, double *miss)
+static Py_ssize_t plan(Cover *c, double cap, int64_t *nodes, double *miss)
 {
     Py_ssize_t count = cover(c->p, c->n, c->cum, cap, c->min_length, c->max_length, c->stops, c->buf);
+    for (int k = 0; k < MEMO; k++) {
+        if (count == c->raw_count[k] && !memcmp(c->buf, c->raw[k], count * sizeof(int64_t))) {
+            memcpy(nodes, c->polished[k], count * sizeof(int64_t));
+            *miss = c->miss[k];
+            return count;
+        }
+    }
     memcpy(nodes, c->buf, count * sizeof(int64_t));
     if (count > 2)
         polish(c->p, nodes, count, 4, c->fixed, c->dirty);
     *miss = c->cum[c->n - 1] - chords(c->p, nodes, count);
+    int k = c->next;
+    c->next = (k + 1) % MEMO;
+    memcpy(c->raw[k], c->buf, count * sizeof(int64_t));
+    memcpy(c->polished[k], nodes, count * sizeof(int64_t));
+    c->raw_count[k] = count, c->miss[k] = *miss;
     return count;
 }
 
@@ -337,7 +358,7 @@ static Py_ssize_t plan(const Cover *c, double cap, int64_t *nodes, double *miss)
 Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int64_t *stops, const uint8_t *fixed,
                      int64_t *out, double budget, double min_length, double max_length)
 {
-    int64_t *work = malloc(3 * n * sizeof(int64_t));
+    int64_t *work = malloc((3 + 2 * MEMO) * n * sizeof(int64_t));
     uint8_t *dirty = malloc(n);
     if (!work || !dirty) {
         free(work), free(dirty);
@@ -345,6 +366,8 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
     }
     int64_t *buf = work, *tmp = work + n, *best = out;
     Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf, dirty};
+    for (int k = 0; k < MEMO; k++)
+        c.raw[k] = work + (3 + 2 * k) * n, c.polished[k] = work + (4 + 2 * k) * n, c.raw_count[k] = -1;
     double total = cum[n - 1], miss;
     Py_ssize_t best_count = plan(&c, dmax(budget, 0.0), best, &miss);
     if (miss > budget) { /* the per-segment cap equal to the whole budget is too loose: bisect it down */
@@ -575,6 +598,27 @@ static PyObject *place(PyObject *self, PyObject *args)
 
 /* ---------------------------------------------------------------- splines */
 
+/* de Boor's algorithm for one point x on the span's degree + 1 coefficients, copied into d (degree + 1, dim),
+ * writing the point to out. Inlined with dim a constant (3, or 4 for rational curves), the loops unroll. */
+static inline void de_boor_point(const double *knots, const double *coef, Py_ssize_t span, long degree,
+                                 Py_ssize_t dim, double x, double *d, double *out)
+{
+    for (long j = 0; j <= degree; j++)
+        for (Py_ssize_t c = 0; c < dim; c++)
+            d[j * dim + c] = coef[(j + span - degree) * dim + c];
+    for (long r = 1; r <= degree; r++) {
+        for (long j = degree; j >= r; j--) {
+            double k0 = knots[j + span - degree];
+            double width = knots[j + 1 + span - r] - k0;
+            double alpha = width > 0 ? (x - k0) / width : 0.0;
+            for (Py_ssize_t c = 0; c < dim; c++)
+                d[j * dim + c] = (1.0 - alpha) * d[(j - 1) * dim + c] + alpha * d[j * dim + c];
+        }
+    }
+    for (Py_ssize_t c = 0; c < dim; c++)
+        out[c] = d[degree * dim + c];
+}
+
 /* Points of the spline (knots (nk), coef (n, dim), degree) at u (nu) into out (nu, dim); outside the knots
  * the end pieces are extended. 0 on success, -1 if out of memory. */
 int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_t n, Py_ssize_t dim,
@@ -599,20 +643,12 @@ int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_
             span = degree;
         if (span > n - 1)
             span = n - 1;
-        for (long j = 0; j <= degree; j++)
-            for (Py_ssize_t c = 0; c < dim; c++)
-                d[j * dim + c] = coef[(j + span - degree) * dim + c];
-        for (long r = 1; r <= degree; r++) {
-            for (long j = degree; j >= r; j--) {
-                double k0 = knots[j + span - degree];
-                double width = knots[j + 1 + span - r] - k0;
-                double alpha = width > 0 ? (x - k0) / width : 0.0;
-                for (Py_ssize_t c = 0; c < dim; c++)
-                    d[j * dim + c] = (1.0 - alpha) * d[(j - 1) * dim + c] + alpha * d[j * dim + c];
-            }
-        }
-        for (Py_ssize_t c = 0; c < dim; c++)
-            out[m * dim + c] = d[degree * dim + c];
+        if (dim == 3)
+            de_boor_point(knots, coef, span, degree, 3, x, d, out + m * 3);
+        else if (dim == 4)
+            de_boor_point(knots, coef, span, degree, 4, x, d, out + m * 4);
+        else
+            de_boor_point(knots, coef, span, degree, dim, x, d, out + m * dim);
     }
     free(d);
     return 0;

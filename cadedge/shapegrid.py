@@ -57,18 +57,24 @@ class ShapeEdgeGrid(Polyline):
 def vertex_spacings(edges: list[ShapeEdgeGrid]) -> dict[int, float]:
     """Vertex id -> shortest end segment among the non-degenerate edges meeting there (the contract's
     ``vertices[].spacing``: the spacing a surface mesher should use at that vertex). The end segments of
-    all edges are measured in one batch (``ShapeEdgeGrid.spacing`` per edge, the same values)."""
+    all edges are measured in one batch on their points put end to end (``ShapeEdgeGrid.spacing`` per
+    edge, the same values), and the shortest at each vertex taken in one ``np.minimum.at``."""
     live = [e for e in edges if not e.degenerate and len(e.points) >= 2]
     if not live:
         return {}
-    ends = np.concatenate([p for e in live for p in (e.points[:2], e.points[-2:])]).astype(float, copy=False)
-    ends = ends.reshape(-1, 4, ends.shape[-1])
-    lengths = row_norms((ends[:, [1, 3]] - ends[:, [0, 2]]).reshape(-1, 3)).reshape(-1, 2).tolist()
-    spacing: dict[int, float] = {}
-    for e, hs in zip(live, lengths):
-        for vid, h in zip(e.vertices, hs):
-            spacing[vid] = min(spacing.get(vid, h), h)
-    return spacing
+    points = [e.points for e in live]
+    sizes = np.array([len(p) for p in points], dtype=np.int64)
+    stop = np.cumsum(sizes)
+    start = stop - sizes
+    flat = np.concatenate(points).astype(float, copy=False)
+    # each edge's first segment (start, start + 1), then its last (stop - 2, stop - 1)
+    lengths = row_norms(flat[np.column_stack([start + 1, stop - 1]).ravel()]
+                        - flat[np.column_stack([start, stop - 2]).ravel()])
+    ids = np.array([e.vertices for e in live], dtype=np.int64).ravel()
+    shortest = np.full(int(ids.max()) + 1, np.inf)
+    np.minimum.at(shortest, ids, lengths)
+    ids = np.unique(ids)
+    return dict(zip(ids.tolist(), shortest[ids].tolist()))
 
 
 def with_edges(grid: "ShapeGrid", edges: list[ShapeEdgeGrid]) -> "ShapeGrid":

@@ -124,3 +124,26 @@ def test_an_edge_whose_table_evaluation_disagrees_with_occt_is_left_to_the_per_e
         assert table.rows == rows[:2] + rows[3:]
         batched = refine_shape(shape, ald=1e-3)
     _same(batched, _per_edge(monkeypatch, shape, ald=1e-3))
+
+
+def test_a_hyperbola_is_evaluated_and_refined_as_through_occt(monkeypatch):
+    """The table evaluates a hyperbola by OCCT's own formula (``ElCLib::HyperbolaValue``), so its points
+    and grids are those of the per-edge path, which evaluates it through OCCT: read from the dump (the
+    edge alone) and through its adaptor (a table without the dump)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+    from OCP.GeomAbs import GeomAbs_Hyperbola
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Hypr, gp_Pnt
+
+    edge = BRepBuilderAPI_MakeEdge(gp_Hypr(gp_Ax2(gp_Pnt(1, 2, 3), gp_Dir(0.2, 0.3, 1.0)), 2.0, 0.7),
+                                   -1.3, 2.1).Edge()
+    curve = EdgeCurve(edge)
+    assert curve.fast is None  # the per-edge path asks OCCT for every point
+    table = EdgeTable([edge], [0])
+    assert table.rows == [0] and table.kinds == [GeomAbs_Hyperbola]
+    u = np.linspace(*curve.domain, 101)
+    assert np.array_equal(table.evaluate(np.zeros(len(u), dtype=np.int64), u), curve.evaluate(u))
+    assert table.exact[0] == curve.exact_length(*curve.domain)
+    for ald in (1e-2, 1e-4):
+        grid = refine_shape(edge, ald=ald)
+        assert grid.edges[0].curve == "Hyperbola"
+        _same(grid, _per_edge(monkeypatch, edge, ald=ald))

@@ -1,13 +1,13 @@
 """The geometry of many edges read once into flat arrays, for refining them all in one compiled call.
 
-Each edge whose 3-D curve is a line, circle, ellipse, B-spline or Bezier curve gets a row of
+Each edge whose 3-D curve is a line, circle, ellipse, hyperbola, B-spline or Bezier curve gets a row of
 :class:`EdgeTable`'s arrays. Where the shape was read in one call (:mod:`cadedge.occt.shapedump`) the row
-is the curve OCCT wrote for the edge, with no OCP call but OCCT's length integration (ellipses and
-splines). Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
+is the curve OCCT wrote for the edge, with no OCP call but OCCT's length integration (ellipses, hyperbolas
+and splines). Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
 trimmed curves), the row is read through the edge's ``BRepAdaptor_Curve`` (which applies the edge's
 location), the adaptors' curve handles written by OCCT in one call and parsed in C
 (:mod:`cadedge.occt.curvedump`). The table's evaluation (``cadedge/_batch.c``, the same formulas as
-:mod:`cadedge.occt.fasteval`) is then checked against OCCT's (``BRepAdaptor_Curve.D0``, see
+:mod:`cadedge.occt.fasteval`, and OCCT's own for a hyperbola) is then checked against OCCT's (``BRepAdaptor_Curve.D0``, see
 :meth:`EdgeTable._check`); an edge that disagrees by more than ``fasteval.RTOL`` of its size, or that
 OCCT cannot read, is left out and refined by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
 """
@@ -20,23 +20,24 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint
-from OCP.Geom import Geom_Circle, Geom_Ellipse, Geom_Line
+from OCP.Geom import Geom_Circle, Geom_Ellipse, Geom_Hyperbola, Geom_Line
 from OCP.gp import gp_Pnt
 from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
-                         GeomAbs_Line)
+                         GeomAbs_Hyperbola, GeomAbs_Line)
 from OCP.Standard import Standard_Failure
 
 from .. import explore, kernels, target
 from .curvedump import CIRCLE, DEGREE, DIM, KIND, KNOTS, PERIODIC, TYPE, CurveSet
-from .edgecurve import CONIC_ROOTS, LENGTH_TOL, SPAN_ROOTS, EdgeCurve
+from .edgecurve import CONIC_ROOTS, DEFAULT_ROOTS, LENGTH_TOL, SPAN_ROOTS, EdgeCurve
 from .fasteval import CHECK_POINTS, RTOL
 from .shapedump import ShapeDump
 
-LINE, CONIC, SPLINE = 0, 1, 2
+LINE, CONIC, SPLINE, HYPERBOLA = 0, 1, 2, 3
 #: The check points (of ``CHECK_POINTS``) a row read from the dump is evaluated at by OCCT: two interior ones.
 PROBES = (2, 6)
 #: The adaptor's curve type of each curve type the table reads, by BinTools type code.
-GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 6: GeomAbs_BezierCurve, 7: GeomAbs_BSplineCurve}
+GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 5: GeomAbs_Hyperbola, 6: GeomAbs_BezierCurve,
+           7: GeomAbs_BSplineCurve}
 
 
 def _from_dump(dump: ShapeDump, indices: np.ndarray) -> np.ndarray:
@@ -96,6 +97,8 @@ class EdgeTable:
                     curve = Geom_Circle(ad.Circle())
                 elif t == GeomAbs_Ellipse:
                     curve = Geom_Ellipse(ad.Ellipse())
+                elif t == GeomAbs_Hyperbola:
+                    curve = Geom_Hyperbola(ad.Hyperbola())
                 elif t == GeomAbs_BSplineCurve or t == GeomAbs_BezierCurve:
                     curve = ad.BSpline() if t == GeomAbs_BSplineCurve else ad.Bezier()
                 else:
@@ -204,18 +207,25 @@ class EdgeTable:
         got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
         probe = self.dumped & self._ends_on_vertices(got)
         ref = got.copy()  # OCCT's points where checked
-        values, full = u.tolist(), list(range(CHECK_POINTS))
+        values, full = flat.tolist(), range(CHECK_POINTS)
         ok = np.ones(n, dtype=bool)
         point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
         coord = point.Coord
+        at, coords = [], []  # flat indices into (n * CHECK_POINTS) and OCCT's points there, set in one go
+        adaptor, adaptors = self.adaptor, self.adaptors
         for r, probed in enumerate(probe.tolist()):
-            d0, at, out = self.adaptor(r).D0, values[r], ref[r]
+            ad = adaptors[r]
+            d0 = (adaptor(r) if ad is None else ad).D0
+            base = r * CHECK_POINTS
             try:
                 for k in PROBES if probed else full:
-                    d0(at[k], point)
-                    out[k] = coord()
+                    d0(values[base + k], point)
+                    coords.append(coord())
+                    at.append(base + k)
             except Standard_Failure:
                 ok[r] = False
+        if at:
+            ref.reshape(-1, 3)[at] = coords
         size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
         size = np.maximum(size, math.ulp(1.0))
         ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
@@ -292,7 +302,7 @@ def _settings() -> np.ndarray:
     """The constants of target mode and the exploration, in the order ``cadedge/_batch.c`` reads them."""
     return np.array([target.EXPLORE_SHARE, target.MARGIN, target.EXACT_MARGIN, target.AGREEMENT, explore.STRAIGHT,
                      explore.ASYMPTOTIC_RATIO, explore.NOISE, target.MAX_TRIALS, explore.MAX_SAMPLES, CONIC_ROOTS,
-                     SPAN_ROOTS], dtype=float)
+                     SPAN_ROOTS, DEFAULT_ROOTS], dtype=float)
 
 
 SETTINGS = _settings()

@@ -1,8 +1,8 @@
 """``refine_shape``: edge grids for every edge of a B-rep shape, anchored on its vertices.
 
-Each non-degenerate edge is refined in target mode. Lines, circles, ellipses, B-splines and Bezier
-curves are read once into flat arrays (:class:`~cadedge.occt.edgetable.EdgeTable`) and refined a chunk
-of edges per compiled call (``cadedge/_batch.c``), with the same results as the per-edge path; every
+Each non-degenerate edge is refined in target mode. Lines, circles, ellipses, hyperbolas, B-splines and
+Bezier curves are read once into flat arrays (:class:`~cadedge.occt.edgetable.EdgeTable`) and refined a
+chunk of edges per compiled call (``cadedge/_batch.c``), with the same results as the per-edge path; every
 other edge, any edge that path cannot finish alike (it would add a note) and every run with
 ``min_length``, ``max_length`` or ``max_growth`` takes the per-edge path: a black box
 (:class:`~cadedge.occt.edgecurve.EdgeCurve`) refined by :func:`cadedge.refine_curve`. Either way the
@@ -94,31 +94,33 @@ def _refine_edge(topo: Topology, i: int, vpoints: np.ndarray, src: str, opts: di
 
 
 def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np.ndarray,
-                 topo: Topology) -> tuple:
-    """Grids of the table's ``rows`` in one compiled call, anchored on their vertices: (status, offsets,
-    params, points, estimate, raw_estimate, evaluations), the per-row ones as lists."""
+                 topo: Topology) -> list[tuple | None]:
+    """Grids of the table's ``rows`` in one compiled call, anchored on their vertices: per row, its (params,
+    points, estimate, raw_estimate, evaluations), or None where the per-edge path must refine the edge."""
     ends = np.array([topo.edge_vertices[i] for i in table.rows[rows]], dtype=np.int64).reshape(-1, 2) - 1
     status, offsets, params, points, estimate, raw, evaluations = refine_table(
         table, rows, targets[table.rows[rows]], vpoints[ends[:, 0]], vpoints[ends[:, 1]])
-    return (status.tolist(), offsets.tolist(), params, points, estimate.tolist(), raw.tolist(),
-            evaluations.tolist())
+    at = offsets.tolist()
+    return [None if failed else (params[lo:hi], points[lo:hi], est, raw_est, evals)
+            for failed, lo, hi, est, raw_est, evals in zip(status.tolist(), at, at[1:], estimate.tolist(),
+                                                           raw.tolist(), evaluations.tolist())]
 
 
-def _table_edge(topo: Topology, i: int, kind, k: int, chunk: tuple, ald: float,
-                notes: list[str], tolerance: float) -> ShapeEdgeGrid | None:
-    """Edge ``i``'s grid from row ``k`` of a compiled chunk, or None where the per-edge path must refine it."""
-    _, status, offsets, params, points, estimate, raw_estimate, evaluations = chunk
-    v1, v2 = topo.edge_vertices[i]
-    lo, hi = offsets[k], offsets[k + 1]
-    if status[k] or (v1 == v2 and hi - lo - 1 < MIN_CLOSED_SEGMENTS):  # (a closed edge: see refine_target)
+def _table_edge(topo: Topology, i: int, kind, row: tuple | None, ald: float, notes: list[str],
+                tolerance: float) -> ShapeEdgeGrid | None:
+    """Edge ``i``'s grid from its row of a compiled chunk, or None where the per-edge path must refine it."""
+    if row is None:
         return None
-    if estimate[k] > ald and raw_estimate[k] <= ald:
-        notes.append(f"edge {i + 1}: ald {estimate[k]:.3g} after snapping the ends to the vertices "
+    params, points, estimate, raw_estimate, evaluations = row
+    v1, v2 = topo.edge_vertices[i]
+    if v1 == v2 and len(params) - 1 < MIN_CLOSED_SEGMENTS:  # a closed edge: see refine_target
+        return None
+    if estimate > ald and raw_estimate <= ald:
+        notes.append(f"edge {i + 1}: ald {estimate:.3g} after snapping the ends to the vertices "
                      f"(vertices lie off the curve by up to {tolerance:.3g})")
     return ShapeEdgeGrid(id=i + 1, vertices=(v1, v2), degenerate=False, closed=v1 == v2,
                          faces=list(topo.edge_faces[i]), tolerance=tolerance, curve=curve_type_name(kind),
-                         params=params[lo:hi], points=points[lo:hi], ald_estimate=estimate[k],
-                         evaluations=evaluations[k])
+                         params=params, points=points, ald_estimate=estimate, evaluations=evaluations)
 
 
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
@@ -160,15 +162,16 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     curves: dict[int, EdgeCurve] = {}  # built by the per-edge path; the table's are built on demand
     segments = 0
     done = 0  # table rows refined so far
-    chunk: tuple[np.ndarray, ...] = ()
+    start, chunk = 0, []  # the rows refined by the last compiled call, from row start
+    ald_of = targets.tolist()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CadedgeWarning)  # collected per edge in notes instead
         for i in range(total):
             r = row_of.get(i)
             if r is not None and r >= done:  # refine the next rows of the table in one compiled call
                 start, done = r, min(r + CHUNK, len(table))
-                chunk = (start, *_refine_rows(table, slice(start, done), targets, vpoints, topo))
-            grid = (_table_edge(topo, i, table.kinds[r], r - chunk[0], chunk, targets[i], notes, edge_tolerance[i])
+                chunk = _refine_rows(table, slice(start, done), targets, vpoints, topo)
+            grid = (_table_edge(topo, i, table.kinds[r], chunk[r - start], ald_of[i], notes, edge_tolerance[i])
                     if r is not None else None)
             if grid is None:
                 edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
