@@ -1,4 +1,5 @@
-"""numpy-facing wrappers of the compiled inner loops (``cadedge/_kernels.c``, ``_batch.c``, ``_shapedump.c``).
+"""numpy-facing wrappers of the compiled inner loops (``cadedge/_kernels.c``, ``_batch.c``, ``_bintools.c``,
+``_shapedump.c``).
 
 A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
 dominated; :func:`refine_edges` runs the whole target mode of many edges in one call. They are plain C

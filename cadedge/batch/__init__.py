@@ -1,4 +1,4 @@
-"""Many models at once: ``run_batch`` refines STEP files on dask.distributed, resumably.
+"""Many models at once: ``run_batch`` refines STEP, IGES and BREP files on dask.distributed, resumably.
 
 Modules: :mod:`.inputs` (expand and name inputs), :mod:`.index` (the SQLite index), :mod:`.runner`
 (dask cluster, submission, timeouts, crashes), :mod:`.task` (the per-file work), :mod:`.run`

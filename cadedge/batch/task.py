@@ -1,4 +1,4 @@
-"""The per-file work of a batch, run inside a dask worker: refine one STEP file, write its JSON.
+"""The per-file work of a batch, run inside a dask worker: refine one model file, write its JSON.
 
 A task is any picklable callable ``task(input, output, options) -> dict`` returning the summary the
 index records (``edges``, ``segments``, ``worst_ald``, optionally ``seconds`` and ``warnings``, a

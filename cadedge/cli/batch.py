@@ -1,4 +1,4 @@
-"""``cadedge batch INPUT... -o OUTDIR``: refine many STEP files on dask.distributed, resumably.
+"""``cadedge batch INPUT... -o OUTDIR``: refine many STEP, IGES or BREP files on dask.distributed, resumably.
 
 A thin shell over :func:`cadedge.batch.run_batch`: a tqdm bar on stderr (when it is a terminal) with
 done/failed counts, each failure as one line on stderr as it happens, a summary on stdout. Exit code

@@ -1,7 +1,7 @@
-"""``cadedge info INPUT``: what is in a STEP file, edge by edge, before refining it.
+"""``cadedge info INPUT``: what is in a STEP, IGES or BREP file, edge by edge, before refining it.
 
-Counts (solids, shells, faces, edges, vertices), curve types, the worst edge tolerance and units,
-then one row per edge: id, curve type, degenerate/closed/seam flags, vertex and face ids,
+Counts (solids, shells, faces, edges, vertices), curve types, the worst edge tolerance, units and total edge
+length, then one row per edge: id, curve type, degenerate/closed/seam flags, vertex and face ids,
 tolerance and OCCT's length. Ids are those of ``cadedge refine``'s output.
 """
 

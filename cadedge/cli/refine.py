@@ -1,4 +1,4 @@
-"""``cadedge refine INPUT --ald EPS -o OUT``: refine every edge of a STEP file and write the grids.
+"""``cadedge refine INPUT --ald EPS -o OUT``: refine every edge of a STEP, IGES or BREP file and write the grids.
 
 Arguments are checked (numbers, output suffix, output folder, plot name) before the model is read,
 so a typo costs nothing. A progress bar (tqdm, stderr) appears for models with more than

@@ -2,7 +2,7 @@
 
 Reading a B-spline's knots and poles from Python is one OCP call per number (a few microseconds
 each). ``BinTools_CurveSet`` writes every curve added to it, exactly (IEEE doubles, little-endian),
-in one C++ call, and ``cadedge/_shapedump.c`` parses that stream straight into rows of the edge table's
+in one C++ call, and ``cadedge/_bintools.c`` parses that stream straight into rows of the edge table's
 geometry (``parse_curves``). A curve handle added twice (edges sharing one curve) is written once.
 Only the types the edge table evaluates are read: lines, circles, ellipses, hyperbolas, Bezier and B-spline
 curves (``BinTools_CurveSet.cxx`` fixes their layout).
