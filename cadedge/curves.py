@@ -199,11 +199,14 @@ class Evaluator:
     def __init__(self, curve: Any):
         self.curve = curve
         self._asked = 0
+        self._calls_before = getattr(curve, "calls", None)  # a curve object reused counts on from there
 
     @property
     def evaluations(self) -> int:
         calls = getattr(self.curve, "calls", None)
-        return int(calls) if calls is not None else self._asked
+        if calls is None or self._calls_before is None:
+            return self._asked
+        return int(calls) - int(self._calls_before)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         u = np.asarray(u, dtype=float).ravel()

@@ -408,7 +408,11 @@ def write_model(name: str, folder: Path) -> Path:
 
 
 def main(argv: list[str]) -> int:
-    folder = Path(argv[0]) if argv else Path("hard_models")
+    import argparse
+
+    ap = argparse.ArgumentParser(description="Write every hard model of the mesh benchmark into FOLDER.")
+    ap.add_argument("folder", nargs="?", type=Path, default=Path("hard_models"), help="default: hard_models")
+    folder = ap.parse_args(argv).folder
     folder.mkdir(parents=True, exist_ok=True)
     for name in NAMES:
         print(write_model(name, folder))

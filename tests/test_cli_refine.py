@@ -90,7 +90,7 @@ def test_refine_prints_model_warnings(tmp_path, capsys, name, expected):
     out = tmp_path / "s.json"
     assert main(["refine", str(CORPUS / name), "-o", str(out)]) == 0
     err = capsys.readouterr().err.splitlines()
-    assert err and all(line.startswith("cadedge refine: warning: ") for line in err)
+    assert err and all(line.startswith(f"cadedge refine: {CORPUS / name}: warning: ") for line in err)
     assert any(expected in line for line in err)
     validate(json.loads(out.read_text()))
 
@@ -229,3 +229,12 @@ def test_info_flags_seams_and_closed_edges(capsys):
     degenerate = [int(r[0]) for r in rows if r[2] == "yes"]
     assert len(rows) == 6 and len(seams) == 2 and len(degenerate) == 2  # as SOURCES.tsv describes it
     assert all(r[3] == "yes" for r in rows if int(r[0]) in degenerate)
+
+
+def test_errors_after_the_read_name_the_file_as_typed(tmp_path, capsys, monkeypatch):
+    """The library names a file by its base name once it is read (the results' ``source``); the CLI's line
+    names it as the user typed it, like every other line."""
+    monkeypatch.chdir(FIXTURES.parent)
+    assert main(["refine", "fixtures/bracket.step", "--ald-edge", "99=1e-3", "-o", str(tmp_path / "o.json")]) == 2
+    assert capsys.readouterr().err.strip() == ("cadedge refine: error: fixtures/bracket.step: local ald for edge 99: "
+                                               "no such edge (the shape has edges 1 to 36)")

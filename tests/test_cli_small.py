@@ -66,7 +66,8 @@ def test_info_and_refine_cap_their_warnings(tmp_path, capsys):
     assert total > MAX_WARNINGS
     for argv in (["info", str(cut)], ["refine", str(cut), "-o", str(tmp_path / "o.json"), "--quiet"]):
         assert main([*argv, "--allow-partial"]) == 0
-        warned = [line for line in capsys.readouterr().err.splitlines() if f"cadedge {argv[0]}: warning:" in line]
+        warned = [line for line in capsys.readouterr().err.splitlines()
+                  if line.startswith(f"cadedge {argv[0]}: {cut}: warning:")]
         assert len(warned) == MAX_WARNINGS + 1 and warned[0].endswith("refining what did load")
         assert f"... and {total - MAX_WARNINGS} more warnings" in warned[-1]
 

@@ -114,3 +114,10 @@ def test_bad_arguments_are_input_errors(kwargs, message):
 def test_bad_domain_is_an_input_error(domain):
     with pytest.raises(cadedge.InputError, match="domain"):
         cadedge.refine_curve(_circle_rows, domain)
+
+
+def test_a_curve_object_reused_counts_each_refinement_on_its_own():
+    """A FunctionCurve counts its calls over its life; each refinement reports only its own."""
+    curve = FunctionCurve(lambda u: np.c_[np.cos(u), np.sin(u), np.zeros_like(u)], (0.0, 3.0))
+    first = cadedge.refine_curve(curve, ald=1e-3).evaluations
+    assert first > 0 and cadedge.refine_curve(curve, ald=1e-3).evaluations == first

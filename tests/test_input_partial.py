@@ -125,7 +125,7 @@ def test_cli_refine_refuses_then_allows(tmp_path, capsys):
     assert not out.exists()
     assert main(["refine", str(path), "--allow-partial", "-o", str(out), "--quiet"]) == 0
     err = capsys.readouterr().err
-    assert "cadedge refine: warning: partial transfer: " in err and "of 6 faces" in err
+    assert f"cadedge refine: {path}: warning: partial transfer: " in err and "of 6 faces" in err
     doc = json.loads(out.read_text())
     assert doc["summary"]["edges"] > 0  # the faces left still bound every edge
 
@@ -138,7 +138,7 @@ def test_cli_info_and_mesh_refuse_then_allow(tmp_path, capsys):
     assert main(["info", str(path)]) == 2
     assert "partial transfer refused" in capsys.readouterr().err
     assert main(["info", str(path), "--allow-partial"]) == 0
-    assert "cadedge info: warning: partial transfer: " in capsys.readouterr().err
+    assert f"cadedge info: {path}: warning: partial transfer: " in capsys.readouterr().err
     out = tmp_path / "m.msh"
     assert main(["mesh", str(path), "--ald", "1e-2", "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()

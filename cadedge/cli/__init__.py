@@ -60,7 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             import traceback  # only here: every command's start-up would pay for it
 
             traceback.print_exc()
-        print(f"cadedge {args.command}: error: {exc}", file=sys.stderr)
+        print(f"cadedge {args.command}: error: {_as_typed(args, str(exc))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"cadedge {args.command}: interrupted", file=sys.stderr)
@@ -70,6 +70,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"cadedge {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _as_typed(args: argparse.Namespace, message: str) -> str:
+    """``message`` naming the input as the user typed it: the library names a file by its base name (the
+    ``source`` of its results) once it is read."""
+    import os
+
+    given = getattr(args, "input", None)
+    if isinstance(given, str):
+        base = f"{os.path.basename(given)}: "
+        if message.startswith(base) and not message.startswith(f"{given}: "):
+            return f"{given}: {message[len(base):]}"
+    return message
 
 
 def _interrupted(exc: BaseException) -> bool:

@@ -54,7 +54,7 @@ class BatchBar:
 
 
 def register(subparsers: Any) -> None:
-    p = subparsers.add_parser("batch", help="edge grids of many STEP files on dask",
+    p = subparsers.add_parser("batch", help="edge grids of many STEP, IGES or BREP files on dask",
                               description="Refine every model file named (files, folders searched recursively "
                                           "for .step/.stp/.igs/.iges/.brep, globs) into OUTDIR/<name>.json, recording each "
                                           "outcome in OUTDIR/index.sqlite; a rerun skips finished inputs.")

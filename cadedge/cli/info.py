@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     from .refine import print_warnings
 
     d = describe_shape(args.input, allow_partial=args.allow_partial)
-    print_warnings("info", d.warnings)
+    print_warnings("info", args.input, d.warnings)
     types = ", ".join(f"{name} {n}" for name, n in sorted(d.curve_types.items(), key=lambda kv: (-kv[1], kv[0])))
     print(f"source: {d.source}")
     print(f"units: {d.units}")

@@ -51,7 +51,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--plot", metavar="FILE", help="also draw the mesh and the edge grids: .png (static) or .html "
                                                   "(interactive 3-D page, works offline)")
     p.add_argument("--quiet", action="store_true", help="print only problems")
-    p.add_argument("--verbose", action="store_true", help="every failed attempt of every face, and every note")
+    p.add_argument("--verbose", action="store_true", help="every failed attempt of every face, every note and "
+                   "every warning")
     p.set_defaults(func=run)
 
 
@@ -60,9 +61,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         return _run(args)
     except InputError as exc:
+        _debug_traceback(args)
         _err(args.input, exc)
         return 2
     except CadedgeError as exc:  # a valid file our pipeline could not finish: not bad input
+        _debug_traceback(args)
         _err(args.input, exc)
         return 1
     except (KeyboardInterrupt, Exception) as exc:  # Ctrl-C (native code may turn it into another error), or a
@@ -73,6 +76,14 @@ def run(args: argparse.Namespace) -> int:
             raise
         _err(args.input, f"internal error: {type(exc).__name__}: {exc}")
         return 1
+
+
+def _debug_traceback(args: argparse.Namespace) -> None:
+    """With ``--debug``, the traceback of the error being handled (as ``main`` prints for other commands)."""
+    if getattr(args, "debug", False):
+        import traceback
+
+        traceback.print_exc()
 
 
 def _err(source: str, message: object) -> None:

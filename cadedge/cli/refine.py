@@ -111,15 +111,16 @@ def check_writable(path: str) -> None:
         raise InputError(f"{path}: folder {os.fspath(folder)!r} does not exist")
 
 
-def print_warnings(command: str, messages: list[str], *, stream: IO[str] | None = None) -> None:
-    """Each distinct message as ``cadedge COMMAND: warning: ...``, at most ``MAX_WARNINGS``, then a count."""
+def print_warnings(command: str, source: str, messages: list[str], *, stream: IO[str] | None = None) -> None:
+    """Each distinct message as ``cadedge COMMAND: SOURCE: warning: ...`` (``source`` as the user typed it),
+    at most ``MAX_WARNINGS``, then a count."""
     stream = sys.stderr if stream is None else stream
     messages = list(dict.fromkeys(messages))
     for message in messages[:MAX_WARNINGS]:
-        print(f"cadedge {command}: warning: {message}", file=stream)
+        print(f"cadedge {command}: {source}: warning: {message}", file=stream)
     if len(messages) > MAX_WARNINGS:
-        print(f"cadedge {command}: warning: ... and {len(messages) - MAX_WARNINGS} more warnings (the Python "
-              "API returns them all, e.g. ShapeGrid.warnings)", file=stream)
+        print(f"cadedge {command}: {source}: warning: ... and {len(messages) - MAX_WARNINGS} more warnings (the "
+              "Python API returns them all, e.g. ShapeGrid.warnings)", file=stream)
 
 
 class Progress:
@@ -166,7 +167,7 @@ def summary_table(grid: ShapeGrid) -> str:
 
 
 def register(subparsers: Any) -> None:
-    p = subparsers.add_parser("refine", help="edge grids of a STEP file",
+    p = subparsers.add_parser("refine", help="edge grids of a STEP, IGES or BREP file",
                               description="Refine every edge of INPUT to the arc-length deficit EPS and write "
                                           "the grids; the format comes from OUT's suffix "
                                           "(.json .csv .vtp .vtu .vtk .msh .geo .obj .ply).")
@@ -206,7 +207,7 @@ def run(args: argparse.Namespace) -> int:
         if not issubclass(w.category, CadedgeWarning):
             warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     ours = [str(w.message) for w in caught if issubclass(w.category, CadedgeWarning)]
-    print_warnings("refine", [*grid.warnings, *ours])
+    print_warnings("refine", source, [*grid.warnings, *ours])
     write(grid, args.output)
     if args.plot:
         from ..plot import plot_grid
