@@ -6,13 +6,18 @@ again and again while they load (about 0.2 s of CPU), and once more by the colle
 exit (about 0.3 s), for nothing: none of them is ever garbage. In a process the CLI owns
 (:func:`own_process`, called by the console script and ``python -m cadedge``), :func:`heavy_imports`
 therefore loads them with the collector off and then moves them out of its reach (``gc.freeze``);
-objects made afterwards are collected as usual. Called in-process (``main(argv)`` from Python) it
-does nothing: freezing a heap is the process owner's choice, not a library's.
+objects made afterwards are collected as usual. It also asks OpenBLAS (numpy's BLAS) for one thread
+unless ``OPENBLAS_NUM_THREADS`` is set: its worker threads start with numpy and spin while idle (about
+0.05 s of CPU on two cores), and the refiner makes no BLAS call large enough to share. Called
+in-process (``main(argv)`` from Python) it does nothing: these are the process owner's choices, not a
+library's.
 """
 
 from __future__ import annotations
 
 import gc
+import os
+import sys
 from contextlib import contextmanager
 from typing import Iterator
 
@@ -28,10 +33,12 @@ def own_process() -> None:
 @contextmanager
 def heavy_imports() -> Iterator[None]:
     """Run the block (a subcommand's imports of OCP, numpy) with the collector off, then freeze what
-    it made; a no-op unless :func:`own_process` was called and the collector is on."""
+    it made, OpenBLAS on one thread; a no-op unless :func:`own_process` was called and the collector is on."""
     if not (_owner and gc.isenabled()):
         yield
         return
+    if "numpy" not in sys.modules:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     gc.disable()
     try:
         yield
