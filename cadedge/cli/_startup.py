@@ -8,7 +8,7 @@ exit (about 0.3 s), for nothing: none of them is ever garbage. In a process the 
 therefore loads them with the collector off and then moves them out of its reach (``gc.freeze``);
 objects made afterwards are collected as usual. It also asks OpenBLAS (numpy's BLAS) for one thread
 unless ``OPENBLAS_NUM_THREADS`` is set: its worker threads start with numpy and spin while idle (about
-0.05 s of CPU on two cores), and the refiner makes no BLAS call large enough to share. Called
+0.07 s of CPU on two cores), and the refiner makes no BLAS call large enough to share. Called
 in-process (``main(argv)`` from Python) it does nothing: these are the process owner's choices, not a
 library's.
 """
