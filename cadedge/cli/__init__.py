@@ -112,4 +112,7 @@ def _stdout_to_devnull() -> None:
 
 
 def entry() -> None:  # pragma: no cover - console-script shim
+    from ._startup import own_process
+
+    own_process()
     sys.exit(main())

@@ -33,9 +33,11 @@ def register(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..occt.describe import describe_shape
-
+    from ._startup import heavy_imports
     from .refine import print_warnings
+
+    with heavy_imports():
+        from ..occt.describe import describe_shape
 
     d = describe_shape(args.input, allow_partial=args.allow_partial)
     print_warnings("info", args.input, d.warnings)

@@ -195,6 +195,9 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from ..plot import check_plot_path
         check_plot_path(args.plot)
+    from ._startup import heavy_imports
+    with heavy_imports():
+        from ..occt import shape  # noqa: F401 - OCP and numpy, which cadedge.refine_shape imports on first use
     progress = Progress(stream=sys.stderr, enabled=False if args.quiet else None)
     try:
         with warnings.catch_warnings(record=True) as caught:
