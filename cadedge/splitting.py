@@ -16,7 +16,8 @@ falls). The pieces:
   out of bounds is fixed by splitting the longer segment.
 
 - :func:`regrade` re-places target mode's nodes along such a size field (fewer points than splitting
-  would add, the target kept), then hands what is left to :func:`limit_growth`.
+  would add, the target kept), then hands what is left to :func:`limit_growth`; with end sizes, the
+  field grades an edge towards its vertices (vertex grading below the golden ratio).
 
 Callers: refine_curve and target mode (``max_growth`` within an edge), :mod:`cadedge.occt.vertexgrowth`
 (``max_growth`` across vertices) and :mod:`cadedge.mesh.proximity` (segments longer than the mesh size).
@@ -213,13 +214,15 @@ def evaluate_new(ev, u: np.ndarray, params: np.ndarray, points: np.ndarray) -> n
 
 
 def _graded(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarray, growth: float,
-            total: float, limit: float) -> tuple[np.ndarray, np.ndarray] | None:
+            total: float, limit: float, end_sizes: tuple[float | None, float | None] = (None, None)
+            ) -> tuple[np.ndarray, np.ndarray] | None:
     """Re-place the grid so neighbouring segments differ by at most ``growth``, keeping the target.
 
     The size field h(s) = min over segments j of (l_j + alpha * arc distance to j), alpha just under
     growth - 1, is never above the grid's own sizes; nodes at equal steps of the integral of ds / h
     then have sizes that follow h, so neighbours differ by about 1 + alpha. Both running minima are
-    prefix minima over the dense samples, so this is linear in their number.
+    prefix minima over the dense samples, so this is linear in their number. ``end_sizes`` are sizes the
+    field starts from at either end (``None``: the grid's own), for grading towards a shared vertex.
     """
     u, cum = ex.params, ex.cumulative
     alpha = 0.75 * (growth - 1.0)
@@ -237,6 +240,10 @@ def _graded(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarr
     k = np.searchsorted(starts, cum, side="left")
     has = k < len(seg)
     h[has] = np.minimum(h[has], bwd_key[k[has]] - alpha * cum[has])
+    if end_sizes[0] is not None:
+        h = np.minimum(h, end_sizes[0] + alpha * cum)
+    if end_sizes[1] is not None:
+        h = np.minimum(h, end_sizes[1] + alpha * (cum[-1] - cum))
     h = np.maximum(h, 1e-300)
     inv = 1.0 / h
     measure = np.concatenate([[0.0], np.cumsum(0.5 * (inv[:-1] + inv[1:]) * np.diff(cum))])
@@ -264,22 +271,31 @@ def _sharp_nodes(points: np.ndarray, ald: float) -> np.ndarray:
     return 1 + np.flatnonzero(turn > max(0.5, 3.0 * math.sqrt(24.0 * ald)))
 
 
+def _ends_within(points: np.ndarray, end_sizes: tuple[float | None, float | None], growth: float) -> bool:
+    """Whether the end segments are at most ``sqrt(growth)`` times the given end sizes (the field aims at
+    the end sizes; the rounds of :func:`regrade` stop once the ends are that close)."""
+    seg = row_norms(np.diff(points[[0, 1, -2, -1]], axis=0))[[0, 2]]
+    return all(e is None or s <= e * math.sqrt(growth) for s, e in zip(seg, end_sizes))
+
+
 def regrade(ev, ex, corner_idx: np.ndarray, params: np.ndarray, points: np.ndarray, growth: float, ald: float,
-            total: float, limit: float) -> tuple[np.ndarray, np.ndarray]:
-    """A new grid for target mode's ``max_growth``: the nodes re-placed along a graded size field
-    (:func:`_graded`) on the exploration ``ex``, keeping its corners (``corner_idx``) and the sharp nodes,
-    its deficit against ``total`` within ``limit``; then :func:`limit_growth` for what is left."""
+            total: float, limit: float, *, end_sizes: tuple[float | None, float | None] = (None, None)
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """A new grid for ``max_growth``: the nodes re-placed along a graded size field (:func:`_graded`,
+    starting from the sizes ``end_sizes`` at the grid's ends where given) on the exploration ``ex``, keeping
+    its corners (``corner_idx``) and the sharp nodes, its deficit against ``total`` within ``limit``;
+    then :func:`limit_growth` for what is left within the grid."""
     keep = _sharp_nodes(points, ald)
     if len(keep):  # make the sharp nodes samples (if they are not) and pin them like corners
         ex = ex.with_samples(params[keep], points[keep])
         corner_idx = unique_sorted(np.concatenate([np.searchsorted(ex.params, ex.corners),
                                                np.searchsorted(ex.params, params[keep])])).astype(int)
     for _ in range(GRADING_PASSES):  # each pass smooths the sizes of the one before
-        graded = _graded(ev, ex, corner_idx, params, points, growth, total, limit)
+        graded = _graded(ev, ex, corner_idx, params, points, growth, total, limit, end_sizes)
         if graded is None:
             break
         params, points = graded
-        if worst_growth(points) <= growth:
+        if worst_growth(points) <= growth and _ends_within(points, end_sizes, growth):
             return params, points
     params, points, _ = limit_growth(ev, params, points, growth)
     return params, points

@@ -182,7 +182,7 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     curves = TableCurves(table, [i + 1 for i in table.rows], curves, topo.edges)
     if opts["max_growth"] is not None:
         try:
-            edges, graded = grade_vertices(edges, curves, opts["max_growth"])
+            edges, graded = grade_vertices(edges, curves, opts["max_growth"], targets)
             notes += graded
         except GeometryError as exc:
             raise GeometryError(f"{loaded.source}: grading edge ends at vertices: {exc}") from exc

@@ -1,33 +1,42 @@
 """Grading edge ends at shared vertices so neighbouring segments differ by at most ``max_growth``.
 
 Within an edge ``refine_curve`` limits growth; across a vertex the end segments of different edges are
-unrelated. Here each edge end gets a cap, ``g`` times the shortest end segment at its vertex, and
-each edge is split until its end segments respect the caps and adjacent segments differ by at most
-``g``. A segment of length ``L`` that is too long next to an allowed size ``A`` (``g`` times the
-short neighbour, or the cap) is split into ``A`` on the short side and ``L - A`` when ``L >= 2 A``,
-else into two halves; repeated, this grades geometrically away from the short side. Caps are
-recomputed until nothing changes, since splitting an edge's far end changes the shortest end segment
-at its other vertex. No piece is made shorter than ``1/g`` of the shortest segment on the edge or
-at its vertices, nor than ``1/g`` of the shortest segment of the whole shape before grading, so it
-terminates; for ``g >= sqrt(2)`` halves never fall below that floor, below ``sqrt(2)`` some limits
-may stay unmet and a note names the edges.
+unrelated. Here each edge end gets a cap, ``g`` times the shortest end segment at its vertex, and the
+edges are changed until their end segments respect the caps and adjacent segments differ by at most
+``g``. Caps are recomputed round after round until nothing changes, since changing an edge's far end
+changes the shortest end segment at its other vertex. Two regimes:
 
-New points lie on the curve (placed by arc length along a small dense sampling of the split
-segment, :func:`cadedge.splitting.point_at_arc`); vertex points stay bit-identical. Splitting only
-lengthens the polyline, so the deficit only falls. Grids are replaced, never edited in place.
+- ``g`` at least the golden ratio (the mesh default 2.0): splitting. A segment of length ``L`` too
+  long next to an allowed size ``A`` (``g`` times the short neighbour, or the cap) is split into ``A``
+  on the short side and ``L - A`` when ``L >= 2 A``, else into two halves; repeated, this grades
+  geometrically away from the short side, and the other points stay where they are. No piece is made
+  shorter than ``1/g`` of the shortest segment on the edge or at its vertices, nor than ``1/g`` of the
+  shortest segment of the whole shape before grading, so it terminates.
+- ``g`` below the golden ratio: re-placement. There splitting cannot stop (a segment cut in two
+  leaves a far piece of at most ``g / (1 + g)`` of it, which an equal neighbour exceeds ``g``-fold, so
+  every segment to the edge's far end is cut, and through the caps every edge beyond: 917_fusee went
+  from 3,340 segments to 87,567 at 1.5). An edge over a cap has its nodes re-placed along a size field
+  graded from its capped ends (:func:`cadedge.splitting.regrade`), its deficit kept within its target.
+
+New points lie on the curve; vertex points stay bit-identical. Splitting only lengthens the polyline,
+so the deficit only falls; a re-placement is checked against the edge's target. Grids are replaced,
+never edited in place. Notes name what is left unmet.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import defaultdict
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..grid import row_norms
+from ..explore import Exploration
+from ..grid import polyline_length, row_norms
 from ..shapegrid import ShapeEdgeGrid
-from ..splitting import insert_points, point_at_arc
+from ..splitting import insert_points, point_at_arc, regrade, worst_growth
+from ..target import MARGIN
 from .edgecurve import EdgeCurve
 
 #: Samples along a segment to place a new point by arc length.
@@ -37,6 +46,17 @@ SLACK = 1e-6
 #: Upper bound on splits per edge and on global rounds (safety bounds; not reached in practice).
 MAX_SPLITS = 5000
 MAX_ROUNDS = 50
+#: Below this growth (the golden ratio) splitting alone cannot stop: a segment cut in two leaves a far
+#: piece of at most ``g / (1 + g)`` of it, which its equal neighbour exceeds ``g``-fold, so every
+#: segment to the edge's far end would be cut, and through the vertex caps every edge beyond. There
+#: the edges are first re-placed along a size field graded from their vertices.
+GOLDEN = (1.0 + math.sqrt(5.0)) / 2.0
+#: Rounds of re-placement (the shortest end segment at a vertex can fall as its edges are re-placed).
+REGRADE_ROUNDS = 4
+#: Samples per segment of the grid on which a re-placement measures arc length.
+REGRADE_SAMPLES = 8
+#: Ratio of the extra samples' distances from a capped end (they start at a quarter of its size).
+END_STEP = 1.25
 
 
 def _allowed(seg: np.ndarray, g: float, caps: tuple[float | None, float | None]) -> tuple[np.ndarray, np.ndarray]:
@@ -93,21 +113,120 @@ def _caps(edges: list[ShapeEdgeGrid], g: float) -> dict[int, float]:
     return {vid: g * min(s) for vid, s in ends.items() if len(s) > 1}
 
 
-def grade_vertices(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve],
-                   g: float) -> tuple[list[ShapeEdgeGrid], list[str]]:
+def _regraded(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, sizes: tuple[float | None, float | None],
+              target: float, total: float) -> ShapeEdgeGrid:
+    """``e`` with its nodes re-placed along a size field graded from ``sizes`` at its ends, its deficit
+    against ``total`` kept within the edge's target (or its deficit before, if that was over).
+
+    Arc length is measured on ``REGRADE_SAMPLES`` samples per segment of the grid; the ends (the vertex
+    points) stay as they are.
+    """
+    calls = 0
+
+    def evaluate(u: np.ndarray) -> np.ndarray:
+        nonlocal calls
+        calls += len(u)
+        return curve.evaluate(u)
+
+    u, p = e.params, e.points
+    t = np.arange(1, REGRADE_SAMPLES) / REGRADE_SAMPLES
+    mid = u[:-1, None] + np.diff(u)[:, None] * t[None, :]
+    pm = evaluate(mid.ravel()).reshape(len(u) - 1, len(t), 3)
+    dense_u = np.concatenate([np.c_[u[:-1], mid].ravel(), u[-1:]])
+    dense_p = np.concatenate([np.concatenate([p[:-1, None, :], pm], axis=1).reshape(-1, 3), p[-1:]])
+    ex = Exploration(params=dense_u, points=dense_p, length_estimate=total, remainder=0.0)
+    # near a capped end the field grows from a size far below the grid's: samples at geometric steps
+    # from there, so the placement resolves it
+    cum, reach = ex.cumulative, []
+    for end, size in enumerate(sizes):
+        if size is not None and size < cum[-1]:
+            steps = (0.25 * size) * END_STEP ** np.arange(int(math.log(2.0 * cum[-1] / size) / math.log(END_STEP)) + 1)
+            steps = steps[steps < 0.5 * cum[-1]]
+            reach.append(steps if end == 0 else cum[-1] - steps)
+    if reach:
+        extra = np.interp(np.concatenate(reach), cum, dense_u)
+        ex = ex.with_samples(extra, evaluate(extra))
+    limit = max(target * (1.0 - MARGIN), e.ald_estimate) * total
+    params, points = regrade(evaluate, ex, np.zeros(0, dtype=int), u, p, g, target, total, limit, end_sizes=sizes)
+    if total - polyline_length(points) > limit * (1 + 1e-12):
+        return e
+    return dataclasses.replace(e, params=params, points=points, evaluations=e.evaluations + calls)
+
+
+def _regrade_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: float,
+                  targets: Sequence[float], totals: Mapping[int, float]) -> tuple[list[ShapeEdgeGrid], list[str]]:
+    """Re-place the edges whose end segments exceed their vertex caps along size fields that start at
+    ``sqrt(g)`` times the shortest end segment at each capped end (midway, on a log scale, between
+    that segment and its cap), round after round until no end exceeds its cap: (new edges, notes).
+
+    No splitting follows: below the golden ratio it would cascade (:data:`GOLDEN`). The notes name
+    what is left unmet.
+    """
+    edges = list(edges)
+    for _ in range(MAX_ROUNDS):
+        caps = _caps(edges, g)
+        changed = False
+        for k, e in enumerate(edges):
+            if e.degenerate or e.segments == 0 or k not in totals:
+                continue
+            ends = (caps.get(e.vertices[0]), caps.get(e.vertices[1]))
+            if not any(c is not None and s > c * (1 + SLACK) for s, c in zip(e.spacing, ends)):
+                continue
+            sizes = (None if ends[0] is None else ends[0] / math.sqrt(g),
+                     None if ends[1] is None else ends[1] / math.sqrt(g))
+            edges[k] = _regraded(e, curves[e.id], g, sizes, float(targets[k]), totals[k])
+            changed = changed or edges[k] is not e
+        if not changed:
+            break
+    caps = _caps(edges, g)
+    notes = [f"vertex {v}: max_growth {g:g} across vertices not met: its end segments differ up to "
+             f"{max(ends) * g / c:.3g}-fold" for v, c, ends in _vertex_ends(edges, caps) if max(ends) > c * (1 + SLACK)]
+    for k, e in enumerate(edges):
+        if not e.degenerate and e.segments > 1 and worst_growth(e.points) > g * (1 + SLACK):
+            notes.append(f"edge {k + 1}: max_growth {g:g} not met everywhere: worst ratio of adjacent "
+                         f"segments is {worst_growth(e.points):.3g}")
+    return edges, notes
+
+
+def _vertex_ends(edges: list[ShapeEdgeGrid], caps: Mapping[int, float]):
+    """(vertex id, cap, end segment lengths there) for every capped vertex."""
+    ends: dict[int, list[float]] = defaultdict(list)
+    for e in edges:
+        if not e.degenerate and e.segments:
+            ends[e.vertices[0]].append(e.spacing[0])
+            ends[e.vertices[1]].append(e.spacing[1])
+    return [(v, caps[v], ends[v]) for v in sorted(caps)]
+
+
+def grade_vertices(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: float,
+                   targets: Sequence[float]) -> tuple[list[ShapeEdgeGrid], list[str]]:
     """Grade every edge against its vertex caps and ``g``: (new edge list, notes).
 
-    ``curves`` maps edge ids to their curves (those refine_shape built). The notes name edges where the
-    limits could not be met within the split budget.
+    ``curves`` maps edge ids to their curves (those refine_shape built), ``targets`` gives each edge's
+    ALD target (kept when edges are re-placed, below the golden ratio). The notes name edges where the
+    limits could not be met.
     """
     edges = list(edges)
     totals = {k: e.length / (1.0 - e.ald_estimate) for k, e in enumerate(edges)
               if not e.degenerate and e.ald_estimate < 1.0 and e.length > 0.0}
-    notes: list[str] = []
-    met: dict[int, bool] = {}
     live = [e for e in edges if not e.degenerate and e.segments]
     if not live:
         return edges, []
+    if g < GOLDEN:
+        edges, notes = _regrade_ends(edges, curves, g, targets, totals)
+    else:
+        edges, notes = _split_ends(edges, curves, g, live)
+    for k, total in totals.items():
+        edges[k] = dataclasses.replace(edges[k], ald_estimate=max(1.0 - edges[k].length / total, 0.0))
+    return edges, notes
+
+
+def _split_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: float,
+                live: list[ShapeEdgeGrid]) -> tuple[list[ShapeEdgeGrid], list[str]]:
+    """Split every edge until its vertex caps and ``g`` hold, round after round (``g`` at least the
+    golden ratio, where splitting settles): (new edges, notes)."""
+    notes: list[str] = []
+    met: dict[int, bool] = {}
     lowest = min(float(e.segment_lengths.min()) for e in live) / g
     for _ in range(MAX_ROUNDS):
         caps = _caps(edges, g)
@@ -123,8 +242,6 @@ def grade_vertices(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve],
             break
     else:
         notes.append(f"max_growth {g:g} across vertices not settled after {MAX_ROUNDS} rounds")
-    notes += [f"edge {k + 1}: max_growth {g:g} not met everywhere (below sqrt(2) splitting needs "
-              "pieces shorter than the edge's shortest segment)" for k, ok in sorted(met.items()) if not ok]
-    for k, total in totals.items():
-        edges[k] = dataclasses.replace(edges[k], ald_estimate=max(1.0 - edges[k].length / total, 0.0))
+    notes += [f"edge {k + 1}: max_growth {g:g} not met everywhere (splitting would need pieces shorter "
+              "than the edge's shortest segment)" for k, ok in sorted(met.items()) if not ok]
     return edges, notes
