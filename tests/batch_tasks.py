@@ -35,6 +35,16 @@ def hang_or_refine(input: str, output: str, options: dict[str, Any]) -> dict[str
     return refine_task(input, output, options)
 
 
+def wait_for_workers(address: str, n: int) -> None:
+    """Wait until the scheduler at ``address`` has ``n`` workers: the nannies restart killed workers in
+    their own time (a fresh interpreter importing distributed: tens of seconds on a loaded machine, longer
+    than the 30 s a batch waits for its first worker)."""
+    from distributed import Client
+
+    with Client(address) as client:
+        client.wait_for_workers(n, timeout=300)
+
+
 @contextlib.contextmanager
 def local_cluster(n_workers: int = 2) -> Iterator[Any]:
     """A LocalCluster configured like the embedded one (no task retries after a worker death)."""

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from batch_tasks import CRASH_STEM, HANG_STEM, crash_or_refine, hang_or_refine, local_cluster
+from batch_tasks import CRASH_STEM, HANG_STEM, crash_or_refine, hang_or_refine, local_cluster, wait_for_workers
 from cadedge.batch import INDEX_NAME, WORKER_DIED, BatchIndex, expand_inputs, output_names, run_batch
 from cadedge.errors import InputError
 from cadedge.exporters.json import validate
@@ -27,9 +27,16 @@ ALD = 1e-2
 
 
 @pytest.fixture(scope="module")
-def scheduler():
+def cluster():
     with local_cluster(2) as cluster:
-        yield cluster.scheduler_address
+        yield cluster
+
+
+@pytest.fixture
+def scheduler(cluster):
+    """The cluster's address once both workers are up (an earlier test may have killed or restarted one)."""
+    wait_for_workers(cluster.scheduler_address, 2)
+    return cluster.scheduler_address
 
 
 def copy_fixtures(folder: Path, stems=SMALL) -> list[Path]:

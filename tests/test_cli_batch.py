@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from batch_tasks import local_cluster
+from batch_tasks import local_cluster, wait_for_workers
 from cadedge.batch import WORKER_DIED, BatchProgress, FileResult
 from cadedge.cli import main
 from cadedge.cli.batch import BatchBar
@@ -111,6 +111,7 @@ def test_existing_scheduler_workers_killed_mid_run_then_retry(tmp_path, capsys):
         assert "4 inputs: 2 ok, 2 failed" in cap.out
         assert {line for line in cap.err.splitlines()} == {f"failed: {p}: {WORKER_DIED}" for p in SLOW}
 
+        wait_for_workers(cluster.scheduler_address, 2)  # the nannies restart both
         assert main([*args, "--scheduler", cluster.scheduler_address, "--retry-failed"]) == 0
         cap = capsys.readouterr()
         assert "skipped 2 finished inputs" in cap.out and "2 ok, 0 failed" in cap.out

@@ -73,11 +73,26 @@ def test_a_crash_outside_the_faces_fails_the_run_not_the_caller(cylinder, tmp_pa
     assert not out.exists() and result.output is None  # nothing meshed: no file
 
 
-def test_the_whole_run_is_bounded_by_the_timeout(cylinder, tmp_path):
-    t0 = time.monotonic()
+def test_the_whole_run_is_bounded_by_the_timeout(cylinder, tmp_path, monkeypatch):
+    """The gmsh job (every child, the delivery and the writing) ends within the timeout and a few seconds.
+    What ``mesh_shape`` does before it in this process (sizes, imports) is not under the timeout, and takes
+    several seconds more on a loaded machine, so the job is timed alone."""
+    import cadedge.mesh.isolate as isolate
+
+    spans = []
+    run_isolated = isolate.run_isolated
+
+    def timed(*args, **kwargs):
+        t0 = time.monotonic()
+        try:
+            return run_isolated(*args, **kwargs)
+        finally:
+            spans.append(time.monotonic() - t0)
+
+    monkeypatch.setattr(isolate, "run_isolated", timed)
     result = mesh_shape(cylinder, output=tmp_path / "c.msh", hooks={"before_face": ["mesh_faults:hang"]},
                         timeout=4, face_timeout=100)
-    assert time.monotonic() - t0 < 20
+    assert len(spans) == 1 and spans[0] < 4 + 10  # the hang alone would last WALL_SLACK * 100 s
     assert not result.ok
     # Out of time either with nothing delivered (the job's error) or with the faces meshed so far (face 1,
     # in its own first batch, before face 2 hung): then face 2 is named as out of time (killed at the
