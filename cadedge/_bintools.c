@@ -64,53 +64,35 @@ static int skip_spline(Reader *r, long n, long nk, int dim, int rational)
     return skip(r, (Py_ssize_t)n * 8 * (dim + rational) + (Py_ssize_t)nk * 12);
 }
 
-int bt_skip_curve2d(Reader *r, int depth)
+/* A curve of dim (2 or 3) coordinates: the record is the same for both but for the sizes of its points and
+   directions (a line: a point and a direction; a conic: a point, dim directions and its radii). */
+static int skip_curve(Reader *r, int dim, int depth)
 {
     int type = u8(r), rational;
     long degree;
     if (depth > MAX_DEPTH)
         return fail(r, "curves nested too deep");
     switch (type) {
-    case BT_LINE: return skip(r, 4 * 8);
-    case BT_CIRCLE: case BT_PARABOLA: return skip(r, 7 * 8);
-    case BT_ELLIPSE: case BT_HYPERBOLA: return skip(r, 8 * 8);
+    case BT_LINE: return skip(r, 2 * dim * 8);
+    case BT_CIRCLE: case BT_PARABOLA: return skip(r, (dim + dim * dim + 1) * 8);
+    case BT_ELLIPSE: case BT_HYPERBOLA: return skip(r, (dim + dim * dim + 2) * 8);
     case BT_BEZIER:
         rational = u8(r), degree = u16(r);
-        return rational >= 0 && degree >= 0 && skip_spline(r, degree + 1, 0, 2, rational != 0);
+        return rational >= 0 && degree >= 0 && skip_spline(r, degree + 1, 0, dim, rational != 0);
     case BT_BSPLINE: {
         rational = u8(r), u8(r), degree = u16(r);
         long n = i32(r), nk = i32(r);
-        return rational >= 0 && degree >= 0 && skip_spline(r, n, nk, 2, rational != 0);
+        return rational >= 0 && degree >= 0 && skip_spline(r, n, nk, dim, rational != 0);
     }
-    case BT_TRIMMED: return skip(r, 2 * 8) && bt_skip_curve2d(r, depth + 1);
-    case BT_OFFSET: return skip(r, 8) && bt_skip_curve2d(r, depth + 1);
-    default: return fail(r, "a 2-D curve of unknown type");
+    case BT_TRIMMED: return skip(r, 2 * 8) && skip_curve(r, dim, depth + 1);
+    case BT_OFFSET: return skip(r, (dim == 3 ? 4 : 1) * 8) && skip_curve(r, dim, depth + 1);  /* 3-D: a direction too */
+    default: return fail(r, dim == 3 ? "a curve of unknown type" : "a 2-D curve of unknown type");
     }
 }
 
-int bt_skip_curve3d(Reader *r, int depth)
-{
-    int type = u8(r), rational;
-    long degree;
-    if (depth > MAX_DEPTH)
-        return fail(r, "curves nested too deep");
-    switch (type) {
-    case BT_LINE: return skip(r, 6 * 8);
-    case BT_CIRCLE: case BT_PARABOLA: return skip(r, 13 * 8);
-    case BT_ELLIPSE: case BT_HYPERBOLA: return skip(r, 14 * 8);
-    case BT_BEZIER:
-        rational = u8(r), degree = u16(r);
-        return rational >= 0 && degree >= 0 && skip_spline(r, degree + 1, 0, 3, rational != 0);
-    case BT_BSPLINE: {
-        rational = u8(r), u8(r), degree = u16(r);
-        long n = i32(r), nk = i32(r);
-        return rational >= 0 && degree >= 0 && skip_spline(r, n, nk, 3, rational != 0);
-    }
-    case BT_TRIMMED: return skip(r, 2 * 8) && bt_skip_curve3d(r, depth + 1);
-    case BT_OFFSET: return skip(r, 4 * 8) && bt_skip_curve3d(r, depth + 1);
-    default: return fail(r, "a curve of unknown type");
-    }
-}
+int bt_skip_curve2d(Reader *r, int depth) { return skip_curve(r, 2, depth); }
+
+int bt_skip_curve3d(Reader *r, int depth) { return skip_curve(r, 3, depth); }
 
 int bt_skip_surface(Reader *r, int depth)
 {
