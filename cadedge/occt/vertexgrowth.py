@@ -102,15 +102,20 @@ def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | 
     return dataclasses.replace(e, params=params, points=points, evaluations=evaluations), count, met
 
 
-def _caps(edges: list[ShapeEdgeGrid], g: float) -> dict[int, float]:
-    """``g`` times the shortest end segment at each vertex where two or more edge ends meet."""
+def _end_segments(edges: list[ShapeEdgeGrid]) -> dict[int, list[float]]:
+    """Vertex id -> the lengths of the end segments meeting there (non-degenerate edges)."""
     ends: dict[int, list[float]] = defaultdict(list)
     for e in edges:
-        if not e.degenerate:
+        if not e.degenerate and e.segments:
             first, last = e.spacing
             ends[e.vertices[0]].append(first)
             ends[e.vertices[1]].append(last)
-    return {vid: g * min(s) for vid, s in ends.items() if len(s) > 1}
+    return ends
+
+
+def _caps(edges: list[ShapeEdgeGrid], g: float) -> dict[int, float]:
+    """``g`` times the shortest end segment at each vertex where two or more edge ends meet."""
+    return {vid: g * min(s) for vid, s in _end_segments(edges).items() if len(s) > 1}
 
 
 def _regraded(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, sizes: tuple[float | None, float | None],
@@ -178,24 +183,15 @@ def _regrade_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g
             changed = changed or edges[k] is not e
         if not changed:
             break
-    caps = _caps(edges, g)
+    ends_at = _end_segments(edges)
     notes = [f"vertex {v}: max_growth {g:g} across vertices not met: its end segments differ up to "
-             f"{max(ends) * g / c:.3g}-fold" for v, c, ends in _vertex_ends(edges, caps) if max(ends) > c * (1 + SLACK)]
+             f"{max(s) / min(s):.3g}-fold" for v, s in sorted(ends_at.items())
+             if len(s) > 1 and max(s) > g * min(s) * (1 + SLACK)]
     for k, e in enumerate(edges):
         if not e.degenerate and e.segments > 1 and worst_growth(e.points) > g * (1 + SLACK):
             notes.append(f"edge {k + 1}: max_growth {g:g} not met everywhere: worst ratio of adjacent "
                          f"segments is {worst_growth(e.points):.3g}")
     return edges, notes
-
-
-def _vertex_ends(edges: list[ShapeEdgeGrid], caps: Mapping[int, float]):
-    """(vertex id, cap, end segment lengths there) for every capped vertex."""
-    ends: dict[int, list[float]] = defaultdict(list)
-    for e in edges:
-        if not e.degenerate and e.segments:
-            ends[e.vertices[0]].append(e.spacing[0])
-            ends[e.vertices[1]].append(e.spacing[1])
-    return [(v, caps[v], ends[v]) for v in sorted(caps)]
 
 
 def grade_vertices(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: float,
