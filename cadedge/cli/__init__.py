@@ -56,11 +56,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         _stdout_to_devnull()
         return 141
     except CadedgeError as exc:
-        if args.debug:
-            import traceback  # only here: every command's start-up would pay for it
-
-            traceback.print_exc()
-        print(f"cadedge {args.command}: error: {_as_typed(args, str(exc))}", file=sys.stderr)
+        debug_traceback(args)
+        message, given = str(exc), getattr(args, "input", None)
+        if isinstance(given, str) and without_name(given, message) != message:  # named: as the user typed it
+            message = f"{given}: {without_name(given, message)}"
+        print(f"cadedge {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"cadedge {args.command}: interrupted", file=sys.stderr)
@@ -72,17 +72,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
-def _as_typed(args: argparse.Namespace, message: str) -> str:
-    """``message`` naming the input as the user typed it: the library names a file by its base name (the
-    ``source`` of its results) once it is read."""
+def without_name(given: str, message: str) -> str:
+    """``message`` without its leading ``FILE: `` where FILE is the input as typed or its base name (the
+    library names a file by its base name, the ``source`` of its results, once it is read)."""
     import os
 
-    given = getattr(args, "input", None)
-    if isinstance(given, str):
-        base = f"{os.path.basename(given)}: "
-        if message.startswith(base) and not message.startswith(f"{given}: "):
-            return f"{given}: {message[len(base):]}"
+    for prefix in (f"{given}: ", f"{os.path.basename(given)}: "):
+        if message.startswith(prefix):
+            return message[len(prefix):]
     return message
+
+
+def debug_traceback(args: argparse.Namespace) -> None:
+    """With ``--debug``, the traceback of the error being handled."""
+    if getattr(args, "debug", False):
+        import traceback  # only here: every command's start-up would pay for it
+
+        traceback.print_exc()
 
 
 def _interrupted(exc: BaseException) -> bool:

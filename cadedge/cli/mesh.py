@@ -9,14 +9,13 @@ every line naming INPUT as typed; ``--verbose`` for every attempt), 2 on bad inp
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import warnings
 from pathlib import Path
 from typing import Any
 
 from ..errors import CadedgeError, CadedgeWarning, InputError
-from . import _interrupted
+from . import _interrupted, debug_traceback, without_name
 from .refine import add_refine_options, check_writable, parse_number, refine_options
 
 
@@ -61,11 +60,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         return _run(args)
     except InputError as exc:
-        _debug_traceback(args)
+        debug_traceback(args)
         _err(args.input, exc)
         return 2
     except CadedgeError as exc:  # a valid file our pipeline could not finish: not bad input
-        _debug_traceback(args)
+        debug_traceback(args)
         _err(args.input, exc)
         return 1
     except (KeyboardInterrupt, Exception) as exc:  # Ctrl-C (native code may turn it into another error), or a
@@ -78,21 +77,8 @@ def run(args: argparse.Namespace) -> int:
         return 1
 
 
-def _debug_traceback(args: argparse.Namespace) -> None:
-    """With ``--debug``, the traceback of the error being handled (as ``main`` prints for other commands)."""
-    if getattr(args, "debug", False):
-        import traceback
-
-        traceback.print_exc()
-
-
 def _err(source: str, message: object) -> None:
-    text = str(message)
-    for prefix in (f"{source}: ", f"{os.path.basename(source)}: "):
-        if text.startswith(prefix):
-            text = text[len(prefix):]
-            break
-    print(f"cadedge mesh: {source}: {text}", file=sys.stderr)
+    print(f"cadedge mesh: {source}: {without_name(source, str(message))}", file=sys.stderr)
 
 
 def _run(args: argparse.Namespace) -> int:
