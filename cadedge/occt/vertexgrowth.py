@@ -51,8 +51,6 @@ MAX_ROUNDS = 50
 #: segment to the edge's far end would be cut, and through the vertex caps every edge beyond. There
 #: the edges are first re-placed along a size field graded from their vertices.
 GOLDEN = (1.0 + math.sqrt(5.0)) / 2.0
-#: Rounds of re-placement (the shortest end segment at a vertex can fall as its edges are re-placed).
-REGRADE_ROUNDS = 4
 #: Samples per segment of the grid on which a re-placement measures arc length.
 REGRADE_SAMPLES = 8
 #: Ratio of the extra samples' distances from a capped end (they start at a quarter of its size).
@@ -135,11 +133,8 @@ def _regraded(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, sizes: tuple[float |
 
     u, p = e.params, e.points
     t = np.arange(1, REGRADE_SAMPLES) / REGRADE_SAMPLES
-    mid = u[:-1, None] + np.diff(u)[:, None] * t[None, :]
-    pm = evaluate(mid.ravel()).reshape(len(u) - 1, len(t), 3)
-    dense_u = np.concatenate([np.c_[u[:-1], mid].ravel(), u[-1:]])
-    dense_p = np.concatenate([np.concatenate([p[:-1, None, :], pm], axis=1).reshape(-1, 3), p[-1:]])
-    ex = Exploration(params=dense_u, points=dense_p, length_estimate=total, remainder=0.0)
+    mid = (u[:-1, None] + np.diff(u)[:, None] * t[None, :]).ravel()
+    ex = Exploration(params=u, points=p, length_estimate=total, remainder=0.0).with_samples(mid, evaluate(mid))
     # near a capped end the field grows from a size far below the grid's: samples at geometric steps
     # from there, so the placement resolves it
     cum, reach = ex.cumulative, []
@@ -149,7 +144,7 @@ def _regraded(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, sizes: tuple[float |
             steps = steps[steps < 0.5 * cum[-1]]
             reach.append(steps if end == 0 else cum[-1] - steps)
     if reach:
-        extra = np.interp(np.concatenate(reach), cum, dense_u)
+        extra = np.interp(np.concatenate(reach), cum, ex.params)
         ex = ex.with_samples(extra, evaluate(extra))
     limit = max(target * (1.0 - MARGIN), e.ald_estimate) * total
     params, points = regrade(evaluate, ex, np.zeros(0, dtype=int), u, p, g, target, total, limit, end_sizes=sizes)
