@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import gc
+import json
 import logging
 import os
 import signal
+import sys
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -25,6 +28,14 @@ def crash_or_refine(input: str, output: str, options: dict[str, Any]) -> dict[st
     """SIGKILL this worker process for the input named ``crash_me*``; refine any other."""
     if Path(input).stem.startswith(CRASH_STEM):
         os.kill(os.getpid(), signal.SIGKILL)
+    return refine_task(input, output, options)
+
+
+def probe_and_refine(input: str, output: str, options: dict[str, Any]) -> dict[str, Any]:
+    """Record what the worker held before its first file (next to ``output``, as ``*.probe``), then refine."""
+    probe = {"frozen": gc.get_freeze_count(), "ocp": "OCP.BRepAdaptor" in sys.modules,
+             "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")}
+    Path(output).with_suffix(".probe").write_text(json.dumps(probe))
     return refine_task(input, output, options)
 
 

@@ -8,11 +8,13 @@ import json
 import os
 import shutil
 import sqlite3
+import sys
 from pathlib import Path
 
 import pytest
 
-from batch_tasks import CRASH_STEM, HANG_STEM, crash_or_refine, hang_or_refine, local_cluster, wait_for_workers
+from batch_tasks import (CRASH_STEM, HANG_STEM, crash_or_refine, hang_or_refine, local_cluster, probe_and_refine,
+                         wait_for_workers)
 from cadedge.batch import INDEX_NAME, WORKER_DIED, BatchIndex, expand_inputs, output_names, run_batch
 from cadedge.errors import InputError
 from cadedge.exporters.json import validate
@@ -234,3 +236,15 @@ def test_scheduler_without_workers_is_an_input_error(tmp_path):
     with local_cluster(0) as empty, dask.config.set({"distributed.comm.timeouts.connect": "2s"}), \
             pytest.raises(InputError, match="has no workers"):
         run_batch([FIXTURES / "sphere.step"], tmp_path / "out", scheduler=empty.scheduler_address)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="no fork server on Windows")
+def test_embedded_workers_fork_from_a_server_holding_occt_frozen(tmp_path):
+    """The embedded cluster's workers fork from a server that imported OCCT and the task once, with the
+    collector off and then frozen (cadedge.batch.preload): a worker holds them before its first file."""
+    inputs = copy_fixtures(tmp_path / "in", ["sphere"])
+    report = run_batch(inputs, tmp_path / "out", ald=ALD, workers=1, task=probe_and_refine)
+    assert report.all_ok, report.results
+    probe = json.loads((tmp_path / "out" / "sphere.probe").read_text())
+    assert probe["ocp"] and probe["frozen"] > 100_000
+    assert probe["blas_threads"] == os.environ.get("OPENBLAS_NUM_THREADS", "1")

@@ -48,9 +48,8 @@ WORKER_DIED = "worker process died (killed or crashed)"
 #: a free port instead.
 NO_DASHBOARD = {"dashboard_address": ":0", "scheduler_kwargs": {"dashboard": False}}
 
-#: What a worker needs before its first file: dask, OCCT (through cadedge's OCCT layer), the task.
-WORKER_PRELOAD = ["distributed", "cadedge.occt.shape", "cadedge.occt.step", "cadedge.exporters.json",
-                  "cadedge.batch.task"]
+#: What a worker needs before its first file (dask, OCCT, the task), imported by :mod:`.preload`.
+WORKER_PRELOAD = ["cadedge.batch.preload"]
 
 Task = Callable[[str, str, dict], dict]
 
@@ -165,8 +164,8 @@ def _start_fork_server() -> None:
     per restart, paid on the cores the tasks need). Started before this process imports dask, the
     server's imports run beside the client's import of distributed and the scheduler's start (on
     two idle cores, up to about 0.7 s less before the first file). dask's own choice of preloaded modules
-    comes too late to apply. A module that fails to import there is skipped by multiprocessing and
-    imported by the task as usual. Nothing changes if the server is already running (a second batch
+    comes too late to apply. If the preload fails to import there, multiprocessing skips it and the
+    task imports what it needs as usual. Nothing changes if the server is already running (a second batch
     in the same process).
 
     The server, and so every worker forked from it, ignores SIGINT: a Ctrl-C in the terminal reaches
