@@ -1,7 +1,7 @@
 """Per-face area deficit: how far a face's triangles are from its B-rep area.
 
 The area deficit of a face is ``1 - mesh area / B-rep area`` (B-rep area from OCCT's
-``BRepGProp::SurfaceProperties``), the 2-simplex sibling of the edges' arc-length deficit. It is signed:
+``BRepGProp::SurfaceProperties``, cross-checked: :mod:`cadedge.occt.areas`), the 2-simplex sibling of the edges' arc-length deficit. It is signed:
 flat triangles inscribed in a convex surface lose area (positive), while a plate whose hole is an
 inscribed polygon gains some (negative). The target is ``|deficit| <= surface_ald`` on every face.
 """
@@ -11,27 +11,12 @@ from __future__ import annotations
 import numpy as np
 
 
-#: Relative precision of the B-rep face areas. OCCT's default fixed-order integration is off by 0.3% on
-#: a planar face bounded by B-spline curves (periodic_u_cst face 2: 229.73 instead of 230.41 mm2), more
-#: than the targets measured against it; the adaptive integration to this precision is not.
-AREA_EPS = 1e-6
-
-
 def brep_face_areas(shape: object) -> np.ndarray:
-    """Area of every face of ``shape`` in ``TopExp::MapShapes`` order (index ``id - 1``), integrated
-    adaptively to :data:`AREA_EPS` (``BRepGProp::SurfaceProperties`` with a precision)."""
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
+    """Area of every face of ``shape`` in ``TopExp::MapShapes`` order (index ``id - 1``), OCCT's
+    integrations cross-checked (:mod:`cadedge.occt.areas`)."""
+    from ..occt.areas import face_areas
 
-    from ..occt.topology import Topology
-
-    faces = Topology(shape).faces
-    out = np.empty(len(faces))
-    for i, face in enumerate(faces):
-        props = GProp_GProps()
-        BRepGProp.SurfaceProperties_s(face, props, AREA_EPS)
-        out[i] = abs(props.Mass())
-    return out
+    return face_areas(shape)
 
 
 def triangle_areas(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -1,0 +1,154 @@
+"""B-rep face areas that the mesh's area deficits can be measured against.
+
+OCCT integrates a face's area two ways, and each is badly off on some faces:
+``BRepGProp::SurfaceProperties`` with its default fixed order lost 0.3% on a planar face bounded by
+B-spline curves (periodic_u_cst face 2: 229.73 instead of 230.41 mm2) and 4.8% on B-spline face 4 of
+mesh_T106_V3; the adaptive integration to a precision gained 0.42% on a thickened wavy plate's offset
+face and was 0.12% off on wing_fuselage's faces 7 and 15, more than the area targets measured against
+it. Where the two agree (within :data:`AGREE`), that is the area. Where they do not, the surface's area
+element ``|S_u x S_v|`` is integrated over the face's parameter domain independently: over a
+triangulation of it (OCCT's ``BRepMesh`` on a copy of the face, a degree-4 rule per triangle) plus the
+slivers between the boundary chords and the face's pcurves. On those faces it is within 3e-6 of the
+converged value on a coarse triangulation (0.02-0.34 s a face), and it is the area unless it falls far
+outside both OCCT values (then the nearer of them).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+from OCP.BRepGProp import BRepGProp
+from OCP.BRepMesh import BRepMesh_IncrementalMesh
+from OCP.GProp import GProp_GProps
+from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
+from OCP.Standard import Standard_Failure
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_REVERSED
+from OCP.TopExp import TopExp_Explorer
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
+
+from .compat import TopoDS
+from .topology import Topology
+
+#: Precision asked of OCCT's adaptive integration.
+AREA_EPS = 1e-6
+#: Relative difference under which OCCT's two integrations are taken to agree (a hundredth of the
+#: finest face target, 1e-3).
+AGREE = 1e-5
+#: The check triangulation: linear deflection as a fraction of the square root of the face's area,
+#: and angular deflection in radians.
+CHECK_DEFLECTION = 1e-3
+CHECK_ANGLE = 0.2
+#: The 6-point degree-4 rule on a triangle (Dunavant): barycentric points and weights summing to 1.
+_A1, _B1, _A2, _B2 = 0.445948490915965, 0.108103018168070, 0.091576213509771, 0.816847572980459
+_BARY = np.array([[_A1, _A1, _B1], [_A1, _B1, _A1], [_B1, _A1, _A1],
+                  [_A2, _A2, _B2], [_A2, _B2, _A2], [_B2, _A2, _A2]])
+_WEIGHTS = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
+#: Gauss-Legendre points per boundary chord for its sliver.
+SLIVER_POINTS = 6
+
+
+def face_areas(shape: TopoDS_Shape) -> np.ndarray:
+    """Area of every face of ``shape`` in ``TopExp::MapShapes`` order (index ``id - 1``)."""
+    faces = Topology(shape).faces
+    return np.array([face_area(face) for face in faces], dtype=float)
+
+
+def face_area(face: TopoDS_Face) -> float:
+    """One face's area: OCCT's two integrations where they agree, else the one the check confirms."""
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props, AREA_EPS)
+    adaptive = abs(props.Mass())
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(face, props)
+    fixed = abs(props.Mass())
+    gap = abs(adaptive - fixed)
+    if gap <= AGREE * max(adaptive, fixed):
+        return adaptive
+    check = domain_area(face, CHECK_DEFLECTION * np.sqrt(max(adaptive, fixed)))
+    low, high = min(adaptive, fixed) - gap, max(adaptive, fixed) + gap
+    if check is None or not low <= check <= high:  # no check, or one far from both: OCCT's nearest
+        return adaptive if check is None else min((adaptive, fixed), key=lambda a: abs(a - check))
+    return check
+
+
+def domain_area(face: TopoDS_Face, deflection: float) -> float | None:
+    """``|S_u x S_v|`` integrated over the face's parameter domain: over a triangulation of it (a 6-point
+    rule per triangle, exact for quartics), plus, along its boundary, the slivers between each
+    boundary chord and the curve it cuts (the face's pcurves, Gauss-Legendre), so a coarse triangulation
+    will do. None if OCCT gives no triangulation (or no boundary parameters) or the surface fails to
+    evaluate. The triangulation is made on a copy: the caller's shape keeps what it carries."""
+    try:
+        copy = TopoDS.Face_s(BRepBuilderAPI_Copy(face).Shape().Oriented(TopAbs_FORWARD))
+        BRepMesh_IncrementalMesh(copy, deflection, False, CHECK_ANGLE, False)
+        loc = TopLoc_Location()
+        tri = BRep_Tool.Triangulation_s(copy, loc)
+        if tri is None or tri.NbTriangles() == 0:
+            return None
+        surface = BRepAdaptor_Surface(copy)
+        uv = np.array([(p.X(), p.Y()) for p in (tri.UVNode(i) for i in range(1, tri.NbNodes() + 1))])
+        corners = uv[np.array([[t.Value(1), t.Value(2), t.Value(3)]
+                               for t in (tri.Triangle(i) for i in range(1, tri.NbTriangles() + 1))]) - 1]
+        e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+        areas = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        points = np.einsum("qk,tkd->qtd", _BARY, corners).reshape(-1, 2)
+        inner = float(_WEIGHTS @ (_area_element(surface, points).reshape(len(_WEIGHTS), -1) @ areas))
+        slivers = _slivers(copy, tri, loc, surface)
+    except Standard_Failure:
+        return None
+    return None if slivers is None else inner + slivers
+
+
+def _area_element(surface: BRepAdaptor_Surface, uv: np.ndarray) -> np.ndarray:
+    """``|S_u x S_v|`` at each (u, v) row (OCCT evaluates one point per call)."""
+    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+    out = np.empty(len(uv))
+    for k, (u, v) in enumerate(uv):
+        surface.D1(float(u), float(v), p, du, dv)
+        out[k] = du.Crossed(dv).Magnitude()
+    return out
+
+
+def _slivers(face: TopoDS_Face, tri, loc: TopLoc_Location, surface: BRepAdaptor_Surface) -> float | None:
+    """The area between the triangulation's boundary chords and the face's pcurves, each sliver's
+    parameter-space area (signed: outside the chord adds, inside takes away) times the area element at
+    its chord's midpoint; None where an edge has no boundary polygon with parameters."""
+    x, w = np.polynomial.legendre.leggauss(SLIVER_POINTS)
+    total = 0.0
+    explorer = TopExp_Explorer(face, TopAbs_EDGE)
+    while explorer.More():
+        edge = TopoDS.Edge_s(explorer.Current())
+        explorer.Next()
+        if BRep_Tool.Degenerated_s(edge):
+            continue
+        poly = BRep_Tool.PolygonOnTriangulation_s(edge, tri, loc)
+        if poly is None or not poly.HasParameters():
+            return None
+        params = poly.Parameters()
+        t = np.array([params.Value(i) for i in range(params.Lower(), params.Upper() + 1)])
+        pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
+        half = 0.5 * np.diff(t)
+        nodes = (0.5 * (t[:-1] + t[1:]))[:, None] + half[:, None] * x[None, :]
+        ends = _pcurve_points(pcurve, t)[0]
+        pts, ders = _pcurve_points(pcurve, nodes.ravel())
+        rel = pts.reshape(len(half), SLIVER_POINTS, 2) - ends[:-1, None, :]
+        ders = ders.reshape(len(half), SLIVER_POINTS, 2)
+        # area swept from the chord's start along the arc, closed by the chord: positive when the arc
+        # runs right of the chord, i.e. outside the face (the material is on the left of a FORWARD edge)
+        swept = 0.5 * half * ((rel[..., 0] * ders[..., 1] - rel[..., 1] * ders[..., 0]) @ w)
+        sliver = float(np.dot(swept, _area_element(surface, 0.5 * (ends[:-1] + ends[1:]))))
+        total += -sliver if edge.Orientation() == TopAbs_REVERSED else sliver
+    return total
+
+
+def _pcurve_points(pcurve, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points and first derivatives of a 2-D curve at ``t``, shape (n, 2) each."""
+    p, d = gp_Pnt2d(), gp_Vec2d()
+    pts, ders = np.empty((len(t), 2)), np.empty((len(t), 2))
+    for k, tk in enumerate(t):
+        pcurve.D1(float(tk), p, d)
+        pts[k] = p.X(), p.Y()
+        ders[k] = d.X(), d.Y()
+    return pts, ders
