@@ -8,8 +8,11 @@ degrees, and seconds:
 - gmsh tuned: gmsh alone (``gmsh.open``, its own curve and surface meshing) with
   ``Mesh.MeshSizeFromCurvature`` = N and ``Mesh.MeshSizeMax`` = cadedge's largest edge spacing; N is searched
   (secant steps on ``deficit ~ N**-2``, at most ``--tries`` runs) for the fewest triangles whose worst face
-  is within cadedge's worst face; each run in a child process with a time limit. gmsh's face areas come
-  from its own OCCT model (``gmsh.model.occ.getMass``);
+  is within cadedge's worst face; each run in a child process with a time limit. gmsh's surfaces are
+  matched to cadedge's faces by area and centre of mass as gmsh's own OCCT model computes them
+  (``gmsh.model.occ.getMass``: OCCT's fixed-order integration, 5% off on some faces) and measured
+  against the same B-rep areas as cadedge's (:mod:`cadedge.occt.areas`); an unmatched surface against
+  gmsh's own area;
 - OCCT tuned: ``BRepMesh_IncrementalMesh`` with the angular deflection searched the same way and the
   linear deflection at 5% of the model's diagonal (loose enough that the angle governs on curved faces;
   at the model's full size OCCT ignores the angle altogether).
@@ -77,10 +80,10 @@ def _figures(nodes: np.ndarray, tris: np.ndarray, tri_faces: np.ndarray, areas: 
             "below_20": float(np.mean(ang < GOOD_DEG)) if len(ang) else float("nan")}
 
 
-def gmsh_run(path: Path, per_circle: float, max_size: float, leave_out: list | None = None) -> dict:
-    """gmsh alone on ``path`` with curvature sizes (runs in this process: call it in a child). Surfaces
-    matching a ``leave_out`` face (area and centre of mass, see :func:`face_keys`) do not count in the
-    worst face."""
+def gmsh_run(path: Path, per_circle: float, max_size: float, keys: list | None = None) -> dict:
+    """gmsh alone on ``path`` with curvature sizes (runs in this process: call it in a child). Each surface
+    matching one of ``keys`` (see :func:`face_keys`) is measured against that face's B-rep area, and left
+    out of the worst face where the key says so."""
     import gmsh
 
     from cadedge.mesh.generate import read_mesh
@@ -98,10 +101,16 @@ def gmsh_run(path: Path, per_circle: float, max_size: float, leave_out: list | N
             pass
         seconds = time.perf_counter() - t0
         surfaces = [s for _, s in gmsh.model.getEntities(2)]
-        areas = {s: float(gmsh.model.occ.getMass(2, s)) for s in surfaces}
-        skip = {s for s in surfaces for area, centre, tol in (leave_out or [])
-                if abs(areas[s] - area) <= 1e-3 * area
-                and np.linalg.norm(np.subtract(gmsh.model.occ.getCenterOfMass(2, s), centre)) <= tol}
+        areas, skip = {}, set()
+        for s in surfaces:
+            areas[s] = float(gmsh.model.occ.getMass(2, s))
+            centre = gmsh.model.occ.getCenterOfMass(2, s)
+            for fixed, at, tol, area, left_out in keys or []:
+                if abs(areas[s] - fixed) <= 1e-6 * fixed and np.linalg.norm(np.subtract(centre, at)) <= tol:
+                    areas[s] = area
+                    if left_out:
+                        skip.add(s)
+                    break
         raw = read_mesh(surfaces)
     finally:
         gmsh.finalize()
@@ -112,10 +121,10 @@ def gmsh_run(path: Path, per_circle: float, max_size: float, leave_out: list | N
 
 
 def gmsh_isolated(path: Path, per_circle: float, max_size: float, timeout: float,
-                  leave_out: list | None = None) -> dict | None:
+                  keys: list | None = None) -> dict | None:
     """:func:`gmsh_run` in a child process; None when it hangs or crashes."""
     cmd = [sys.executable, __file__, "--gmsh-run", str(path), repr(per_circle), repr(max_size),
-           json.dumps(leave_out or [])]
+           json.dumps(keys or [])]
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -125,21 +134,22 @@ def gmsh_isolated(path: Path, per_circle: float, max_size: float, timeout: float
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def face_keys(shape, faces: list[int]) -> list[tuple[float, list[float], float]]:
-    """Area, centre of mass and a matching distance (1e-4 of the model's diagonal) of the faces ``faces``
-    (cadedge ids): how gmsh's own surfaces are matched to them."""
+def face_keys(shape, areas: np.ndarray, left_out: list[int]) -> list[tuple[float, list[float], float, float, bool]]:
+    """Per face: its area and centre of mass as gmsh's OCCT model gives them (``BRepGProp`` at its fixed
+    order, gmsh's ``getMass``), a matching distance (1e-4 of the model's diagonal), its B-rep area
+    (``areas``) and whether it is left out of the worst face (cadedge ids in ``left_out``)."""
     from OCP.BRepGProp import BRepGProp
     from OCP.GProp import GProp_GProps
 
     from cadedge.occt.topology import Topology
 
-    topo = Topology(shape).faces
     lo, hi = _bounds(shape)
+    tol = 1e-4 * float(np.linalg.norm(hi - lo))
     out = []
-    for f in faces:
+    for f, face in enumerate(Topology(shape).faces, 1):
         props = GProp_GProps()
-        BRepGProp.SurfaceProperties_s(topo[f - 1], props, 1e-6)
-        out.append((abs(props.Mass()), list(props.CentreOfMass().Coord()), 1e-4 * float(np.linalg.norm(hi - lo))))
+        BRepGProp.SurfaceProperties_s(face, props)
+        out.append((abs(props.Mass()), list(props.CentreOfMass().Coord()), tol, float(areas[f - 1]), f in left_out))
     return out
 
 
@@ -235,8 +245,8 @@ def main() -> int:
     parser.add_argument("--gmsh-run", nargs=4, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.gmsh_run:
-        path, n, size, leave_out = args.gmsh_run
-        print(json.dumps(gmsh_run(Path(path), float(n), float(size), json.loads(leave_out))))
+        path, n, size, keys = args.gmsh_run
+        print(json.dumps(gmsh_run(Path(path), float(n), float(size), json.loads(keys))))
         return 0
     models = args.models or FIXTURES + sorted(p for p in CORPUS.glob("*") if p.suffix.lower() in (".step", ".stp"))
     print("| model | EPS | cadedge triangles | worst face | min angle | % < 20 deg | s "
@@ -262,7 +272,7 @@ def main() -> int:
                       f"target: {over or 'none'} |", flush=True)
                 continue
             ours["left_out"] = len(ours["stuck"])
-            keys = face_keys(shape, ours["stuck"])
+            keys = face_keys(shape, areas, ours["stuck"])
             target = ours["worst"] if math.isfinite(ours["worst"]) and ours["worst"] > 0 else eps
             spacing = max((float(e.segment_lengths.max()) for e in result.grid.edges
                            if not e.degenerate and len(e.points) > 1), default=diag)
