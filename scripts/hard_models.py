@@ -11,7 +11,8 @@ with one part instanced three times, a faceted solid (an STL mesh sewn into 228 
 tube swept along a polyline with round bends. A third set: a non-manifold general fuse (inner faces
 shared by two solids), a STEP sewn across real gaps between its faces, disjoint bodies with a free
 polyline and tolerances wider than a slot (OCCT BREP: STEP keeps no per-entity tolerances) and an IGES
-file of unsewn trimmed surfaces.
+file of unsewn trimmed surfaces. A fourth: a thickened wavy plate (offset surfaces) and a twisted blade
+with a sharp trailing edge (curvature radii from 27 mm to 0.1 mm on one face).
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -106,6 +107,25 @@ def wavy_plate() -> object:
     """A B-spline surface with waves, trimmed to a rectangle, plus its border as free edges."""
     pts = [[cq.Vector(x, y, 0.6 * math.sin(x) * math.cos(0.7 * y)) for y in range(0, 11)] for x in range(0, 11)]
     return cq.Face.makeSplineApprox(pts).wrapped
+
+
+def thick_wavy_plate() -> object:
+    """A wavy B-spline surface thickened by 1.5: its far side is an offset surface, where OCCT's adaptive
+    area integration is 0.4% off (the fixed-order one is right there)."""
+    pts = [[cq.Vector(5.0 * i, 5.0 * j, 2.0 * math.sin(0.9 * i) * math.cos(0.7 * j)) for j in range(9)] for i in range(9)]
+    return cq.Face.makeSplineApprox(pts).thicken(1.5).wrapped
+
+
+def sharp_blade() -> object:
+    """A blade lofted through five periodic splines with a sharp trailing edge, twisted by 80 degrees: its
+    curvature spans four orders of magnitude across a face (radius 27 mm mid-chord, 0.1 mm at the edge)."""
+    base = [(-12, 0), (-4, 3.5), (6, 2.5), (14, 0), (6, -0.8), (-4, -1.2)]
+    wires = []
+    for k in range(5):
+        a, z = math.radians(20.0 * k), 15.0 * k
+        rot = [cq.Vector(x * math.cos(a) - y * math.sin(a), x * math.sin(a) + y * math.cos(a), z) for x, y in base]
+        wires.append(cq.Wire.assembleEdges([cq.Edge.makeSpline(rot, periodic=True)]))
+    return cq.Solid.makeLoft(wires, ruled=False).wrapped
 
 
 def loose_tolerance() -> object:
@@ -381,7 +401,8 @@ MODELS: dict[str, Callable[[], object]] = {
     "threaded_bolt": threaded_bolt, "filleted_boolean": filleted_boolean, "shelled_drafted": shelled_drafted,
     "swept_nonplanar": swept_nonplanar, "tangent_union": tangent_union, "knurled": knurled,
     "sliver_hole": sliver_hole, "faceted": faceted, "pipe_bends": pipe_bends,
-    "nonmanifold": nonmanifold, "gapped_sewn": gapped_sewn,
+    "nonmanifold": nonmanifold, "gapped_sewn": gapped_sewn, "thick_wavy_plate": thick_wavy_plate,
+    "sharp_blade": sharp_blade,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
