@@ -237,6 +237,19 @@ def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
     assert not (tmp_path / "c.msh").exists()
 
 
+def test_cli_sigterm_is_one_line_and_kills_gmsh(tmp_path):
+    """SIGTERM (``kill``, ``timeout``, a job scheduler) takes Ctrl-C's way out: one "terminated" line, exit
+    143, the gmsh child killed, no output file (it used to end the process with no line at all)."""
+    proc, child = _cli_hung_in_gmsh(tmp_path)
+    time.sleep(1.0)  # into the hung face attempt
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143
+    assert err.strip() == "cadedge mesh: cyl.step: terminated"
+    assert not child.is_running() or child.status() == psutil.STATUS_ZOMBIE
+    assert not (tmp_path / "c.msh").exists()
+
+
 def test_the_gmsh_child_dies_with_its_caller(cylinder, tmp_path):
     """A caller killed outright (SIGKILL: no handler, no cleanup) takes its gmsh child with it, even one hung
     in a face: an orphan would go on meshing or hanging with nobody to time it. The job folder it leaves is

@@ -4,19 +4,26 @@
 ``register(subparsers)``, which adds its parser and sets ``func(args) -> int``. Library errors become
 one line on stderr naming the file and the reason, with exit code 2 (bad input or usage); ``--debug``
 shows the traceback instead. Ctrl-C ends with one "interrupted" line (exit 130), also when native code
-turned it into another error; a closed stdout pipe
+turned it into another error; SIGTERM (``kill``, ``timeout``, a job scheduler) while a command runs is
+handled the same way, with a "terminated" line and exit 143 (:class:`Terminated`); a closed stdout pipe
 (``cadedge info x | head``) ends quietly with exit 141, as a process killed by SIGPIPE.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
-from typing import Sequence
+from typing import Iterator, Sequence
 
 from ..errors import CadedgeError
 
 SUBCOMMANDS = ("refine", "info", "mesh", "batch")
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM received while a command ran. A KeyboardInterrupt, so it takes Ctrl-C's way out: gmsh and
+    OCCT children are killed, no output is half-written, batch closes its cluster."""
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
@@ -49,7 +56,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
         return int(exc.code or 0)
     try:
-        code = int(args.func(args))
+        with _sigterm_as_interrupt():
+            code = int(args.func(args))
         sys.stdout.flush()
         return code
     except BrokenPipeError:  # stdout's reader went away (``cadedge info x | head``): stop quietly, as on SIGPIPE
@@ -62,14 +70,42 @@ def main(argv: Sequence[str] | None = None) -> int:
             message = f"{given}: {without_name(given, message)}"
         print(f"cadedge {args.command}: error: {message}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"cadedge {args.command}: interrupted", file=sys.stderr)
-        return 130
-    except Exception as exc:
-        if args.debug or not _interrupted(exc):
+    except (KeyboardInterrupt, Exception) as exc:  # Ctrl-C, SIGTERM (native code may turn them into another error)
+        if isinstance(exc, Exception) and (args.debug or not _interrupted(exc)):
             raise
-        print(f"cadedge {args.command}: interrupted", file=sys.stderr)
-        return 130
+        word, code = stopped(exc)
+        print(f"cadedge {args.command}: {word}", file=sys.stderr)
+        return code
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """While a command runs, SIGTERM raises :class:`Terminated` instead of ending the process on the spot
+    (which left no line, and a gmsh child to die by its parent-death signal). Only in the main thread and
+    where SIGTERM has its default action: a program calling ``main`` that handles SIGTERM keeps its handler."""
+    import signal
+
+    def stop(signum: int, frame: object) -> None:
+        raise Terminated
+
+    try:
+        if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+            yield
+            return
+        previous = signal.signal(signal.SIGTERM, stop)
+    except ValueError:  # not the main thread: no handlers to set
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def stopped(exc: BaseException) -> tuple[str, int]:
+    """The word and exit code for a run ended by Ctrl-C (``interrupted``, 130) or SIGTERM (``terminated``,
+    143), given the KeyboardInterrupt or the error native code turned it into."""
+    return ("terminated", 143) if _interrupted(exc, Terminated) else ("interrupted", 130)
 
 
 def without_name(given: str, message: str) -> str:
@@ -91,13 +127,14 @@ def debug_traceback(args: argparse.Namespace) -> None:
         traceback.print_exc()
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """Whether Ctrl-C caused ``exc``: native code turns a KeyboardInterrupt raised inside it into another
-    error (an extension module interrupted while loading: "ImportError: initialization failed")."""
+def _interrupted(exc: BaseException, kind: type[BaseException] = KeyboardInterrupt) -> bool:
+    """Whether a ``kind`` (Ctrl-C's KeyboardInterrupt by default) caused ``exc``: native code turns a
+    KeyboardInterrupt raised inside it into another error (an extension module interrupted while loading:
+    "ImportError: initialization failed")."""
     seen: set[int] = set()
     cause: BaseException | None = exc
     while cause is not None and id(cause) not in seen:
-        if isinstance(cause, KeyboardInterrupt):
+        if isinstance(cause, kind):
             return True
         seen.add(id(cause))
         cause = cause.__cause__ or cause.__context__

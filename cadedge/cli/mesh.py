@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import CadedgeError, CadedgeWarning, InputError
-from . import _interrupted, debug_traceback, without_name
+from . import _interrupted, debug_traceback, stopped, without_name
 from .refine import add_refine_options, check_writable, parse_number, refine_options
 
 
@@ -67,10 +67,11 @@ def run(args: argparse.Namespace) -> int:
         debug_traceback(args)
         _err(args.input, exc)
         return 1
-    except (KeyboardInterrupt, Exception) as exc:  # Ctrl-C (native code may turn it into another error), or a
-        if _interrupted(exc):                       # fault of ours on a valid file: one line, exit 1 (--debug: raise)
-            print(f"cadedge mesh: {args.input}: interrupted", file=sys.stderr)
-            return 130
+    except (KeyboardInterrupt, Exception) as exc:  # Ctrl-C or SIGTERM (native code may turn them into another
+        if _interrupted(exc):                       # error), or a fault of ours on a valid file: one line, exit 1
+            word, code = stopped(exc)               # (--debug: raise)
+            print(f"cadedge mesh: {args.input}: {word}", file=sys.stderr)
+            return code
         if getattr(args, "debug", False):
             raise
         _err(args.input, f"internal error: {type(exc).__name__}: {exc}")
