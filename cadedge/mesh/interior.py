@@ -1,0 +1,118 @@
+"""Inside the gmsh job: interiors of faces of varying curvature sized as ``k**-1/2``.
+
+Flat triangles of size ``h`` on a surface of curvature ``k`` lose about ``C (h k)**2`` of their area, so a
+face's deficit is ``integral C (h k)**2 dA / A`` for about ``integral h**-2 dA`` triangles. The fewest
+triangles for a given deficit (Lagrange: ``h**-3 ~ lambda h k**2``) have ``h ~ k**-1/2``, not the
+``k**-1`` of curvature sizing (gmsh's ``Mesh.MeshSizeFromCurvature``), which spends its triangles where
+the face is most curved. Here a face's size at curvature ``k`` is ``2 pi / (N sqrt(k_ref k))`` with
+``k_ref`` the face's area-weighted mean curvature: for the same ``N`` (triangles per ``2 pi``, the
+per-face knob the fidelity loop scales) it predicts the same deficit as curvature sizing and takes
+``mean(k)**2 / mean(k**2)`` of its interior triangles (0.88 on periodic_u_cst's B-spline faces).
+
+Faces of constant largest curvature (cylinders, spheres, tori) gain nothing and keep gmsh's own curvature
+sizes. The others (cones, B-spline, revolved, extruded, offset surfaces) have their largest principal
+curvature sampled by gmsh on a grid of their parameters; gmsh's size callback returns
+``min(lc, size at the nearest sample)``, ``lc`` being the graded boundary field gmsh computed. Sizes stay
+within ``[MeshSizeMin, MeshSizeMax]`` (gmsh clamps after the callback).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Surface types (OCCT names) whose largest principal curvature is the same everywhere: sized by gmsh.
+CONSTANT_CURVATURE = frozenset({"Plane", "Cylinder", "Sphere", "Torus"})
+#: Samples per parametric direction of a face's curvature.
+SAMPLES = 24
+#: The curvature is clipped to this many times the face's mean: a spline surface's curvature estimate
+#: spikes where it is nearly singular (the sizes there stop at ``1 / sqrt(SPIKE)`` of the face's own).
+SPIKE = 16.0
+
+
+@dataclass
+class _Face:
+    tree: object  # scipy cKDTree of the sample points
+    base: np.ndarray  # size at each sample for one triangle per 2 pi: 2 pi / sqrt(k_ref k)
+    per_circle: float = 0.0  # the current N; 0: not sized here (gmsh's own curvature sizes)
+
+
+class InteriorSizes:
+    """The ``k**-1/2`` sizes of the sampled faces; callable as gmsh's size callback."""
+
+    def __init__(self) -> None:
+        self.faces: dict[int, _Face] = {}
+
+    def sample(self, surface: int) -> bool:
+        """Sample gmsh surface ``surface``'s curvature; False (left to gmsh) if it is flat or cannot be
+        sampled."""
+        import gmsh
+        from scipy.spatial import cKDTree
+
+        try:
+            lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
+            t = (np.arange(SAMPLES) + 0.5) / SAMPLES
+            u, v = np.meshgrid(lo[0] + (hi[0] - lo[0]) * t, lo[1] + (hi[1] - lo[1]) * t)
+            uv = np.column_stack([u.ravel(), v.ravel()]).ravel().tolist()
+            x = np.asarray(gmsh.model.getValue(2, surface, uv), dtype=float).reshape(-1, 3)
+            kmax, kmin, _, _ = gmsh.model.getPrincipalCurvatures(surface, uv)
+            d = np.asarray(gmsh.model.getDerivative(2, surface, uv), dtype=float).reshape(-1, 6)
+        except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
+            return False
+        k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
+        da = np.linalg.norm(np.cross(d[:, :3], d[:, 3:]), axis=1)
+        good = np.isfinite(k) & np.isfinite(da) & np.all(np.isfinite(x), axis=1)
+        if len(k) != len(x) or len(da) != len(x) or good.sum() < 4 or not np.sum(da[good]) > 0:
+            return False
+        k, da, x = k[good], da[good], x[good]
+        k_ref = float(np.sum(k * da) / np.sum(da))
+        if not k_ref > 0:
+            return False
+        with np.errstate(divide="ignore"):
+            base = 2.0 * np.pi / np.sqrt(k_ref * np.minimum(k, SPIKE * k_ref))
+        self.faces[surface] = _Face(cKDTree(x), base)
+        return True
+
+    def set(self, surface: int, per_circle: float) -> bool:
+        """Size ``surface`` here at ``per_circle`` (0: not at all); False if it was not sampled."""
+        face = self.faces.get(surface)
+        if face is None:
+            return False
+        face.per_circle = float(per_circle)
+        return True
+
+    def __call__(self, dim: int, tag: int, x: float, y: float, z: float, lc: float) -> float:
+        face = self.faces.get(tag) if dim == 2 else None
+        if face is None or not face.per_circle > 0:
+            return lc
+        return min(lc, float(face.base[face.tree.query((x, y, z))[1]]) / face.per_circle)
+
+
+#: The sizes of the job running in this process (one gmsh model at a time).
+SIZES = InteriorSizes()
+
+
+def install(surfaces: list[int]) -> list[int]:
+    """Sample ``surfaces`` (gmsh tags of curved faces whose curvature varies) and make :data:`SIZES` gmsh's
+    size callback; returns the surfaces sampled."""
+    import gmsh
+
+    SIZES.faces.clear()
+    done = [s for s in surfaces if SIZES.sample(s)]
+    if done:
+        gmsh.model.mesh.setSizeCallback(SIZES)
+    return done
+
+
+def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) -> None:
+    """Size gmsh surface ``surface`` at ``per_circle`` triangles per ``2 pi``: by :data:`SIZES` where it was
+    sampled (gmsh's curvature sizes off), else by gmsh's ``Mesh.MeshSizeFromCurvature``. ``uniform``
+    (the one-size strategy, which reads the gmsh option) always takes the latter."""
+    import gmsh
+
+    if not uniform and SIZES.set(surface, per_circle):
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    else:
+        SIZES.set(surface, 0.0)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
