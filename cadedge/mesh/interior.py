@@ -12,8 +12,17 @@ per-face knob the fidelity loop scales) it predicts the same deficit as curvatur
 Faces of constant largest curvature (cylinders, spheres, tori) gain nothing and keep gmsh's own curvature
 sizes. The others (cones, B-spline, revolved, extruded, offset surfaces) have their largest principal
 curvature sampled by gmsh on a grid of their parameters; gmsh's size callback returns
-``min(lc, size at the nearest sample)``, ``lc`` being the graded boundary field gmsh computed. Sizes stay
-within ``[MeshSizeMin, MeshSizeMax]`` (gmsh clamps after the callback).
+``min(lc, size)``, ``lc`` being the graded boundary field gmsh computed and ``size`` the inverse-distance
+mean of the :data:`NEAREST` nearest samples' sizes (the nearest sample's alone left steps in the sizes:
+a revolved spline face at ALD 1e-2 came out at 37.5 degrees, 39.7 interpolated). gmsh takes the
+minimum of its curvature size, background field and entity size, hands it to the callback as ``lc``,
+uses what the callback returns and clamps it to ``[MeshSizeMin, MeshSizeMax]``
+(``BGM_MeshSize`` in gmsh's ``BackgroundMeshTools.cpp``); so a sampled face is meshed with gmsh's own
+curvature sizes off. The callback costs about 4 calls and 30 us of CPU per triangle (periodic_u_cst's
+two B-spline faces with gmsh alone: 0.99 s of meshing for 15 036 triangles, against 0.58 s with gmsh's
+curvature sizes for 15 778). The samples cover the surface's whole parameter rectangle,
+trimmed away or not: on a heavily trimmed face ``k_ref`` is the surface's, which the measure-and-remesh
+loop of :mod:`cadedge.mesh.fidelity` corrects (gmsh's per-point inside test cost 0.2 s a face).
 """
 
 from __future__ import annotations
@@ -26,6 +35,8 @@ import numpy as np
 CONSTANT_CURVATURE = frozenset({"Plane", "Cylinder", "Sphere", "Torus"})
 #: Samples per parametric direction of a face's curvature.
 SAMPLES = 24
+#: Samples whose sizes are interpolated at a point (inverse-distance weights).
+NEAREST = 4
 #: The curvature is clipped to this many times the face's mean: a spline surface's curvature estimate
 #: spikes where it is nearly singular (the sizes there stop at ``1 / sqrt(SPIKE)`` of the face's own).
 SPIKE = 16.0
@@ -63,7 +74,7 @@ class InteriorSizes:
         k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
         da = np.linalg.norm(np.cross(d[:, :3], d[:, 3:]), axis=1)
         good = np.isfinite(k) & np.isfinite(da) & np.all(np.isfinite(x), axis=1)
-        if len(k) != len(x) or len(da) != len(x) or good.sum() < 4 or not np.sum(da[good]) > 0:
+        if len(k) != len(x) or len(da) != len(x) or good.sum() < NEAREST or not np.sum(da[good]) > 0:
             return False
         k, da, x = k[good], da[good], x[good]
         k_ref = float(np.sum(k * da) / np.sum(da))
@@ -86,7 +97,9 @@ class InteriorSizes:
         face = self.faces.get(tag) if dim == 2 else None
         if face is None or not face.per_circle > 0:
             return lc
-        return min(lc, float(face.base[face.tree.query((x, y, z))[1]]) / face.per_circle)
+        d, i = face.tree.query((x, y, z), k=NEAREST)
+        w = 1.0 / (d + 1e-12)
+        return min(lc, float(np.dot(w, face.base[i]) / w.sum()) / face.per_circle)
 
 
 #: The sizes of the job running in this process (one gmsh model at a time).
