@@ -67,3 +67,19 @@ def test_cone_interior_is_sized_as_inverse_square_root_of_curvature():
     inside = (r > 5.0) & (r < 15.0)
     slope = np.polyfit(np.log(r[inside]), np.log(h[inside]), 1)[0]
     assert 0.3 <= slope <= 0.7, slope
+
+
+def test_scale_matches_the_predicted_deficit_of_curvature_sizing_within_the_size_bounds():
+    """Unclipped, alpha is 2 pi / (N sqrt(k_mean)); where curvature sizing was capped the k**-1/2 sizes
+    (capped alike) predict the same deficit as the capped sizes did, not as the uncapped ones."""
+    rng = np.random.default_rng(1)
+    k = rng.uniform(0.02, 0.1, 400)
+    da = rng.uniform(0.5, 1.5, 400)
+    n = 50.0
+    alpha = interior.matched_scale(k, da, n, 1e-6, 1e6)
+    assert alpha == pytest.approx(2 * np.pi / (n * np.sqrt(np.sum(k * da) / da.sum())), rel=1e-9)
+    hi = 2.0  # curvature sizing 2 pi / (N k) is 1.3-6.3 here: capped at 2 on most samples
+    capped = interior.matched_scale(k, da, n, 1e-6, hi)
+    goal = interior.predicted(np.minimum(2 * np.pi / (n * k), hi), k, da)
+    assert interior.predicted(np.minimum(capped / np.sqrt(k), hi), k, da) == pytest.approx(goal, rel=1e-9)
+    assert capped != pytest.approx(alpha, rel=0.05)
