@@ -54,17 +54,22 @@ def predicted(sizes: np.ndarray, k: np.ndarray, da: np.ndarray) -> float:
 
 
 def matched_scale(k: np.ndarray, da: np.ndarray, per_circle: float, lo: float, hi: float) -> float:
-    """``alpha`` such that sizes ``clip(alpha / sqrt(k), lo, hi)`` predict the deficit of curvature sizing
-    ``clip(2 pi / (per_circle k), lo, hi)`` on the same samples.
+    """``alpha`` such that sizes ``clip(alpha / sqrt(k), lo, hi)`` predict the deficit curvature sizing
+    ``2 pi / (per_circle k)`` is designed for, ``(2 pi / per_circle)**2`` of the area (what the surface
+    type's ``per_circle`` aims at, and what the fidelity loop scales).
 
     Without the clips ``alpha = 2 pi / (per_circle sqrt(k_mean))``, ``k_mean`` the area-weighted mean
-    curvature. With them the deficit is matched as both sizings are meshed: where curvature sizing was
-    capped at ``hi`` (a flatter part) or ``lo`` its triangles lost less or more than ``2 pi / N`` asks,
-    and the fidelity loop's ``N`` (tuned on those sizes) keeps its meaning."""
+    curvature. With them it is the optimum under the bounds (Lagrange with box constraints): what a
+    flatter part capped at ``hi`` leaves of the deficit goes to coarser triangles where the face is
+    curved. Matched instead to the deficit curvature sizing predicts within the same bounds (which ``hi``
+    had left under its design), the sizes were finer: lofted_spline at 1e-3 took 6 632 triangles against
+    6 124."""
+    goal = (2.0 * np.pi / per_circle) ** 2 * float(np.sum(da))
     with np.errstate(divide="ignore"):
-        goal = predicted(np.clip(2.0 * np.pi / (per_circle * k), lo, hi), k, da)
         root = 1.0 / np.sqrt(k)
     a, b = np.log(lo * np.sqrt(k[k > 0].min())), np.log(hi * np.sqrt(k.max()))  # every size at lo, at hi
+    if predicted(np.clip(np.exp(b) * root, lo, hi), k, da) <= goal:
+        return float(np.exp(b))  # even every size at hi is within the deficit
     for _ in range(STEPS):
         mid = 0.5 * (a + b)
         if predicted(np.clip(np.exp(mid) * root, lo, hi), k, da) > goal:
