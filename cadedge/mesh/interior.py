@@ -4,10 +4,11 @@ Flat triangles of size ``h`` on a surface of curvature ``k`` lose about ``C (h k
 face's deficit is ``integral C (h k)**2 dA / A`` for about ``integral h**-2 dA`` triangles. The fewest
 triangles for a given deficit (Lagrange: ``h**-3 ~ lambda h k**2``) have ``h ~ k**-1/2``, not the
 ``k**-1`` of curvature sizing (gmsh's ``Mesh.MeshSizeFromCurvature``), which spends its triangles where
-the face is most curved. Here a face's size at curvature ``k`` is ``2 pi / (N sqrt(k_ref k))`` with
-``k_ref`` the face's area-weighted mean curvature: for the same ``N`` (triangles per ``2 pi``, the
-per-face knob the fidelity loop scales) it predicts the same deficit as curvature sizing and takes
-``mean(k)**2 / mean(k**2)`` of its interior triangles (0.88 on periodic_u_cst's B-spline faces).
+the face is most curved. Here a face's size is ``clip(alpha / sqrt(k), MeshSizeMin, MeshSizeMax)`` with
+``alpha`` set (:func:`matched_scale`) so that it predicts the deficit curvature sizing at the face's
+``N`` (triangles per ``2 pi``, the per-face knob the fidelity loop scales) is designed for; unbounded,
+``alpha = 2 pi / (N sqrt(k_mean))`` and it takes ``mean(k)**2 / mean(k**2)`` of curvature sizing's
+interior triangles (0.88 on periodic_u_cst's B-spline faces).
 
 Faces of constant largest curvature (cylinders, spheres, tori) gain nothing and keep gmsh's own curvature
 sizes. The others (cones, B-spline, revolved, extruded, offset surfaces) have their largest principal
@@ -21,8 +22,9 @@ uses what the callback returns and clamps it to ``[MeshSizeMin, MeshSizeMax]``
 curvature sizes off. The callback costs about 4 calls and 30 us of CPU per triangle (periodic_u_cst's
 two B-spline faces with gmsh alone: 0.99 s of meshing for 15 036 triangles, against 0.58 s with gmsh's
 curvature sizes for 15 778). The samples cover the surface's whole parameter rectangle,
-trimmed away or not: on a heavily trimmed face ``k_ref`` is the surface's, which the measure-and-remesh
-loop of :mod:`cadedge.mesh.fidelity` corrects (gmsh's per-point inside test cost 0.2 s a face).
+trimmed away or not: on a heavily trimmed face ``alpha`` comes from the whole surface's curvature, and
+the measure-and-remesh loop of :mod:`cadedge.mesh.fidelity` corrects its scale (gmsh's per-point inside
+test cost 0.2 s a face).
 """
 
 from __future__ import annotations
@@ -39,11 +41,11 @@ SAMPLES = 24
 NEAREST = 4
 #: A face whose sampled curvature spans more than this factor between its 2nd and 98th percentiles keeps
 #: gmsh's curvature sizes: its curvature has sharp ridges or spikes where the ``(h k)**2`` model fails.
-#: twisted_blade's lofted faces (114-292x) matched to gmsh's sizes came out at 1.5e-2 against the target
-#: 1e-2 (gmsh's: 0.002), its thin edges meshed coarser; revolved_spline's face (54x) takes 45% fewer
-#: triangles at 1e-3, periodic_u_cst's (4x) 8%.
+#: twisted_blade's lofted faces (114-292x) came out at 1.5e-2 against the target 1e-2 (gmsh's sizes:
+#: 0.002), their thin edges meshed coarser; revolved_spline's face (54x) takes half the triangles at 1e-3,
+#: periodic_u_cst's (4x) 8% fewer.
 SPREAD = 64.0
-#: Bisection steps (on log alpha) matching a face's predicted deficit to curvature sizing's.
+#: Bisection steps (on log alpha) of :func:`matched_scale`.
 STEPS = 60
 
 

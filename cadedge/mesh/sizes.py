@@ -224,7 +224,6 @@ def retry_failed_faces(ctx) -> None:
 
     from .generate import STRATEGIES, FaceOutcome, mesh_faces, remesh_curves
     from .gmsh_model import surface_curve_uses
-    from .interior import use_per_circle
 
     job = ctx.job
     if job.mode != "sizes":
@@ -235,11 +234,7 @@ def retry_failed_faces(ctx) -> None:
     default = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature")
 
     def started(face: int, k: int) -> None:  # each face's own curvature sizes, as the first pass gave them
-        n = per_circle.get(face, default)
-        if face in ctx.emap.faces:
-            use_per_circle(ctx.emap.faces[face], n, uniform=STRATEGIES[k].uniform)
-        else:
-            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle.get(face, default))
 
     def remesh(s: int, curves: set[int], factor: float, only: set[int]) -> dict:
         apply_spacing_sizes(job.grid, ctx.emap, job.field, factor=factor, curves=curves)
