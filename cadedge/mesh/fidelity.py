@@ -319,20 +319,26 @@ def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
     import gmsh
 
     from .generate import mesh_faces
+    from .interior import use_per_circle
 
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
+    use_per_circle(s, per_circle)
     gmsh.model.mesh.clear([(2, s)])
     return mesh_faces([s], face_of)[s]
 
 
 def before_generate(ctx) -> None:
-    """Hook: face interiors sized by curvature for the surface target (see :func:`per_circle`); planar
-    interiors grow from their boundaries at :data:`INTERIOR_GROWTH` times the job's growth."""
+    """Hook: face interiors sized by curvature for the surface target (see :func:`per_circle`; in nodes
+    mode faces whose curvature varies as ``k**-1/2``, see :mod:`cadedge.mesh.interior`); planar interiors
+    grow from their boundaries at :data:`INTERIOR_GROWTH` times the job's growth."""
+    from .interior import CONSTANT_CURVATURE, install
     from .sizes import configure_curvature_sizes
 
     opts = ctx.job.options.get("fidelity")
     if opts:
         configure_curvature_sizes(opts["per_circle"], MIN_SIZE_SHARE * ctx.job.field.min_size)
+        kinds = opts.get("surface_types") or []
+        install([s for f, s in sorted(ctx.emap.faces.items()) if ctx.job.mode == "nodes"
+                 and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE])
         curved = set(opts["curved_faces"])
         planes = [s for f, s in ctx.emap.faces.items() if f not in curved]
         if planes:
@@ -372,10 +378,17 @@ def before_face(ctx) -> None:
     """Hook: the curvature sizes of the face about to be meshed (its surface type's constant)."""
     import gmsh
 
+    from .generate import STRATEGIES
+    from .interior import use_per_circle
+
     opts = ctx.job.options.get("fidelity")
     if opts:
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature",
-                              opts["face_per_circle"].get(ctx.face, opts["per_circle"]))
+        n = opts["face_per_circle"].get(ctx.face, opts["per_circle"])
+        s = ctx.emap.faces.get(ctx.face)
+        if s is None:
+            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n)
+        else:
+            use_per_circle(s, n, uniform=STRATEGIES[ctx.strategy].uniform)
 
 
 def after_generate(ctx) -> None:
@@ -393,6 +406,7 @@ def after_generate(ctx) -> None:
 
     from .coarsen import coarsen
     from .generate import mesh_faces
+    from .interior import use_per_circle
 
     opts = ctx.job.options.get("fidelity")
     if not opts:
@@ -439,7 +453,7 @@ def after_generate(ctx) -> None:
             n = old_n * float(np.clip(np.sqrt(abs(measured[s]) / (AIM * target)), 1.25, 3.0))
             redo = remesh_face(s, n, face_of)
             if not redo.ok:  # keep what met the boundary before: mesh it again as it was
-                gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", old_n)
+                use_per_circle(s, old_n)
                 redo = mesh_faces([s], face_of)[s]
                 n = old_n
             ctx.outcomes[s] = redo
