@@ -327,6 +327,38 @@ def test_past_the_deadline_only_faces_meshed_before_are_replayed(cylinder):
     assert set(np.unique(res.triangle_faces)) == {1}
 
 
+def test_faces_an_earlier_child_delivered_are_kept_when_the_last_one_did_not_mesh_them(cylinder, tmp_path):
+    """A restarted child that meshes only part of the model (its replays stopped or past the soft deadline)
+    finishes normally; the faces an earlier, killed child had delivered are added to its mesh, so the job
+    does not end with fewer faces than were meshed (a twisted blade at 1e-3 under load ended with none)."""
+    import pickle
+
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.isolate import _with_earlier_faces
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    path = tmp_path / "faces"
+
+    def deliver(dim, tag, corners):
+        with open(path, "ab") as f:
+            pickle.dump((dim, tag, corners), f)
+
+    def job(**kw):
+        return MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape),
+                       grid=dataclasses.replace(cylinder, shape=None), field=SizeField(cylinder), mode="nodes", **kw)
+
+    full = run_job(job(), deliver=deliver)  # the first child: every face meshed and delivered
+    last = run_job(job(known_ok={2: 0}, deadline=time.time() - 1), deliver=deliver)  # face 2 only
+    assert [o.face for o in last.faces if o.ok] == [2]
+    merged = _with_earlier_faces(last, str(path), job(), {2: 0}).result
+    assert [o.face for o in merged.faces if o.ok] == [1, 2, 3]
+    assert set(np.unique(merged.triangle_faces)) == {1, 2, 3}
+    assert len(merged.triangles) == len(full.triangles) and len(merged.nodes) == len(np.unique(full.nodes, axis=0))
+    assert any("faces 1, 3: meshed by an earlier mesh process" in n for n in merged.notes)
+    assert _with_earlier_faces(full, str(path), job(), {}) is None  # nothing to add
+
+
 def test_past_the_deadline_with_nothing_meshed_the_first_faces_are_still_tried(cylinder):
     """A child restarted after the soft deadline when nothing was meshed before (its batch of first
     attempts hung, as on mesh_T106_V3 in sizes mode under load) meshes faces until one is meshed, so the

@@ -21,7 +21,8 @@ A new child replays what the progress file says the killed one achieved: each fa
 strategy that meshed it, and attempts that failed are not tried again. After :data:`SOFT_SHARE` of the
 timeout the child starts no new attempts (the faces left fail with "out of time"), and an attempt still
 running at :data:`KILL_SHARE` of it is killed, so a replay has the rest of the time to deliver what was
-meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing.
+meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing. Faces an
+earlier child delivered that the last one did not mesh again are added to its mesh.
 
 The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
 hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
@@ -38,7 +39,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -204,6 +205,11 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
             if run.status == "ok":
                 result = run.result
                 result.notes = events + result.notes
+                fuller = _with_earlier_faces(result, os.path.join(tmp, "faces"), job, known_ok)
+                if fuller is not None:
+                    if output is not None:
+                        _write(fuller, output)
+                    return fuller.result
                 if output is not None and result.written and len(result.triangles):
                     with atomic_path(output) as dst:
                         shutil.copyfile(job.output, dst)
@@ -356,6 +362,32 @@ def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
                              "face optimiser's last pass or gmsh's writer"
                              + (f"; {missing} faces are missing" if missing else "")]
     return _Delivered(result, lines, line_edges)
+
+
+def _with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dict[int, int]) -> _Delivered | None:
+    """``result``, from a child that finished, with the faces an earlier, stopped child delivered and this
+    one did not mesh (its replay of them was stopped in turn, or came after the soft deadline with their
+    strategy barred): the union of both, nodes merged by exact coordinates as for the hard timeout; None
+    when there is no such face. A restarted job that ran out of time used to end with the last child's
+    faces only, down to none."""
+    if result.error is not None:
+        return None
+    faces, _ = _read_deliveries(path)
+    meshed = {o.face for o in result.faces if o.ok}
+    extra = sorted(set(faces) - meshed)
+    if not extra:
+        return None
+    union = _delivered(path, job, known_ok, "", [])
+    mine = {o.face: o for o in result.faces}
+    outcomes = [o if o.face in extra or o.face not in mine else mine[o.face] for o in union.result.faces]
+    merged = replace(result, nodes=union.result.nodes, triangles=union.result.triangles,
+                                 triangle_faces=union.result.triangle_faces, edge_pairs=union.result.edge_pairs,
+                                 edge_uses=union.result.edge_uses, faces=outcomes, written=False)
+    merged.notes = result.notes + [
+        f"faces {', '.join(map(str, extra))}: meshed by an earlier mesh process that was stopped; the last one "
+        "did not mesh them again, so they are delivered as that process meshed them (the mesh written by "
+        "meshio, not gmsh's writer)"]
+    return _Delivered(merged, union.lines, union.line_edges)
 
 
 def _write(delivered: _Delivered, output: Path) -> None:
