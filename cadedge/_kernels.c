@@ -698,6 +698,7 @@ static PyMethodDef methods[] = {
     {"place", place, METH_VARARGS, "Parameters at equal steps of a measure, piece by piece."},
     {"de_boor", de_boor, METH_VARARGS, "Spline points by de Boor's algorithm."},
     {"evaluate_edges", ck_evaluate_edges, METH_VARARGS, "Points of many edges' curves from a geometry table."},
+    {"edge_lengths", ck_edge_lengths, METH_VARARGS, "Lengths of many edges from a geometry table (Gauss-Legendre)."},
     {"refine_edges", ck_refine_edges, METH_VARARGS, "Target-mode grids of many edges in one call."},
     {"parse_curves", ck_parse_curves, METH_VARARGS, "Curves written by OCCT's BinTools_CurveSet as geometry table rows."},
     {"parse_shapes", ck_parse_shapes, METH_VARARGS, "A shape written by OCCT's BinTools_ShapeSet: topology and edges."},

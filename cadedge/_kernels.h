@@ -62,10 +62,12 @@ Py_ssize_t ck_place(const double *params, const double *cum, const double *measu
 int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_t n, Py_ssize_t dim,
                const double *u, Py_ssize_t nu, double *out, long degree);
 
-/* cadedge/_batch.c's and cadedge/_shapedump.c's functions, registered by cadedge/_kernels.c's module. */
+/* cadedge/_batch.c's, cadedge/_lengths.c's and cadedge/_shapedump.c's functions, registered by cadedge/_kernels.c's
+ * module. */
 PyObject *ck_evaluate_edges(PyObject *self, PyObject *args);
 PyObject *ck_refine_edges(PyObject *self, PyObject *args);
 PyObject *ck_parse_curves(PyObject *self, PyObject *args);
 PyObject *ck_parse_shapes(PyObject *self, PyObject *args);
+PyObject *ck_edge_lengths(PyObject *self, PyObject *args);
 
 #endif

@@ -14,7 +14,8 @@ jobs, wall time mostly measures the wait for a core):
 - its phases, each run again on its own: **topology** (``Topology``), of which **dump** (OCCT writing the
   shape and ``cadedge/_shapedump.c`` parsing it, ``shapedump.read``) is also timed alone; **edge table**
   (every edge's curve row, its length and the check against OCCT, ``EdgeTable``), of which **check** and
-  **lengths** are also timed alone; and **compiled refine** (``refine_table`` on all rows); **rest** is
+  **lengths** (``cadedge/_lengths.c``'s quadrature on every row but lines; circles included, which the table
+  takes in closed form) are also timed alone; and **compiled refine** (``refine_table`` on all rows); **rest** is
   the whole call minus topology, table and compiled refine (the shape's tolerance scan on loading, the
   per-edge grid objects, vertex spacings).
 """
@@ -28,15 +29,15 @@ from pathlib import Path
 
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
-from OCP.GCPnts import GCPnts_AbscissaPoint, GCPnts_TangentialDeflection
+from OCP.GCPnts import GCPnts_TangentialDeflection
 
 import bench
 import corpus_path
 from corpus_path import require_corpus
 
-from cadedge.occt.edgecurve import LENGTH_TOL
+from cadedge import kernels
 from cadedge.occt import shapedump
-from cadedge.occt.edgetable import EdgeTable, refine_table
+from cadedge.occt.edgetable import LINE, EdgeTable, refine_table
 from cadedge.occt.shape import refine_shape
 from cadedge.occt.topology import Topology
 
@@ -71,8 +72,9 @@ def breakdown(path: Path, eps: float, repeats: int, clock=time.perf_counter) -> 
         rows = [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)]
         table = timed("edge table", lambda: EdgeTable(topo.edges, rows, topo.dump))
         timed("check", table._check)
-        timed("lengths", lambda: [GCPnts_AbscissaPoint.Length_s(table.adaptor(r), a, b, LENGTH_TOL)
-                                  for r, (a, b) in enumerate(table.domain.tolist())])
+        curved = np.flatnonzero(table.kind != LINE)
+        timed("lengths", lambda: kernels.edge_lengths(table.kind, table.gofs, table.ints, table.gdata, table.hofs,
+                                                      table.hdata, table.domain, curved))
         n = len(table)
         ends = np.zeros((n, 3))
         timed("compiled refine", lambda: refine_table(table, slice(0, n), np.full(n, eps), ends, ends))

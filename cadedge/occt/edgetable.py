@@ -2,14 +2,15 @@
 
 Each edge whose 3-D curve is a line, circle, ellipse, hyperbola, B-spline or Bezier curve gets a row of
 :class:`EdgeTable`'s arrays. Where the shape was read in one call (:mod:`cadedge.occt.shapedump`) the row
-is the curve OCCT wrote for the edge, with no OCP call but OCCT's length integration (ellipses, hyperbolas
-and splines). Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
+is the curve OCCT wrote for the edge, with no OCP call. Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
 trimmed curves), the row is read through the edge's ``BRepAdaptor_Curve`` (which applies the edge's
 location), the adaptors' curve handles written by OCCT in one call and parsed in C
 (:mod:`cadedge.occt.curvedump`). The table's evaluation (``cadedge/_batch.c``, the same formulas as
 :mod:`cadedge.occt.fasteval`, and OCCT's own for a hyperbola) is then checked against OCCT's (``BRepAdaptor_Curve.D0``, see
 :meth:`EdgeTable._check`); an edge that disagrees by more than ``fasteval.RTOL`` of its size, or that
 OCCT cannot read, is left out and refined by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
+The lengths of ellipses, hyperbolas and splines are integrated on the table's rows in C (``cadedge/_lengths.c``,
+within 1e-13 of OCCT's ``GCPnts_AbscissaPoint::Length`` on every corpus edge), OCCT's where that gives none.
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ class EdgeTable:
 
     def __init__(self, edges: Sequence, indices: list[int], dump: ShapeDump | None = None):
         self._edges = edges
-        rows, adaptors, kinds, lengths, domain, ids, dumped, splines = [], [], [], [], [], [], [], {}
+        rows, adaptors, kinds, domain, ids, dumped, splines = [], [], [], [], [], [], {}
         parts = [dump.curves] if dump is not None else []
         base = len(dump.curves.meta) if dump is not None else 0  # the curves' indices continue after the dump's
         if dump is not None:  # the rows the dump holds, without an OCP call
@@ -71,14 +72,7 @@ class EdgeTable:
             rows, ids = indices[taken].tolist(), dump.edge_curve[indices[taken]].tolist()
             domain = dump.edge_range[indices[taken]].tolist()
             kinds = [GEOMABS[t] for t in dump.curves.meta[np.asarray(ids, dtype=np.int64) - 1, TYPE].tolist()]
-            adaptors, lengths = [None] * len(rows), [math.nan] * len(rows)
-            for k, t in enumerate(kinds):  # OCCT's length, as the per-edge path below takes it
-                if t != GeomAbs_Line and t != GeomAbs_Circle:
-                    try:
-                        adaptors[k] = ad = BRepAdaptor_Curve(edges[rows[k]])
-                        lengths[k] = float(GCPnts_AbscissaPoint.Length_s(ad, *domain[k], LENGTH_TOL))
-                    except Standard_Failure:
-                        rows[k] = -1  # left to the per-edge path, as below
+            adaptors = [None] * len(rows)
             indices = indices[~taken].tolist()
             dumped = [True] * len(rows)
         curves = CurveSet()
@@ -90,7 +84,6 @@ class EdgeTable:
                     continue
                 a, b = ad.FirstParameter(), ad.LastParameter()
                 t = ad.GetType()
-                length = math.nan
                 if t == GeomAbs_Line:
                     curve = Geom_Line(ad.Line())
                 elif t == GeomAbs_Circle:
@@ -103,8 +96,6 @@ class EdgeTable:
                     curve = ad.BSpline() if t == GeomAbs_BSplineCurve else ad.Bezier()
                 else:
                     continue
-                if t != GeomAbs_Line and t != GeomAbs_Circle:  # (a line's and a circle's are set below)
-                    length = float(GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL))
                 index = base + add(curve)
             except Standard_Failure:
                 continue  # the per-edge path reports what OCCT cannot do
@@ -115,12 +106,11 @@ class EdgeTable:
             kinds.append(t)
             ids.append(index)
             domain.append((a, b))
-            lengths.append(length)
-        if dump is not None and (len(rows) > len(dumped) or -1 in rows):  # rows in edge order, none failed
+        if dump is not None and len(rows) > len(dumped):  # rows in edge order
             dumped += [False] * (len(rows) - len(dumped))
-            order = [k for k in sorted(range(len(rows)), key=rows.__getitem__) if rows[k] >= 0]
-            rows, adaptors, kinds, ids, domain, lengths, dumped = (
-                [x[k] for k in order] for x in (rows, adaptors, kinds, ids, domain, lengths, dumped))
+            order = sorted(range(len(rows)), key=rows.__getitem__)
+            rows, adaptors, kinds, ids, domain, dumped = (
+                [x[k] for k in order] for x in (rows, adaptors, kinds, ids, domain, dumped))
         #: Row k came from the dump (its ends are checked against its vertices, see _check).
         self.dumped = np.array(dumped + [False] * (len(rows) - len(dumped)), dtype=bool)
         self._dump = dump
@@ -167,10 +157,29 @@ class EdgeTable:
         self.hofs = np.zeros(len(c) + 1, dtype=np.int64)
         np.cumsum(hint_sizes, out=self.hofs[1:])
         self.hdata = np.array(hints, dtype=float)
-        self.exact = np.array(lengths, dtype=float)
+        self.exact = np.full(len(rows), math.nan)
         circles = np.flatnonzero(meta[c, TYPE] == CIRCLE)  # closed form, as EdgeCurve.exact_length
         self.exact[circles] = gdata[gofs[circles] + 9] * (self.domain[circles, 1] - self.domain[circles, 0])
+        self._lengths(np.flatnonzero((self.kind != LINE) & (meta[c, TYPE] != CIRCLE)))
         self._check()
+
+    def _lengths(self, curved: np.ndarray) -> None:
+        """Set the lengths of the rows ``curved`` (ellipses, hyperbolas, splines) by ``cadedge/_lengths.c``'s
+        quadrature, or where it gives none by OCCT's (``GCPnts_AbscissaPoint::Length`` to ``LENGTH_TOL``); drop
+        a row OCCT cannot measure either (the per-edge path reports it)."""
+        if not len(curved):
+            return
+        got = kernels.edge_lengths(self.kind, self.gofs, self.ints, self.gdata, self.hofs, self.hdata, self.domain,
+                                   curved)
+        self.exact[curved] = got
+        failed = []
+        for r in curved[np.isnan(got)].tolist():
+            try:
+                self.exact[r] = float(GCPnts_AbscissaPoint.Length_s(self.adaptor(r), *self.domain[r], LENGTH_TOL))
+            except Standard_Failure:
+                failed.append(r)
+        if failed:
+            self._keep(np.setdiff1d(np.arange(len(self.rows)), failed))
 
     def __len__(self) -> int:
         return len(self.rows)
