@@ -30,7 +30,7 @@ from ..target import MIN_CLOSED_SEGMENTS
 from .edgecurve import EdgeCurve
 from .edgetable import EdgeTable, TableCurves, refine_table
 from .localald import check_ald_for, edge_targets
-from .reader import load_shape
+from .reader import load_shape, tolerance_warnings
 from .topology import Topology, curve_type_name
 from .vertexgrowth import grade_vertices
 
@@ -142,11 +142,12 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     opts = refine_options(ald, min_length, max_length, max_growth)  # before the (possibly slow) read
     local = check_ald_for(ald_for)
     t0 = time.perf_counter()
-    loaded = load_shape(source, allow_partial=allow_partial)
+    loaded = load_shape(source, allow_partial=allow_partial, tolerance_scan=False)
     try:
         topo = Topology(loaded.shape)
     except GeometryError as exc:
         raise GeometryError(f"{loaded.source}: {exc}") from exc
+    loaded.warnings += tolerance_warnings(loaded.shape, loaded.units, loaded.declared, topo.dump)
     try:
         targets, local_records, notes = edge_targets(local, topo, opts["ald"])
     except InputError as exc:
