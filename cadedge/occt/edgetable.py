@@ -34,8 +34,8 @@ from .fasteval import CHECK_POINTS, RTOL
 from .shapedump import ShapeDump
 
 LINE, CONIC, SPLINE, HYPERBOLA = 0, 1, 2, 3
-#: The check points (of ``CHECK_POINTS``) a row read from the dump is evaluated at by OCCT: two interior ones.
-PROBES = (2, 6)
+#: The check point (of ``CHECK_POINTS``) a row read from the dump is evaluated at by OCCT: the middle one.
+PROBE = CHECK_POINTS // 2
 #: The adaptor's curve type of each curve type the table reads, by BinTools type code.
 GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 5: GeomAbs_Hyperbola, 6: GeomAbs_BezierCurve,
            7: GeomAbs_BSplineCurve}
@@ -203,55 +203,74 @@ class EdgeTable:
         ``CHECK_POINTS`` parameters against ``BRepAdaptor_Curve::D0``, to ``RTOL`` of the curve's size. A row
         read from the dump holds the numbers OCCT itself wrote, in a stream whose every size and count was
         checked; its evaluated ends must lie on its vertices (within their tolerances: that the curve, its
-        range and its placement are the edge's) and two interior points must agree with OCCT's as above
+        range and its placement are the edge's) and its middle check point must agree with OCCT's as above
         (that the table evaluates that curve as OCCT does). A dump row whose ends miss its vertices (a
         loose vertex) gets the full check."""
         n = len(self.rows)
         if not n:
             return
         a, b = self.domain[:, 0], self.domain[:, 1]
-        u = np.linspace(a, b, CHECK_POINTS, axis=1)
-        u[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]  # off the knots, as fast_evaluator
-        flat = u.ravel()
-        got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
-        probe = self.dumped & self._ends_on_vertices(got)
-        ref = got.copy()  # OCCT's points where checked
-        values, full = flat.tolist(), range(CHECK_POINTS)
+        u = np.stack([a, a + (b - a) / (CHECK_POINTS - 1) * (PROBE + 0.1234), b], axis=1)  # off the knots
+        got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), 3), u.ravel()).reshape(n, 3, 3)
+        probed = self.dumped & self._ends_on_vertices(got[:, [0, 2]])
         ok = np.ones(n, dtype=bool)
-        point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
-        coord = point.Coord
-        at, coords = [], []  # flat indices into (n * CHECK_POINTS) and OCCT's points there, set in one go
-        adaptor, adaptors = self.adaptor, self.adaptors
-        for r, probed in enumerate(probe.tolist()):
-            ad = adaptors[r]
-            d0 = (adaptor(r) if ad is None else ad).D0
-            base = r * CHECK_POINTS
-            try:
-                for k in PROBES if probed else full:
-                    d0(values[base + k], point)
-                    coords.append(coord())
-                    at.append(base + k)
-            except Standard_Failure:
-                ok[r] = False
-        if at:
-            ref.reshape(-1, 3)[at] = coords
-        size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
-        size = np.maximum(size, math.ulp(1.0))
-        ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
-        lines = np.flatnonzero(self.kind == LINE)
-        for r in lines.tolist():  # the same expression as EdgeCurve.exact_length
+        self._build_adaptors()
+        one = np.flatnonzero(probed)
+        ref = got.copy()  # OCCT's points where checked
+        ref[one, 1] = self._occt_points([self.adaptors[r] for r in one.tolist()], u[one, 1].tolist(), ok, one.tolist())
+        ok[one] &= _agree(got[one], ref[one])
+        full = np.flatnonzero(~probed)
+        if len(full):  # every check point, as fast_evaluator
+            a, b = a[full], b[full]
+            u9 = np.linspace(a, b, CHECK_POINTS, axis=1)
+            u9[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]
+            got9 = self.evaluate(np.repeat(full, CHECK_POINTS), u9.ravel()).reshape(len(full), CHECK_POINTS, 3)
+            rows = np.repeat(full, CHECK_POINTS).tolist()
+            ref9 = self._occt_points([self.adaptors[r] for r in rows], u9.ravel().tolist(), ok, rows)
+            ok[full] &= _agree(got9, ref9.reshape(got9.shape))
+        for r in np.flatnonzero(self.kind == LINE).tolist():  # the same expression as EdgeCurve.exact_length
             self.exact[r] = float(np.linalg.norm(np.diff(got[r, [0, -1]], axis=0)))
         if not ok.all():
             self._keep(np.flatnonzero(ok))
 
-    def _ends_on_vertices(self, got: np.ndarray) -> np.ndarray:
-        """Rows whose evaluated first and last points lie within their vertices' tolerances of them."""
+    def _build_adaptors(self) -> None:
+        """Every row's ``BRepAdaptor_Curve`` (the check evaluates each row through its own)."""
+        missing = [r for r, ad in enumerate(self.adaptors) if ad is None]
+        if missing:
+            take = getattr(self._edges, "take", None)
+            at = [self.rows[r] for r in missing]
+            edges = take(at) if take is not None else [self._edges[i] for i in at]
+            for r, edge in zip(missing, edges):
+                self.adaptors[r] = BRepAdaptor_Curve(edge)
+
+    @staticmethod
+    def _occt_points(adaptors: list, u: list[float], ok: np.ndarray, rows: list[int]) -> np.ndarray:
+        """``adaptors[k].D0(u[k])`` for every k, (len(u), 3); where OCCT fails, ``ok[rows[k]]`` is cleared
+        (and the point is NaN)."""
+        point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
+        coord = point.Coord
+        try:
+            out = [(ad.D0(x, point), coord())[1] for ad, x in zip(adaptors, u)]
+        except Standard_Failure:  # again one by one, to know which
+            out = []
+            for ad, x, r in zip(adaptors, u, rows):
+                try:
+                    ad.D0(x, point)
+                    out.append(coord())
+                except Standard_Failure:
+                    ok[r] = False
+                    out.append((math.nan,) * 3)
+        return np.array(out, dtype=float).reshape(-1, 3)
+
+    def _ends_on_vertices(self, ends: np.ndarray) -> np.ndarray:
+        """Rows whose evaluated first and last points ``ends`` (n, 2, 3) lie within their vertices' tolerances of
+        them."""
         if self._dump is None:
-            return np.zeros(len(got), dtype=bool)
+            return np.zeros(len(ends), dtype=bool)
         d = self._dump
-        ends = d.edge_vertices[self.rows] - 1
-        gap = np.linalg.norm(got[:, [0, -1]] - d.vertex_points[ends], axis=2)
-        return np.all(gap <= d.vertex_tolerance[ends], axis=1)
+        at = d.edge_vertices[self.rows] - 1
+        gap = np.linalg.norm(ends - d.vertex_points[at], axis=2)
+        return np.all(gap <= d.vertex_tolerance[at], axis=1)
 
     def _keep(self, keep: np.ndarray) -> None:
         """Only the rows ``keep`` (increasing)."""
@@ -265,6 +284,18 @@ class EdgeTable:
         self.adaptors = [self.adaptors[r] for r in keep]
         self.kinds = [self.kinds[r] for r in keep]
         self.dumped = self.dumped[keep]
+
+
+def _agree(got: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """Rows (of (n, points, 3)) whose points agree with OCCT's ``ref`` to ``RTOL`` of the row's size (the largest
+    coordinate or extent of its points, as ``fasteval``)."""
+    n = len(got)
+    if not n:
+        return np.ones(0, dtype=bool)
+    flat = ref.reshape(n, -1)
+    size = np.maximum(np.abs(flat).max(axis=1), (ref.max(axis=1) - ref.min(axis=1)).max(axis=1))
+    size = np.maximum(size, math.ulp(1.0))
+    return (np.abs(got - ref).reshape(n, -1) <= (RTOL * size)[:, None]).all(axis=1)
 
 
 def _periodic_knots(bs, a: float, b: float) -> list[float]:
