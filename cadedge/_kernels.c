@@ -19,6 +19,9 @@
 #include <string.h>
 
 #include "_kernels.h"
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 /* ---------------------------------------------------------------- buffers */
 
@@ -243,14 +246,38 @@ static Py_ssize_t cover(const double *p, Py_ssize_t n, const double *cum, double
     while (i < last) {
         while (stops[s] <= i)
             s++;
-        Py_ssize_t stop = stops[s], reach = stop;
-        for (Py_ssize_t j = i + 1; j <= stop; j++) {
+        Py_ssize_t stop = stops[s], reach = stop, j = i + 1;
+#ifdef __SSE2__
+        /* two chords at a time (the same correctly rounded values as distance()), tested in order */
+        const double *a = p + 3 * i;
+        __m128d ax = _mm_set1_pd(a[0]), ay = _mm_set1_pd(a[1]), az = _mm_set1_pd(a[2]);
+        for (; j + 1 <= stop; j += 2) {
+            const double *q = p + 3 * j;
+            __m128d dx = _mm_sub_pd(_mm_set_pd(q[3], q[0]), ax), dy = _mm_sub_pd(_mm_set_pd(q[4], q[1]), ay);
+            __m128d dz = _mm_sub_pd(_mm_set_pd(q[5], q[2]), az);
+            double chord[2];
+            _mm_storeu_pd(chord, _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)),
+                                                        _mm_mul_pd(dz, dz))));
+            if ((cum[j] - cum[i]) - chord[0] > cap || chord[0] > max_length) {
+                reach = j - 1;
+                goto reached;
+            }
+            if ((cum[j + 1] - cum[i]) - chord[1] > cap || chord[1] > max_length) {
+                reach = j;
+                goto reached;
+            }
+        }
+#endif
+        for (; j <= stop; j++) {
             double chord = distance(p, i, p, j);
             if ((cum[j] - cum[i]) - chord > cap || chord > max_length) {
                 reach = j - 1;
                 break;
             }
         }
+#ifdef __SSE2__
+    reached:
+#endif
         if (reach < i + 1)
             reach = i + 1;
         if (min_length > 0.0 && reach < stop && distance(p, i, p, reach) < min_length) {
@@ -273,10 +300,33 @@ static Py_ssize_t cover(const double *p, Py_ssize_t n, const double *cum, double
     return count;
 }
 
+/* two[c] = |p[c] - p[lo]| + |p[hi] - p[c]| for lo < c < hi (as distance(), two samples at a time where SSE2
+ * is there: the same correctly rounded square roots of the same sums). */
+static void chord_pairs(const double *p, int64_t lo, int64_t hi, double *two)
+{
+    int64_t c = lo + 1;
+#ifdef __SSE2__
+    const double *a = p + 3 * lo, *b = p + 3 * hi;
+    __m128d ax = _mm_set1_pd(a[0]), ay = _mm_set1_pd(a[1]), az = _mm_set1_pd(a[2]);
+    __m128d bx = _mm_set1_pd(b[0]), by = _mm_set1_pd(b[1]), bz = _mm_set1_pd(b[2]);
+    for (; c + 1 < hi; c += 2) {
+        const double *q = p + 3 * c;
+        __m128d qx = _mm_set_pd(q[3], q[0]), qy = _mm_set_pd(q[4], q[1]), qz = _mm_set_pd(q[5], q[2]);
+        __m128d dx = _mm_sub_pd(qx, ax), dy = _mm_sub_pd(qy, ay), dz = _mm_sub_pd(qz, az);
+        __m128d ex = _mm_sub_pd(bx, qx), ey = _mm_sub_pd(by, qy), ez = _mm_sub_pd(bz, qz);
+        __m128d d1 = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz)));
+        __m128d d2 = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex, ex), _mm_mul_pd(ey, ey)), _mm_mul_pd(ez, ez)));
+        _mm_storeu_pd(two + c, _mm_add_pd(d1, d2));
+    }
+#endif
+    for (; c < hi; c++)
+        two[c] = distance(p, lo, p, c) + distance(p, c, p, hi);
+}
+
 /* Move interior nodes (not on fixed samples) to the sample between their neighbours that maximises
  * the two chords; odd positions then even ones, until nothing moves or sweeps runs out. */
 static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps, const uint8_t *fixed,
-                   uint8_t *dirty)
+                   uint8_t *dirty, double *two)
 {
     /* A node is scanned again only after a neighbour moved: between the same neighbours the scan finds the
      * same best sample, which the node already holds or did not beat, so skipping it changes nothing. */
@@ -291,11 +341,10 @@ static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps
                 int64_t lo = nodes[k - 1], hi = nodes[k + 1];
                 double best = -1.0;
                 int64_t at = -1;
-                for (int64_t c = lo + 1; c < hi; c++) {
-                    double two = distance(p, lo, p, c) + distance(p, c, p, hi);
-                    if (two > best)
-                        best = two, at = c;
-                }
+                chord_pairs(p, lo, hi, two);
+                for (int64_t c = lo + 1; c < hi; c++)
+                    if (two[c] > best)
+                        best = two[c], at = c;
                 if (at < 0)
                     continue;
                 double current = distance(p, lo, p, nodes[k]) + distance(p, nodes[k], p, hi);
@@ -321,6 +370,7 @@ typedef struct {
     const uint8_t *fixed;
     int64_t *buf;
     uint8_t *dirty;
+    double *two; /* polish's scratch, n doubles */
     /* The last MEMO plans: each one's cover (raw, raw_count) and what polishing it gave (polished, miss).
      * The caps of a bisection often give a cover met before, whose polished grid is then copied instead of
      * made again (the same nodes: polishing depends on the cover alone). */
@@ -343,7 +393,7 @@ static Py_ssize_t plan(Cover *c, double cap, int64_t *nodes, double *miss)
     }
     memcpy(nodes, c->buf, count * sizeof(int64_t));
     if (count > 2)
-        polish(c->p, nodes, count, 4, c->fixed, c->dirty);
+        polish(c->p, nodes, count, 4, c->fixed, c->dirty, c->two);
     *miss = c->cum[c->n - 1] - chords(c->p, nodes, count);
     int k = c->next;
     c->next = (k + 1) % MEMO;
@@ -360,12 +410,13 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
 {
     int64_t *work = malloc((3 + 2 * MEMO) * n * sizeof(int64_t));
     uint8_t *dirty = malloc(n);
-    if (!work || !dirty) {
-        free(work), free(dirty);
+    double *two = malloc(n * sizeof(double));
+    if (!work || !dirty || !two) {
+        free(work), free(dirty), free(two);
         return -1;
     }
     int64_t *buf = work, *tmp = work + n, *best = out;
-    Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf, dirty};
+    Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf, dirty, two};
     for (int k = 0; k < MEMO; k++)
         c.raw[k] = work + (3 + 2 * k) * n, c.polished[k] = work + (4 + 2 * k) * n, c.raw_count[k] = -1;
     double total = cum[n - 1], miss;
@@ -409,13 +460,13 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
         if (!found)
             break;
         if (fewer_count > 2)
-            polish(p, fewer, fewer_count, 8, fixed, dirty);
+            polish(p, fewer, fewer_count, 8, fixed, dirty, two);
         if (total - chords(p, fewer, fewer_count) > budget)
             break;
         memcpy(best, fewer, fewer_count * sizeof(int64_t));
         best_count = fewer_count;
     }
-    free(work), free(dirty);
+    free(work), free(dirty), free(two);
     return best_count;
 }
 

@@ -64,8 +64,15 @@ class LazyShapes(Sequence):
 
     def take(self, positions: list[int]) -> list:
         """The shapes at ``positions``, as ``[self[i] for i in positions]`` without a Python call per shape."""
-        built, build = self._built, self._build
-        return [build(i) if built[i] is None else built[i] for i in positions]
+        built, shape_at, cast, index = self._built, self._set.Shape, self._cast, self._index
+        orientation, stored = self._orientation, self._stored
+        for i in positions:
+            if built[i] is None:
+                shape = shape_at(index[i])
+                if orientation[i] != stored[i]:
+                    shape = shape.Oriented(ORIENTATIONS[orientation[i]])
+                built[i] = cast(shape)
+        return [built[i] for i in positions]
 
 
 class ShapeDump:
