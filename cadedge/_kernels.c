@@ -404,9 +404,10 @@ static Py_ssize_t plan(Cover *c, double cap, int64_t *nodes, double *miss)
 }
 
 /* The fewest node indices (greedy + bisection on the cap, polished) whose chords miss at most budget
- * of the samples' length, written to out (n entries); returns their count, -1 if out of memory. */
+ * of the samples' length, written to out (n entries); returns their count, -1 if out of memory. With drop,
+ * the polished grid is then tried with one node fewer, as long as that meets the budget. */
 Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int64_t *stops, const uint8_t *fixed,
-                     int64_t *out, double budget, double min_length, double max_length)
+                     int64_t *out, double budget, double min_length, double max_length, int drop)
 {
     int64_t *work = malloc((3 + 2 * MEMO) * n * sizeof(int64_t));
     uint8_t *dirty = malloc(n);
@@ -441,7 +442,7 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
     }
     /* The polished grid may leave room for fewer nodes: bisect for a cap that drops one, polish, check. */
     int64_t *fewer = work + 2 * n;
-    while (best_count > 2) {
+    while (drop && best_count > 2) {
         Py_ssize_t count = best_count, fewer_count = 0;
         double lo = 0.0, hi = total;
         int found = 0;
@@ -470,7 +471,7 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
     return best_count;
 }
 
-/* fewest(points, cum, stops, fixed, out, budget, min_length, max_length) -> count (see ck_fewest) */
+/* fewest(points, cum, stops, fixed, out, budget, min_length, max_length, drop) -> count (see ck_fewest) */
 static PyObject *fewest(PyObject *self, PyObject *args)
 {
     Buffers b = {.n = 0};
@@ -484,11 +485,18 @@ static PyObject *fewest(PyObject *self, PyObject *args)
     int64_t *out = ck_arg(&b, args, 4, I64, 1, NULL);
     if (!out || ck_num(args, 5, &budget) || ck_num(args, 6, &min_length) || ck_num(args, 7, &max_length))
         goto done;
+    if (PyTuple_GET_SIZE(args) < 9) {
+        PyErr_SetString(PyExc_TypeError, "too few arguments");
+        goto done;
+    }
+    int drop = PyObject_IsTrue(PyTuple_GET_ITEM(args, 8));
+    if (drop < 0)
+        goto done;
     if (n < 1) {
         PyErr_SetString(PyExc_ValueError, "fewest: no samples");
         goto done;
     }
-    Py_ssize_t count = ck_fewest(p, cum, n, stops, fixed, out, budget, min_length, max_length);
+    Py_ssize_t count = ck_fewest(p, cum, n, stops, fixed, out, budget, min_length, max_length, drop);
     result = count < 0 ? PyErr_NoMemory() : PyLong_FromSsize_t(count);
 done:
     ck_release(&b);

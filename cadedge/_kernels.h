@@ -53,7 +53,7 @@ void ck_children(Py_ssize_t n, const double *ua, const double *um, const double 
                  const double *pq, double *c_ua, double *c_um, double *c_ub, double *c_pa, double *c_pm,
                  double *c_pb, double *c_ratio);
 Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int64_t *stops, const uint8_t *fixed,
-                     int64_t *out, double budget, double min_length, double max_length);
+                     int64_t *out, double budget, double min_length, double max_length, int drop);
 int ck_deficit_measure(const double *p, const double *cum, Py_ssize_t n, const int64_t *corners, Py_ssize_t nc,
                        double *measure);
 void ck_interp(const double *x, Py_ssize_t nx, const double *xp, const double *fp, Py_ssize_t np_, double *out);

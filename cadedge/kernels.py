@@ -49,11 +49,11 @@ def children(ua: np.ndarray, um: np.ndarray, ub: np.ndarray, pa: np.ndarray, pm:
 
 
 def fewest(points: np.ndarray, cum: np.ndarray, budget: float, min_length: float, max_length: float,
-           stops: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+           stops: np.ndarray, fixed: np.ndarray, drop: bool = True) -> np.ndarray:
     """Greedy cover + bisection on the cap + polish (see :func:`cadedge.placement.fewest_nodes`)."""
     out = np.empty(len(points), dtype=np.int64)
     count = _kernels.fewest(_f64(points), _f64(cum), np.ascontiguousarray(stops, dtype=np.int64),
-                            np.ascontiguousarray(fixed, dtype=np.bool_), out, budget, min_length, max_length)
+                            np.ascontiguousarray(fixed, dtype=np.bool_), out, budget, min_length, max_length, drop)
     return out[:count]
 
 
