@@ -39,6 +39,8 @@ PROBE = CHECK_POINTS // 2
 #: The adaptor's curve type of each curve type the table reads, by BinTools type code.
 GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 5: GeomAbs_Hyperbola, 6: GeomAbs_BezierCurve,
            7: GeomAbs_BSplineCurve}
+#: Their names in :data:`cadedge.occt.topology.CURVE_TYPES` (``curve_type_name`` of the adaptor's type).
+NAMES = {1: "Line", 2: "Circle", 3: "Ellipse", 5: "Hyperbola", 6: "BezierCurve", 7: "BSplineCurve"}
 
 
 def _from_dump(dump: ShapeDump, indices: np.ndarray) -> np.ndarray:
@@ -58,7 +60,8 @@ class EdgeTable:
 
     ``kind``, ``gofs``, ``ints`` and ``gdata`` are the geometry table of ``cadedge/_batch.c``; ``domain``
     (n, 2), ``exact`` (n, each edge's length or NaN), ``hofs``/``hdata`` (the knots a periodic spline's
-    exploration starts from) go with them. ``adaptors[k]`` and ``kinds[k]`` belong to row ``k``.
+    exploration starts from) go with them. ``adaptors[k]``, ``kinds[k]`` and ``names[k]`` (its curve type's
+    name) belong to row ``k``.
     """
 
     def __init__(self, edges: Sequence, indices: list[int], dump: ShapeDump | None = None):
@@ -149,6 +152,7 @@ class EdgeTable:
                 hints += hint
                 hint_sizes[r] = len(hint)
         self.rows, self.adaptors, self.kinds = rows, adaptors, kinds  # adaptors[k] None until needed
+        self.names = [NAMES[t] for t in meta[c, TYPE].tolist()]
         self.kind = meta[c, KIND].copy()
         self.gofs = gofs
         self.ints = meta[c][:, [DEGREE, KNOTS, DIM]].copy()
@@ -283,6 +287,7 @@ class EdgeTable:
         self.rows = [self.rows[r] for r in keep]
         self.adaptors = [self.adaptors[r] for r in keep]
         self.kinds = [self.kinds[r] for r in keep]
+        self.names = [self.names[r] for r in keep]
         self.dumped = self.dumped[keep]
 
 

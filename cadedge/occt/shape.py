@@ -94,7 +94,7 @@ def _refine_edge(topo: Topology, i: int, vpoints: np.ndarray, src: str, opts: di
 
 
 def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np.ndarray, topo: Topology,
-                 names: list[str], tolerance: list[float]) -> list[tuple[ShapeEdgeGrid, str | None] | None]:
+                 tolerance: list[float]) -> list[tuple[ShapeEdgeGrid, str | None] | None]:
     """Grids of the table's ``rows`` in one compiled call, anchored on their vertices: per row, its grid and the
     note it adds (or None), or None where the per-edge path must refine the edge (the compiled path could not
     finish it alike, or a closed edge got fewer than ``MIN_CLOSED_SEGMENTS`` segments: see refine_target)."""
@@ -108,7 +108,7 @@ def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np
     faces = topo.edge_faces
     out: list[tuple[ShapeEdgeGrid, str | None] | None] = []
     for i, (v1, v2), name, failed, lo, hi, est, raw_est, evals, target in zip(
-            edge_ids, ends, names[rows], status.tolist(), bounds, bounds[1:], estimate.tolist(), raw.tolist(),
+            edge_ids, ends, table.names[rows], status.tolist(), bounds, bounds[1:], estimate.tolist(), raw.tolist(),
             evaluations.tolist(), ald.tolist()):
         if failed or (v1 == v2 and hi - lo - 1 < MIN_CLOSED_SEGMENTS):
             out.append(None)
@@ -158,7 +158,6 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     batched = opts["min_length"] is None and opts["max_length"] is None and opts["max_growth"] is None
     table = EdgeTable(topo.edges, topo.non_degenerate() if batched else [], topo.dump)
     row_of = {i: r for r, i in enumerate(table.rows)}
-    names = [curve_type_name(k) for k in table.kinds]
     edges: list[ShapeEdgeGrid] = []
     curves: dict[int, EdgeCurve] = {}  # built by the per-edge path; the table's are built on demand
     segments = 0
@@ -170,7 +169,7 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
             r = row_of.get(i)
             if r is not None and r >= done:  # refine the next rows of the table in one compiled call
                 start, done = r, min(r + CHUNK, len(table))
-                chunk = _refine_rows(table, slice(start, done), targets, vpoints, topo, names, edge_tolerance)
+                chunk = _refine_rows(table, slice(start, done), targets, vpoints, topo, edge_tolerance)
             made = chunk[r - start] if r is not None else None
             if made is not None:
                 grid, note = made
