@@ -301,11 +301,13 @@ static Py_ssize_t cover(const double *p, Py_ssize_t n, const double *cum, double
 }
 
 /* two[c] = |p[c] - p[lo]| + |p[hi] - p[c]| for lo < c < hi (as distance(), two samples at a time where SSE2
- * is there: the same correctly rounded square roots of the same sums). */
-static void chord_pairs(const double *p, int64_t lo, int64_t hi, double *two)
+ * is there: the same correctly rounded square roots of the same sums); returns their largest (-1 if none). */
+static double chord_pairs(const double *p, int64_t lo, int64_t hi, double *two)
 {
     int64_t c = lo + 1;
+    double most = -1.0;
 #ifdef __SSE2__
+    __m128d top = _mm_set1_pd(-1.0);
     const double *a = p + 3 * lo, *b = p + 3 * hi;
     __m128d ax = _mm_set1_pd(a[0]), ay = _mm_set1_pd(a[1]), az = _mm_set1_pd(a[2]);
     __m128d bx = _mm_set1_pd(b[0]), by = _mm_set1_pd(b[1]), bz = _mm_set1_pd(b[2]);
@@ -316,11 +318,19 @@ static void chord_pairs(const double *p, int64_t lo, int64_t hi, double *two)
         __m128d ex = _mm_sub_pd(bx, qx), ey = _mm_sub_pd(by, qy), ez = _mm_sub_pd(bz, qz);
         __m128d d1 = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz)));
         __m128d d2 = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex, ex), _mm_mul_pd(ey, ey)), _mm_mul_pd(ez, ez)));
-        _mm_storeu_pd(two + c, _mm_add_pd(d1, d2));
+        __m128d sum = _mm_add_pd(d1, d2);
+        _mm_storeu_pd(two + c, sum);
+        top = _mm_max_pd(top, sum);
     }
+    double lanes[2];
+    _mm_storeu_pd(lanes, top);
+    most = dmax(lanes[0], lanes[1]);
 #endif
-    for (; c < hi; c++)
+    for (; c < hi; c++) {
         two[c] = distance(p, lo, p, c) + distance(p, c, p, hi);
+        most = dmax(most, two[c]);
+    }
+    return most;
 }
 
 /* Move interior nodes (not on fixed samples) to the sample between their neighbours that maximises
@@ -339,15 +349,16 @@ static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps
                     continue;
                 dirty[k] = 0;
                 int64_t lo = nodes[k - 1], hi = nodes[k + 1];
-                double best = -1.0;
+                double best = chord_pairs(p, lo, hi, two);
                 int64_t at = -1;
-                chord_pairs(p, lo, hi, two);
-                for (int64_t c = lo + 1; c < hi; c++)
-                    if (two[c] > best)
-                        best = two[c], at = c;
+                for (int64_t c = lo + 1; c < hi; c++) /* the first sample that reaches the largest */
+                    if (two[c] == best) {
+                        at = c;
+                        break;
+                    }
                 if (at < 0)
                     continue;
-                double current = distance(p, lo, p, nodes[k]) + distance(p, nodes[k], p, hi);
+                double current = two[nodes[k]]; /* (the node lies between its neighbours) */
                 if (best > current * (1.0 + 1e-15)) {
                     nodes[k] = at;
                     moved = 1;
