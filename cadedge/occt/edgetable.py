@@ -232,8 +232,9 @@ class EdgeTable:
             rows = np.repeat(full, CHECK_POINTS).tolist()
             ref9 = self._occt_points([self.adaptors[r] for r in rows], u9.ravel().tolist(), ok, rows)
             ok[full] &= _agree(got9, ref9.reshape(got9.shape))
-        for r in np.flatnonzero(self.kind == LINE).tolist():  # the same expression as EdgeCurve.exact_length
-            self.exact[r] = float(np.linalg.norm(np.diff(got[r, [0, -1]], axis=0)))
+        lines = np.flatnonzero(self.kind == LINE)
+        for r, d in zip(lines.tolist(), got[lines, -1] - got[lines, 0]):  # as EdgeCurve.exact_length: norm's dot
+            self.exact[r] = math.sqrt(d.dot(d))
         if not ok.all():
             self._keep(np.flatnonzero(ok))
 
