@@ -117,7 +117,8 @@ class EdgeTable:
         #: Row k came from the dump (its ends are checked against its vertices, see _check).
         self.dumped = np.array(dumped + [False] * (len(rows) - len(dumped)), dtype=bool)
         self._dump = dump
-        parts.append(curves.curves())
+        if indices or not parts:  # (OCCT writes the adaptors' curves only when there are some)
+            parts.append(curves.curves())
         meta = np.concatenate([p.meta for p in parts])
         shift = np.cumsum([0] + [len(p.numbers) for p in parts])
         begin = np.concatenate([p.offsets[:-1] + at for p, at in zip(parts, shift)])
