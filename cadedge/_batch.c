@@ -719,7 +719,8 @@ static int refine_one(const Geometry *g, Py_ssize_t e, const Job *job, const Set
         }
         stops[n_stops++] = n - 1;
     }
-    Py_ssize_t count = ck_fewest(x.p, cum, n, stops, fixed, nodes, budget, 0.0, INFINITY);
+    /* (no dropping: the equidistributed placement below competes, as in cadedge.target) */
+    Py_ssize_t count = ck_fewest(x.p, cum, n, stops, fixed, nodes, budget, 0.0, INFINITY, 0);
     TRY(count >= 0);
     TRY(pts = malloc(3 * count * sizeof(double)));
     for (Py_ssize_t k = 0; k < count; k++)

@@ -19,6 +19,9 @@
 #include <string.h>
 
 #include "_kernels.h"
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 /* ---------------------------------------------------------------- buffers */
 
@@ -243,14 +246,38 @@ static Py_ssize_t cover(const double *p, Py_ssize_t n, const double *cum, double
     while (i < last) {
         while (stops[s] <= i)
             s++;
-        Py_ssize_t stop = stops[s], reach = stop;
-        for (Py_ssize_t j = i + 1; j <= stop; j++) {
+        Py_ssize_t stop = stops[s], reach = stop, j = i + 1;
+#ifdef __SSE2__
+        /* two chords at a time (the same correctly rounded values as distance()), tested in order */
+        const double *a = p + 3 * i;
+        __m128d ax = _mm_set1_pd(a[0]), ay = _mm_set1_pd(a[1]), az = _mm_set1_pd(a[2]);
+        for (; j + 1 <= stop; j += 2) {
+            const double *q = p + 3 * j;
+            __m128d dx = _mm_sub_pd(_mm_set_pd(q[3], q[0]), ax), dy = _mm_sub_pd(_mm_set_pd(q[4], q[1]), ay);
+            __m128d dz = _mm_sub_pd(_mm_set_pd(q[5], q[2]), az);
+            double chord[2];
+            _mm_storeu_pd(chord, _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)),
+                                                        _mm_mul_pd(dz, dz))));
+            if ((cum[j] - cum[i]) - chord[0] > cap || chord[0] > max_length) {
+                reach = j - 1;
+                goto reached;
+            }
+            if ((cum[j + 1] - cum[i]) - chord[1] > cap || chord[1] > max_length) {
+                reach = j;
+                goto reached;
+            }
+        }
+#endif
+        for (; j <= stop; j++) {
             double chord = distance(p, i, p, j);
             if ((cum[j] - cum[i]) - chord > cap || chord > max_length) {
                 reach = j - 1;
                 break;
             }
         }
+#ifdef __SSE2__
+    reached:
+#endif
         if (reach < i + 1)
             reach = i + 1;
         if (min_length > 0.0 && reach < stop && distance(p, i, p, reach) < min_length) {
@@ -273,10 +300,43 @@ static Py_ssize_t cover(const double *p, Py_ssize_t n, const double *cum, double
     return count;
 }
 
+/* two[c] = |p[c] - p[lo]| + |p[hi] - p[c]| for lo < c < hi (as distance(), two samples at a time where SSE2
+ * is there: the same correctly rounded square roots of the same sums); returns their largest (-1 if none). */
+static double chord_pairs(const double *p, int64_t lo, int64_t hi, double *two)
+{
+    int64_t c = lo + 1;
+    double most = -1.0;
+#ifdef __SSE2__
+    __m128d top = _mm_set1_pd(-1.0);
+    const double *a = p + 3 * lo, *b = p + 3 * hi;
+    __m128d ax = _mm_set1_pd(a[0]), ay = _mm_set1_pd(a[1]), az = _mm_set1_pd(a[2]);
+    __m128d bx = _mm_set1_pd(b[0]), by = _mm_set1_pd(b[1]), bz = _mm_set1_pd(b[2]);
+    for (; c + 1 < hi; c += 2) {
+        const double *q = p + 3 * c;
+        __m128d qx = _mm_set_pd(q[3], q[0]), qy = _mm_set_pd(q[4], q[1]), qz = _mm_set_pd(q[5], q[2]);
+        __m128d dx = _mm_sub_pd(qx, ax), dy = _mm_sub_pd(qy, ay), dz = _mm_sub_pd(qz, az);
+        __m128d ex = _mm_sub_pd(bx, qx), ey = _mm_sub_pd(by, qy), ez = _mm_sub_pd(bz, qz);
+        __m128d d1 = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz)));
+        __m128d d2 = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex, ex), _mm_mul_pd(ey, ey)), _mm_mul_pd(ez, ez)));
+        __m128d sum = _mm_add_pd(d1, d2);
+        _mm_storeu_pd(two + c, sum);
+        top = _mm_max_pd(top, sum);
+    }
+    double lanes[2];
+    _mm_storeu_pd(lanes, top);
+    most = dmax(lanes[0], lanes[1]);
+#endif
+    for (; c < hi; c++) {
+        two[c] = distance(p, lo, p, c) + distance(p, c, p, hi);
+        most = dmax(most, two[c]);
+    }
+    return most;
+}
+
 /* Move interior nodes (not on fixed samples) to the sample between their neighbours that maximises
  * the two chords; odd positions then even ones, until nothing moves or sweeps runs out. */
 static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps, const uint8_t *fixed,
-                   uint8_t *dirty)
+                   uint8_t *dirty, double *two)
 {
     /* A node is scanned again only after a neighbour moved: between the same neighbours the scan finds the
      * same best sample, which the node already holds or did not beat, so skipping it changes nothing. */
@@ -289,16 +349,16 @@ static void polish(const double *p, int64_t *nodes, Py_ssize_t count, int sweeps
                     continue;
                 dirty[k] = 0;
                 int64_t lo = nodes[k - 1], hi = nodes[k + 1];
-                double best = -1.0;
+                double best = chord_pairs(p, lo, hi, two);
                 int64_t at = -1;
-                for (int64_t c = lo + 1; c < hi; c++) {
-                    double two = distance(p, lo, p, c) + distance(p, c, p, hi);
-                    if (two > best)
-                        best = two, at = c;
-                }
+                for (int64_t c = lo + 1; c < hi; c++) /* the first sample that reaches the largest */
+                    if (two[c] == best) {
+                        at = c;
+                        break;
+                    }
                 if (at < 0)
                     continue;
-                double current = distance(p, lo, p, nodes[k]) + distance(p, nodes[k], p, hi);
+                double current = two[nodes[k]]; /* (the node lies between its neighbours) */
                 if (best > current * (1.0 + 1e-15)) {
                     nodes[k] = at;
                     moved = 1;
@@ -321,6 +381,7 @@ typedef struct {
     const uint8_t *fixed;
     int64_t *buf;
     uint8_t *dirty;
+    double *two; /* polish's scratch, n doubles */
     /* The last MEMO plans: each one's cover (raw, raw_count) and what polishing it gave (polished, miss).
      * The caps of a bisection often give a cover met before, whose polished grid is then copied instead of
      * made again (the same nodes: polishing depends on the cover alone). */
@@ -343,7 +404,7 @@ static Py_ssize_t plan(Cover *c, double cap, int64_t *nodes, double *miss)
     }
     memcpy(nodes, c->buf, count * sizeof(int64_t));
     if (count > 2)
-        polish(c->p, nodes, count, 4, c->fixed, c->dirty);
+        polish(c->p, nodes, count, 4, c->fixed, c->dirty, c->two);
     *miss = c->cum[c->n - 1] - chords(c->p, nodes, count);
     int k = c->next;
     c->next = (k + 1) % MEMO;
@@ -354,18 +415,20 @@ static Py_ssize_t plan(Cover *c, double cap, int64_t *nodes, double *miss)
 }
 
 /* The fewest node indices (greedy + bisection on the cap, polished) whose chords miss at most budget
- * of the samples' length, written to out (n entries); returns their count, -1 if out of memory. */
+ * of the samples' length, written to out (n entries); returns their count, -1 if out of memory. With drop,
+ * the polished grid is then tried with one node fewer, as long as that meets the budget. */
 Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int64_t *stops, const uint8_t *fixed,
-                     int64_t *out, double budget, double min_length, double max_length)
+                     int64_t *out, double budget, double min_length, double max_length, int drop)
 {
     int64_t *work = malloc((3 + 2 * MEMO) * n * sizeof(int64_t));
     uint8_t *dirty = malloc(n);
-    if (!work || !dirty) {
-        free(work), free(dirty);
+    double *two = malloc(n * sizeof(double));
+    if (!work || !dirty || !two) {
+        free(work), free(dirty), free(two);
         return -1;
     }
     int64_t *buf = work, *tmp = work + n, *best = out;
-    Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf, dirty};
+    Cover c = {p, cum, n, min_length, max_length, stops, fixed, buf, dirty, two};
     for (int k = 0; k < MEMO; k++)
         c.raw[k] = work + (3 + 2 * k) * n, c.polished[k] = work + (4 + 2 * k) * n, c.raw_count[k] = -1;
     double total = cum[n - 1], miss;
@@ -390,7 +453,7 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
     }
     /* The polished grid may leave room for fewer nodes: bisect for a cap that drops one, polish, check. */
     int64_t *fewer = work + 2 * n;
-    while (best_count > 2) {
+    while (drop && best_count > 2) {
         Py_ssize_t count = best_count, fewer_count = 0;
         double lo = 0.0, hi = total;
         int found = 0;
@@ -409,17 +472,17 @@ Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int
         if (!found)
             break;
         if (fewer_count > 2)
-            polish(p, fewer, fewer_count, 8, fixed, dirty);
+            polish(p, fewer, fewer_count, 8, fixed, dirty, two);
         if (total - chords(p, fewer, fewer_count) > budget)
             break;
         memcpy(best, fewer, fewer_count * sizeof(int64_t));
         best_count = fewer_count;
     }
-    free(work), free(dirty);
+    free(work), free(dirty), free(two);
     return best_count;
 }
 
-/* fewest(points, cum, stops, fixed, out, budget, min_length, max_length) -> count (see ck_fewest) */
+/* fewest(points, cum, stops, fixed, out, budget, min_length, max_length, drop) -> count (see ck_fewest) */
 static PyObject *fewest(PyObject *self, PyObject *args)
 {
     Buffers b = {.n = 0};
@@ -433,11 +496,18 @@ static PyObject *fewest(PyObject *self, PyObject *args)
     int64_t *out = ck_arg(&b, args, 4, I64, 1, NULL);
     if (!out || ck_num(args, 5, &budget) || ck_num(args, 6, &min_length) || ck_num(args, 7, &max_length))
         goto done;
+    if (PyTuple_GET_SIZE(args) < 9) {
+        PyErr_SetString(PyExc_TypeError, "too few arguments");
+        goto done;
+    }
+    int drop = PyObject_IsTrue(PyTuple_GET_ITEM(args, 8));
+    if (drop < 0)
+        goto done;
     if (n < 1) {
         PyErr_SetString(PyExc_ValueError, "fewest: no samples");
         goto done;
     }
-    Py_ssize_t count = ck_fewest(p, cum, n, stops, fixed, out, budget, min_length, max_length);
+    Py_ssize_t count = ck_fewest(p, cum, n, stops, fixed, out, budget, min_length, max_length, drop);
     result = count < 0 ? PyErr_NoMemory() : PyLong_FromSsize_t(count);
 done:
     ck_release(&b);
@@ -698,6 +768,7 @@ static PyMethodDef methods[] = {
     {"place", place, METH_VARARGS, "Parameters at equal steps of a measure, piece by piece."},
     {"de_boor", de_boor, METH_VARARGS, "Spline points by de Boor's algorithm."},
     {"evaluate_edges", ck_evaluate_edges, METH_VARARGS, "Points of many edges' curves from a geometry table."},
+    {"edge_lengths", ck_edge_lengths, METH_VARARGS, "Lengths of many edges from a geometry table (Gauss-Legendre)."},
     {"refine_edges", ck_refine_edges, METH_VARARGS, "Target-mode grids of many edges in one call."},
     {"parse_curves", ck_parse_curves, METH_VARARGS, "Curves written by OCCT's BinTools_CurveSet as geometry table rows."},
     {"parse_shapes", ck_parse_shapes, METH_VARARGS, "A shape written by OCCT's BinTools_ShapeSet: topology and edges."},

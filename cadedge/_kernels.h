@@ -53,7 +53,7 @@ void ck_children(Py_ssize_t n, const double *ua, const double *um, const double 
                  const double *pq, double *c_ua, double *c_um, double *c_ub, double *c_pa, double *c_pm,
                  double *c_pb, double *c_ratio);
 Py_ssize_t ck_fewest(const double *p, const double *cum, Py_ssize_t n, const int64_t *stops, const uint8_t *fixed,
-                     int64_t *out, double budget, double min_length, double max_length);
+                     int64_t *out, double budget, double min_length, double max_length, int drop);
 int ck_deficit_measure(const double *p, const double *cum, Py_ssize_t n, const int64_t *corners, Py_ssize_t nc,
                        double *measure);
 void ck_interp(const double *x, Py_ssize_t nx, const double *xp, const double *fp, Py_ssize_t np_, double *out);
@@ -62,10 +62,12 @@ Py_ssize_t ck_place(const double *params, const double *cum, const double *measu
 int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_t n, Py_ssize_t dim,
                const double *u, Py_ssize_t nu, double *out, long degree);
 
-/* cadedge/_batch.c's and cadedge/_shapedump.c's functions, registered by cadedge/_kernels.c's module. */
+/* cadedge/_batch.c's, cadedge/_lengths.c's and cadedge/_shapedump.c's functions, registered by cadedge/_kernels.c's
+ * module. */
 PyObject *ck_evaluate_edges(PyObject *self, PyObject *args);
 PyObject *ck_refine_edges(PyObject *self, PyObject *args);
 PyObject *ck_parse_curves(PyObject *self, PyObject *args);
 PyObject *ck_parse_shapes(PyObject *self, PyObject *args);
+PyObject *ck_edge_lengths(PyObject *self, PyObject *args);
 
 #endif

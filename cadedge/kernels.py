@@ -1,5 +1,5 @@
 """numpy-facing wrappers of the compiled inner loops (``cadedge/_kernels.c``, ``_batch.c``, ``_bintools.c``,
-``_shapedump.c``).
+``_shapedump.c``, ``_lengths.c``).
 
 A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
 dominated; :func:`refine_edges` runs the whole target mode of many edges in one call. They are plain C
@@ -49,11 +49,11 @@ def children(ua: np.ndarray, um: np.ndarray, ub: np.ndarray, pa: np.ndarray, pm:
 
 
 def fewest(points: np.ndarray, cum: np.ndarray, budget: float, min_length: float, max_length: float,
-           stops: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+           stops: np.ndarray, fixed: np.ndarray, drop: bool = True) -> np.ndarray:
     """Greedy cover + bisection on the cap + polish (see :func:`cadedge.placement.fewest_nodes`)."""
     out = np.empty(len(points), dtype=np.int64)
     count = _kernels.fewest(_f64(points), _f64(cum), np.ascontiguousarray(stops, dtype=np.int64),
-                            np.ascontiguousarray(fixed, dtype=np.bool_), out, budget, min_length, max_length)
+                            np.ascontiguousarray(fixed, dtype=np.bool_), out, budget, min_length, max_length, drop)
     return out[:count]
 
 
@@ -97,6 +97,16 @@ def evaluate_edges(kind: np.ndarray, gofs: np.ndarray, ints: np.ndarray, gdata: 
     u = _f64(u).ravel()
     out = np.empty((len(u), 3))
     _kernels.evaluate_edges(kind, gofs, ints, gdata, np.ascontiguousarray(edge, dtype=np.int64), u, out)
+    return out
+
+
+def edge_lengths(kind: np.ndarray, gofs: np.ndarray, ints: np.ndarray, gdata: np.ndarray, hofs: np.ndarray,
+                 hdata: np.ndarray, domain: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The lengths of the geometry table's rows ``rows`` over their domains (n, 2), by adaptive Gauss-Legendre
+    quadrature (see ``cadedge/_lengths.c``); NaN for a row it does not integrate to its tolerance."""
+    rows = np.ascontiguousarray(rows, dtype=np.int64)
+    out = np.empty(len(rows))
+    _kernels.edge_lengths(kind, gofs, ints, gdata, hofs, _f64(hdata), _f64(domain), rows, out)
     return out
 
 

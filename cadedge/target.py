@@ -123,10 +123,11 @@ def refine_target(ev, a: float, b: float, *, ald: float, min_length: float | Non
         limit = ald * (1.0 - MARGIN) * total
     budget = max(limit - remainder, 0.0)
     corner_idx = np.searchsorted(u, ex.corners) if len(ex.corners) else np.zeros(0, dtype=int)
+    competing = min_length is None and max_length is None  # the equidistributed placement below competes
     nodes = fewest_nodes(p, ex.cumulative, budget, min_length=min_length, max_length=max_length,
-                         forced=corner_idx)
+                         forced=corner_idx, drop=not competing)
     params, points = u[nodes], p[nodes]
-    if min_length is None and max_length is None:
+    if competing:
         eq = _equidistributed(ev, ex, corner_idx, total, limit, budget, min_segments=len(corner_idx) + 1)
         if eq is not None and (len(eq[0]) < len(params) or (
                 len(eq[0]) == len(params) and polyline_length(eq[1]) > chord_length(p, nodes))):

@@ -13,35 +13,50 @@ jobs, wall time mostly measures the wait for a core):
 - **refine_shape**: the whole call on the loaded shape, as *cadedge s* there;
 - its phases, each run again on its own: **topology** (``Topology``), of which **dump** (OCCT writing the
   shape and ``cadedge/_shapedump.c`` parsing it, ``shapedump.read``) is also timed alone; **edge table**
-  (every edge's curve row, its length and the check against OCCT, ``EdgeTable``), of which **check** and
-  **lengths** are also timed alone; and **compiled refine** (``refine_table`` on all rows); **rest** is
-  the whole call minus topology, table and compiled refine (the shape's tolerance scan on loading, the
+  (every edge's curve row, its length and the check against OCCT, ``EdgeTable``), of which **check** is the
+  table's time less that of a table built without its check on a fresh topology (so it includes the OCCT
+  edges and adaptors only the check builds) and **lengths** (``cadedge/_lengths.c``'s quadrature on the rows
+  it integrates: ellipses, hyperbolas, splines) is timed alone; and **compiled refine** (``refine_table`` on all
+  rows); **rest** is the whole call minus topology, table and compiled refine (the tolerance scan, the
   per-edge grid objects, vertex spacings).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import statistics
 import time
 from pathlib import Path
 
 import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
-from OCP.GCPnts import GCPnts_AbscissaPoint, GCPnts_TangentialDeflection
+from OCP.GCPnts import GCPnts_TangentialDeflection
+from OCP.GeomAbs import GeomAbs_Circle, GeomAbs_Line
 
 import bench
 import corpus_path
 from corpus_path import require_corpus
 
-from cadedge.occt.edgecurve import LENGTH_TOL
+from cadedge import kernels
 from cadedge.occt import shapedump
 from cadedge.occt.edgetable import EdgeTable, refine_table
 from cadedge.occt.shape import refine_shape
 from cadedge.occt.topology import Topology
 
 LARGEST = ("live-clones__gmsh__917_fusee.stp", "LLNL__axom_data__boxed_sphere.step")
-PHASES = ("OCCT", "refine_shape", "topology", "dump", "edge table", "check", "lengths", "compiled refine")
+PHASES = ("OCCT", "refine_shape", "topology", "dump", "edge table", "unchecked table", "lengths", "compiled refine")
+
+
+@contextlib.contextmanager
+def _unchecked():
+    """EdgeTable without its check against OCCT (to time the check by difference)."""
+    check = EdgeTable._check
+    EdgeTable._check = lambda self: None
+    try:
+        yield
+    finally:
+        EdgeTable._check = check
 
 
 def breakdown(path: Path, eps: float, repeats: int, clock=time.perf_counter) -> tuple[int, dict[str, float]]:
@@ -68,17 +83,23 @@ def breakdown(path: Path, eps: float, repeats: int, clock=time.perf_counter) -> 
         timed("refine_shape", lambda: refine_shape(shape, ald=eps))
         topo = timed("topology", lambda: Topology(shape))
         timed("dump", lambda: shapedump.read(shape))
-        rows = [i for i in range(len(topo.edges)) if not topo.is_degenerate(i)]
+        rows = topo.non_degenerate()
         table = timed("edge table", lambda: EdgeTable(topo.edges, rows, topo.dump))
-        timed("check", table._check)
-        timed("lengths", lambda: [GCPnts_AbscissaPoint.Length_s(table.adaptor(r), a, b, LENGTH_TOL)
-                                  for r, (a, b) in enumerate(table.domain.tolist())])
+        fresh = Topology(shape)  # its OCCT edges not built yet, as in a refine_shape call
+        with _unchecked():
+            timed("unchecked table", lambda: EdgeTable(fresh.edges, rows, fresh.dump))
+        curved = [r for r, kind in enumerate(table.kinds) if kind not in (GeomAbs_Line, GeomAbs_Circle)]
+        timed("lengths", lambda: kernels.edge_lengths(table.kind, table.gofs, table.ints, table.gdata, table.hofs,
+                                                      table.hdata, table.domain, curved))
         n = len(table)
         ends = np.zeros((n, 3))
         timed("compiled refine", lambda: refine_table(table, slice(0, n), np.full(n, eps), ends, ends))
     med = {k: statistics.median(v) for k, v in times.items()}
-    med["rest"] = med["refine_shape"] - med["topology"] - med["edge table"] - med["compiled refine"]
-    return len(model.edges), med
+    unchecked = med.pop("unchecked table")
+    rest = med["refine_shape"] - med["topology"] - med["edge table"] - med["compiled refine"]
+    order = ("OCCT", "refine_shape", "topology", "dump", "edge table", "check", "lengths", "compiled refine", "rest")
+    med = {**med, "check": med["edge table"] - unchecked, "rest": rest}
+    return len(model.edges), {k: med[k] for k in order}
 
 
 def main() -> None:

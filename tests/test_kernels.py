@@ -38,6 +38,25 @@ def test_fewest_nodes_meets_the_budget_keeps_forced_nodes_and_is_minimal():
     assert cum[-1] - np.linalg.norm(np.diff(p[even], axis=0), axis=1).sum() > budget
 
 
+def test_without_dropping_the_grid_meets_the_budget_with_no_fewer_nodes():
+    """``drop=False`` (target mode, where the equidistributed placement competes) skips the search for a grid
+    one node shorter: the same budget met, never fewer nodes than with it (here one more once)."""
+    rng = np.random.default_rng(3)
+    dropped = 0
+    for n, turn in ((400, 3.0), (150, 5.0), (900, 1.0)):
+        p, cum = _arc(n, turn)
+        p[1:-1] += rng.normal(scale=1e-4, size=(n - 2, 3))  # an uneven curve: the drop can find room
+        cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
+        for share in (1e-2, 1e-3, 1e-4):
+            budget = share * cum[-1]
+            fast, full = (fewest_nodes(p, cum, budget, drop=d) for d in (False, True))
+            for nodes in (fast, full):
+                assert cum[-1] - np.linalg.norm(np.diff(p[nodes], axis=0), axis=1).sum() <= budget
+            assert len(full) <= len(fast)
+            dropped += len(fast) - len(full)
+    assert dropped == 1
+
+
 def test_equidistribution_of_a_circle_is_uniform():
     p, cum = _arc(2001, turn=2.0)
     u = np.linspace(0.0, 2.0, 2001)

@@ -15,7 +15,9 @@ from OCP.TopAbs import TopAbs_COMPOUND, TopAbs_SOLID  # noqa: E402
 from OCP.TopoDS import TopoDS_Shape  # noqa: E402
 
 from cadedge.errors import InputError  # noqa: E402
-from cadedge.occt.reader import LoadedShape, _diagonal_at_least, load_shape  # noqa: E402
+from cadedge.occt import shapedump  # noqa: E402
+from cadedge.occt.reader import (LoadedShape, _diagonal_at_least, _diagonal_from_dump, load_shape,  # noqa: E402
+                                 tolerance_warnings)
 from conftest import CORPUS, FIXTURE_FILES, FIXTURES, corpus_params  # noqa: E402
 
 EMPTY_STEP = """ISO-10303-21;
@@ -204,3 +206,20 @@ def test_the_vertex_sample_bounds_the_box_diagonal_from_below(path):
     shape = load_shape(path).shape
     for samples in (2, 32, 10_000):
         assert _diagonal_at_least(shape, 0.0, samples) <= _diag(shape)
+
+
+@pytest.mark.parametrize("path", FIXTURE_FILES + corpus_params(), ids=lambda p: p.name)
+def test_the_scan_from_the_dump_warns_as_the_ocp_scan(path):
+    """refine_shape scans the tolerances from the shape's dump where there is one (else through OCP): every
+    vertex bounds the box from below, and the warnings (with the file's declared precision, none, and 1e-9,
+    which brings the box in on most models) are the OCP scan's; refine_shape passes on load_shape's warnings."""
+    from cadedge.occt.shape import refine_shape
+
+    loaded = load_shape(path)
+    dump = shapedump.read(loaded.shape)
+    if dump is not None:
+        assert _diagonal_from_dump(dump, 0.0) <= _diag(loaded.shape)
+        for declared in (loaded.declared, None, 1e-9):
+            assert tolerance_warnings(loaded.shape, loaded.units, declared, dump) == \
+                   tolerance_warnings(loaded.shape, loaded.units, declared)
+    assert refine_shape(path, ald=0.1).warnings[:len(loaded.warnings)] == loaded.warnings

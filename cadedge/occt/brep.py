@@ -49,7 +49,7 @@ def sniff(path: Path, given: str) -> tuple[int, int]:
 
 def read_brep(path: Path, given: str, *, allow_partial: bool = False) -> LoadedShape:
     """Read an ASCII BREP file; InputError for bad, empty or (unless allowed) partial files."""
-    from .reader import quiet_occt, tolerance_warnings
+    from .reader import quiet_occt
 
     faces, solids = sniff(path, given)
     shape = TopoDS_Shape()
@@ -62,6 +62,4 @@ def read_brep(path: Path, given: str, *, allow_partial: bool = False) -> LoadedS
         raise InputError(f"{given}: corrupt BREP file (OCCT could not read it)")
     got_faces, got_solids = transferred(shape)
     done = Completeness(faces=(got_faces, faces), solids=(got_solids, solids), roots=(int(not shape.IsNull()), 1))
-    loaded = accept(LoadedShape(shape=shape, source=path.name, units="mm"), done, given, "BREP", allow_partial)
-    loaded.warnings += tolerance_warnings(shape, "mm")
-    return loaded
+    return accept(LoadedShape(shape=shape, source=path.name, units="mm"), done, given, "BREP", allow_partial)

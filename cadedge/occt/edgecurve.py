@@ -90,14 +90,21 @@ class EdgeCurve:
         return np.linspace(a, b, DEFAULT_ROOTS + 1)
 
     def exact_length(self, a: float, b: float) -> float | None:
-        """The length of the edge between ``a`` and ``b``: closed form for a line or circle, else OCCT's
-        adaptive Gauss integration (``GCPnts_AbscissaPoint::Length``) to ``LENGTH_TOL``, which agrees
-        with Richardson-extrapolated dense polylines to about 1e-9 on the corpus."""
+        """The length of the edge between ``a`` and ``b``: closed form for a line or circle; over the whole
+        domain of a curve the edge table takes, the table's (``cadedge/_lengths.c``'s quadrature, as the
+        compiled path has it); else OCCT's adaptive Gauss integration (``GCPnts_AbscissaPoint::Length``) to
+        ``LENGTH_TOL``, which agrees with Richardson-extrapolated dense polylines to about 1e-9 on the corpus."""
         try:
             if self.fast is not None and self.kind == GeomAbs_Line:
                 return float(np.linalg.norm(np.diff(self.fast(np.array([a, b])), axis=0)))
             if self.fast is not None and self.kind == GeomAbs_Circle:
                 return float(self.adaptor.Circle().Radius() * (b - a))
+            if (a, b) == self.domain:
+                from .edgetable import EdgeTable  # (which builds on this module)
+
+                table = EdgeTable([self.edge], [0])
+                if len(table):
+                    return float(table.exact[0])
             return float(GCPnts_AbscissaPoint.Length_s(self.adaptor, a, b, LENGTH_TOL))
         except Standard_Failure:
             return None  # the refiner then relies on its own estimate

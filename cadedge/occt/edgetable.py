@@ -2,14 +2,15 @@
 
 Each edge whose 3-D curve is a line, circle, ellipse, hyperbola, B-spline or Bezier curve gets a row of
 :class:`EdgeTable`'s arrays. Where the shape was read in one call (:mod:`cadedge.occt.shapedump`) the row
-is the curve OCCT wrote for the edge, with no OCP call but OCCT's length integration (ellipses, hyperbolas
-and splines). Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
+is the curve OCCT wrote for the edge, with no OCP call. Otherwise, and for the curves the dump gives differently from the adaptor (periodic splines,
 trimmed curves), the row is read through the edge's ``BRepAdaptor_Curve`` (which applies the edge's
 location), the adaptors' curve handles written by OCCT in one call and parsed in C
 (:mod:`cadedge.occt.curvedump`). The table's evaluation (``cadedge/_batch.c``, the same formulas as
 :mod:`cadedge.occt.fasteval`, and OCCT's own for a hyperbola) is then checked against OCCT's (``BRepAdaptor_Curve.D0``, see
 :meth:`EdgeTable._check`); an edge that disagrees by more than ``fasteval.RTOL`` of its size, or that
 OCCT cannot read, is left out and refined by the per-edge path (:class:`cadedge.occt.edgecurve.EdgeCurve`).
+The lengths of ellipses, hyperbolas and splines are integrated on the table's rows in C (``cadedge/_lengths.c``,
+within 1e-13 of OCCT's ``GCPnts_AbscissaPoint::Length`` on every corpus edge), OCCT's where that gives none.
 """
 
 from __future__ import annotations
@@ -33,11 +34,13 @@ from .fasteval import CHECK_POINTS, RTOL
 from .shapedump import ShapeDump
 
 LINE, CONIC, SPLINE, HYPERBOLA = 0, 1, 2, 3
-#: The check points (of ``CHECK_POINTS``) a row read from the dump is evaluated at by OCCT: two interior ones.
-PROBES = (2, 6)
+#: The check point (of ``CHECK_POINTS``) a row read from the dump is evaluated at by OCCT: the middle one.
+PROBE = CHECK_POINTS // 2
 #: The adaptor's curve type of each curve type the table reads, by BinTools type code.
 GEOMABS = {1: GeomAbs_Line, 2: GeomAbs_Circle, 3: GeomAbs_Ellipse, 5: GeomAbs_Hyperbola, 6: GeomAbs_BezierCurve,
            7: GeomAbs_BSplineCurve}
+#: Their names in :data:`cadedge.occt.topology.CURVE_TYPES` (``curve_type_name`` of the adaptor's type).
+NAMES = {1: "Line", 2: "Circle", 3: "Ellipse", 5: "Hyperbola", 6: "BezierCurve", 7: "BSplineCurve"}
 
 
 def _from_dump(dump: ShapeDump, indices: np.ndarray) -> np.ndarray:
@@ -57,12 +60,13 @@ class EdgeTable:
 
     ``kind``, ``gofs``, ``ints`` and ``gdata`` are the geometry table of ``cadedge/_batch.c``; ``domain``
     (n, 2), ``exact`` (n, each edge's length or NaN), ``hofs``/``hdata`` (the knots a periodic spline's
-    exploration starts from) go with them. ``adaptors[k]`` and ``kinds[k]`` belong to row ``k``.
+    exploration starts from) go with them. ``adaptors[k]``, ``kinds[k]`` and ``names[k]`` (its curve type's
+    name) belong to row ``k``.
     """
 
     def __init__(self, edges: Sequence, indices: list[int], dump: ShapeDump | None = None):
         self._edges = edges
-        rows, adaptors, kinds, lengths, domain, ids, dumped, splines = [], [], [], [], [], [], [], {}
+        rows, adaptors, kinds, domain, ids, dumped, splines = [], [], [], [], [], [], {}
         parts = [dump.curves] if dump is not None else []
         base = len(dump.curves.meta) if dump is not None else 0  # the curves' indices continue after the dump's
         if dump is not None:  # the rows the dump holds, without an OCP call
@@ -71,14 +75,7 @@ class EdgeTable:
             rows, ids = indices[taken].tolist(), dump.edge_curve[indices[taken]].tolist()
             domain = dump.edge_range[indices[taken]].tolist()
             kinds = [GEOMABS[t] for t in dump.curves.meta[np.asarray(ids, dtype=np.int64) - 1, TYPE].tolist()]
-            adaptors, lengths = [None] * len(rows), [math.nan] * len(rows)
-            for k, t in enumerate(kinds):  # OCCT's length, as the per-edge path below takes it
-                if t != GeomAbs_Line and t != GeomAbs_Circle:
-                    try:
-                        adaptors[k] = ad = BRepAdaptor_Curve(edges[rows[k]])
-                        lengths[k] = float(GCPnts_AbscissaPoint.Length_s(ad, *domain[k], LENGTH_TOL))
-                    except Standard_Failure:
-                        rows[k] = -1  # left to the per-edge path, as below
+            adaptors = [None] * len(rows)
             indices = indices[~taken].tolist()
             dumped = [True] * len(rows)
         curves = CurveSet()
@@ -90,7 +87,6 @@ class EdgeTable:
                     continue
                 a, b = ad.FirstParameter(), ad.LastParameter()
                 t = ad.GetType()
-                length = math.nan
                 if t == GeomAbs_Line:
                     curve = Geom_Line(ad.Line())
                 elif t == GeomAbs_Circle:
@@ -103,8 +99,6 @@ class EdgeTable:
                     curve = ad.BSpline() if t == GeomAbs_BSplineCurve else ad.Bezier()
                 else:
                     continue
-                if t != GeomAbs_Line and t != GeomAbs_Circle:  # (a line's and a circle's are set below)
-                    length = float(GCPnts_AbscissaPoint.Length_s(ad, a, b, LENGTH_TOL))
                 index = base + add(curve)
             except Standard_Failure:
                 continue  # the per-edge path reports what OCCT cannot do
@@ -115,16 +109,16 @@ class EdgeTable:
             kinds.append(t)
             ids.append(index)
             domain.append((a, b))
-            lengths.append(length)
-        if dump is not None and (len(rows) > len(dumped) or -1 in rows):  # rows in edge order, none failed
+        if dump is not None and len(rows) > len(dumped):  # rows in edge order
             dumped += [False] * (len(rows) - len(dumped))
-            order = [k for k in sorted(range(len(rows)), key=rows.__getitem__) if rows[k] >= 0]
-            rows, adaptors, kinds, ids, domain, lengths, dumped = (
-                [x[k] for k in order] for x in (rows, adaptors, kinds, ids, domain, lengths, dumped))
+            order = sorted(range(len(rows)), key=rows.__getitem__)
+            rows, adaptors, kinds, ids, domain, dumped = (
+                [x[k] for k in order] for x in (rows, adaptors, kinds, ids, domain, dumped))
         #: Row k came from the dump (its ends are checked against its vertices, see _check).
         self.dumped = np.array(dumped + [False] * (len(rows) - len(dumped)), dtype=bool)
         self._dump = dump
-        parts.append(curves.curves())
+        if indices or not parts:  # (OCCT writes the adaptors' curves only when there are some)
+            parts.append(curves.curves())
         meta = np.concatenate([p.meta for p in parts])
         shift = np.cumsum([0] + [len(p.numbers) for p in parts])
         begin = np.concatenate([p.offsets[:-1] + at for p, at in zip(parts, shift)])
@@ -159,6 +153,7 @@ class EdgeTable:
                 hints += hint
                 hint_sizes[r] = len(hint)
         self.rows, self.adaptors, self.kinds = rows, adaptors, kinds  # adaptors[k] None until needed
+        self.names = [NAMES[t] for t in meta[c, TYPE].tolist()]
         self.kind = meta[c, KIND].copy()
         self.gofs = gofs
         self.ints = meta[c][:, [DEGREE, KNOTS, DIM]].copy()
@@ -167,10 +162,29 @@ class EdgeTable:
         self.hofs = np.zeros(len(c) + 1, dtype=np.int64)
         np.cumsum(hint_sizes, out=self.hofs[1:])
         self.hdata = np.array(hints, dtype=float)
-        self.exact = np.array(lengths, dtype=float)
+        self.exact = np.full(len(rows), math.nan)
         circles = np.flatnonzero(meta[c, TYPE] == CIRCLE)  # closed form, as EdgeCurve.exact_length
         self.exact[circles] = gdata[gofs[circles] + 9] * (self.domain[circles, 1] - self.domain[circles, 0])
+        self._lengths(np.flatnonzero((self.kind != LINE) & (meta[c, TYPE] != CIRCLE)))
         self._check()
+
+    def _lengths(self, curved: np.ndarray) -> None:
+        """Set the lengths of the rows ``curved`` (ellipses, hyperbolas, splines) by ``cadedge/_lengths.c``'s
+        quadrature, or where it gives none by OCCT's (``GCPnts_AbscissaPoint::Length`` to ``LENGTH_TOL``); drop
+        a row OCCT cannot measure either (the per-edge path reports it)."""
+        if not len(curved):
+            return
+        got = kernels.edge_lengths(self.kind, self.gofs, self.ints, self.gdata, self.hofs, self.hdata, self.domain,
+                                   curved)
+        self.exact[curved] = got
+        failed = []
+        for r in curved[np.isnan(got)].tolist():
+            try:
+                self.exact[r] = float(GCPnts_AbscissaPoint.Length_s(self.adaptor(r), *self.domain[r], LENGTH_TOL))
+            except Standard_Failure:
+                failed.append(r)
+        if failed:
+            self._keep(np.setdiff1d(np.arange(len(self.rows)), failed))
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -194,55 +208,75 @@ class EdgeTable:
         ``CHECK_POINTS`` parameters against ``BRepAdaptor_Curve::D0``, to ``RTOL`` of the curve's size. A row
         read from the dump holds the numbers OCCT itself wrote, in a stream whose every size and count was
         checked; its evaluated ends must lie on its vertices (within their tolerances: that the curve, its
-        range and its placement are the edge's) and two interior points must agree with OCCT's as above
+        range and its placement are the edge's) and its middle check point must agree with OCCT's as above
         (that the table evaluates that curve as OCCT does). A dump row whose ends miss its vertices (a
         loose vertex) gets the full check."""
         n = len(self.rows)
         if not n:
             return
         a, b = self.domain[:, 0], self.domain[:, 1]
-        u = np.linspace(a, b, CHECK_POINTS, axis=1)
-        u[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]  # off the knots, as fast_evaluator
-        flat = u.ravel()
-        got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), CHECK_POINTS), flat).reshape(n, CHECK_POINTS, 3)
-        probe = self.dumped & self._ends_on_vertices(got)
-        ref = got.copy()  # OCCT's points where checked
-        values, full = flat.tolist(), range(CHECK_POINTS)
+        u = np.stack([a, a + (b - a) / (CHECK_POINTS - 1) * (PROBE + 0.1234), b], axis=1)  # off the knots
+        got = self.evaluate(np.repeat(np.arange(n, dtype=np.int64), 3), u.ravel()).reshape(n, 3, 3)
+        probed = self.dumped & self._ends_on_vertices(got[:, [0, 2]])
         ok = np.ones(n, dtype=bool)
-        point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
-        coord = point.Coord
-        at, coords = [], []  # flat indices into (n * CHECK_POINTS) and OCCT's points there, set in one go
-        adaptor, adaptors = self.adaptor, self.adaptors
-        for r, probed in enumerate(probe.tolist()):
-            ad = adaptors[r]
-            d0 = (adaptor(r) if ad is None else ad).D0
-            base = r * CHECK_POINTS
-            try:
-                for k in PROBES if probed else full:
-                    d0(values[base + k], point)
-                    coords.append(coord())
-                    at.append(base + k)
-            except Standard_Failure:
-                ok[r] = False
-        if at:
-            ref.reshape(-1, 3)[at] = coords
-        size = np.maximum(np.abs(ref).max(axis=(1, 2)), np.ptp(ref, axis=1).max(axis=1))
-        size = np.maximum(size, math.ulp(1.0))
-        ok &= np.all(np.abs(got - ref) <= (RTOL * size)[:, None, None], axis=(1, 2))
+        self._build_adaptors()
+        one = np.flatnonzero(probed)
+        ref = got.copy()  # OCCT's points where checked
+        ref[one, 1] = self._occt_points([self.adaptors[r] for r in one.tolist()], u[one, 1].tolist(), ok, one.tolist())
+        ok[one] &= _agree(got[one], ref[one])
+        full = np.flatnonzero(~probed)
+        if len(full):  # every check point, as fast_evaluator
+            a, b = a[full], b[full]
+            u9 = np.linspace(a, b, CHECK_POINTS, axis=1)
+            u9[:, 1:-1] += ((b - a) / (CHECK_POINTS - 1) * 0.1234)[:, None]
+            got9 = self.evaluate(np.repeat(full, CHECK_POINTS), u9.ravel()).reshape(len(full), CHECK_POINTS, 3)
+            rows = np.repeat(full, CHECK_POINTS).tolist()
+            ref9 = self._occt_points([self.adaptors[r] for r in rows], u9.ravel().tolist(), ok, rows)
+            ok[full] &= _agree(got9, ref9.reshape(got9.shape))
         lines = np.flatnonzero(self.kind == LINE)
-        for r in lines.tolist():  # the same expression as EdgeCurve.exact_length
-            self.exact[r] = float(np.linalg.norm(np.diff(got[r, [0, -1]], axis=0)))
+        for r, d in zip(lines.tolist(), got[lines, -1] - got[lines, 0]):  # as EdgeCurve.exact_length: norm's dot
+            self.exact[r] = math.sqrt(d.dot(d))
         if not ok.all():
             self._keep(np.flatnonzero(ok))
 
-    def _ends_on_vertices(self, got: np.ndarray) -> np.ndarray:
-        """Rows whose evaluated first and last points lie within their vertices' tolerances of them."""
+    def _build_adaptors(self) -> None:
+        """Every row's ``BRepAdaptor_Curve`` (the check evaluates each row through its own)."""
+        missing = [r for r, ad in enumerate(self.adaptors) if ad is None]
+        if missing:
+            take = getattr(self._edges, "take", None)
+            at = [self.rows[r] for r in missing]
+            edges = take(at) if take is not None else [self._edges[i] for i in at]
+            for r, edge in zip(missing, edges):
+                self.adaptors[r] = BRepAdaptor_Curve(edge)
+
+    @staticmethod
+    def _occt_points(adaptors: list, u: list[float], ok: np.ndarray, rows: list[int]) -> np.ndarray:
+        """``adaptors[k].D0(u[k])`` for every k, (len(u), 3); where OCCT fails, ``ok[rows[k]]`` is cleared
+        (and the point is NaN)."""
+        point = gp_Pnt()  # filled by each D0 call: no new point object per evaluation
+        coord = point.Coord
+        try:
+            out = [(ad.D0(x, point), coord())[1] for ad, x in zip(adaptors, u)]
+        except Standard_Failure:  # again one by one, to know which
+            out = []
+            for ad, x, r in zip(adaptors, u, rows):
+                try:
+                    ad.D0(x, point)
+                    out.append(coord())
+                except Standard_Failure:
+                    ok[r] = False
+                    out.append((math.nan,) * 3)
+        return np.array(out, dtype=float).reshape(-1, 3)
+
+    def _ends_on_vertices(self, ends: np.ndarray) -> np.ndarray:
+        """Rows whose evaluated first and last points ``ends`` (n, 2, 3) lie within their vertices' tolerances of
+        them."""
         if self._dump is None:
-            return np.zeros(len(got), dtype=bool)
+            return np.zeros(len(ends), dtype=bool)
         d = self._dump
-        ends = d.edge_vertices[self.rows] - 1
-        gap = np.linalg.norm(got[:, [0, -1]] - d.vertex_points[ends], axis=2)
-        return np.all(gap <= d.vertex_tolerance[ends], axis=1)
+        at = d.edge_vertices[self.rows] - 1
+        gap = np.linalg.norm(ends - d.vertex_points[at], axis=2)
+        return np.all(gap <= d.vertex_tolerance[at], axis=1)
 
     def _keep(self, keep: np.ndarray) -> None:
         """Only the rows ``keep`` (increasing)."""
@@ -255,7 +289,20 @@ class EdgeTable:
         self.rows = [self.rows[r] for r in keep]
         self.adaptors = [self.adaptors[r] for r in keep]
         self.kinds = [self.kinds[r] for r in keep]
+        self.names = [self.names[r] for r in keep]
         self.dumped = self.dumped[keep]
+
+
+def _agree(got: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """Rows (of (n, points, 3)) whose points agree with OCCT's ``ref`` to ``RTOL`` of the row's size (the largest
+    coordinate or extent of its points, as ``fasteval``)."""
+    n = len(got)
+    if not n:
+        return np.ones(0, dtype=bool)
+    flat = ref.reshape(n, -1)
+    size = np.maximum(np.abs(flat).max(axis=1), (ref.max(axis=1) - ref.min(axis=1)).max(axis=1))
+    size = np.maximum(size, math.ulp(1.0))
+    return (np.abs(got - ref).reshape(n, -1) <= (RTOL * size)[:, None]).all(axis=1)
 
 
 def _periodic_knots(bs, a: float, b: float) -> list[float]:

@@ -99,10 +99,6 @@ def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferre
 
 def read_iges(path: Path, given: str, *, allow_partial: bool = False) -> LoadedShape:
     """Read and transfer an IGES file; InputError for bad, empty or (unless allowed) partial files."""
-    from .reader import tolerance_warnings
-
     t = transfer_iges(path, given)
-    loaded = accept(LoadedShape(shape=t.shape, source=path.name, units=t.units, warnings=t.warnings), t.done,
-                    given, "IGES", allow_partial)
-    loaded.warnings += tolerance_warnings(t.shape, t.units)
-    return loaded
+    return accept(LoadedShape(shape=t.shape, source=path.name, units=t.units, warnings=t.warnings), t.done,
+                  given, "IGES", allow_partial)

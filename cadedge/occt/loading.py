@@ -42,12 +42,15 @@ _saved_printers: list[Any] = []
 
 @dataclass
 class LoadedShape:
-    """A shape ready for refinement: ``units`` is its length unit, ``warnings`` one line each."""
+    """A shape ready for refinement: ``units`` is its length unit, ``warnings`` one line each, ``declared``
+    the uncertainty the file declares (in the shape's coordinates; None if it declares none), for the tolerance
+    scan (:func:`cadedge.occt.reader.tolerance_warnings`)."""
 
     shape: TopoDS_Shape
     source: str
     units: str = "mm"
     warnings: list[str] = field(default_factory=list)
+    declared: float | None = None
 
 
 @contextmanager

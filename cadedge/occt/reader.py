@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from OCP.Bnd import Bnd_Box
 from OCP.BRep import BRep_Builder, BRep_Tool
@@ -27,6 +27,9 @@ from ..formats import INPUT_FORMATS
 from .compat import TopoDS, TopTools_IndexedMapOfShape
 from .loading import LoadedShape, quiet_occt
 
+if TYPE_CHECKING:  # (shapedump needs numpy, which ``cadedge info`` does not import)
+    from .shapedump import ShapeDump
+
 __all__ = ["LoadedShape", "load_shape", "quiet_occt", "tolerance_warnings", "SUFFIXES"]
 
 #: File suffixes (lower case) and the format they are read as (:data:`cadedge.formats.INPUT_FORMATS`).
@@ -37,15 +40,23 @@ TOL_REL_MODEL = 5e-4
 TOL_REL_DECLARED, TOL_REL_DECLARED_MODEL = 10.0, 1e-5
 
 
-def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None = None) -> list[str]:
+def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None = None,
+                       dump: ShapeDump | None = None) -> list[str]:
     """One warning if the worst edge tolerance is large for the model's size or its declared precision.
 
     A large edge tolerance means vertices and pcurves may lie far off the 3-D curves (healed or
     badly exported models): the grids are still made, but downstream meshes may not close up.
+    ``dump``, the shape read in one call (:mod:`cadedge.occt.shapedump`), gives the tolerances and vertex
+    points without an OCP call each.
     """
-    worst = BRep_Tool.MaxTolerance_s(shape, TopAbs_EDGE)
+    if dump is not None and len(dump.edge_tolerance):
+        worst = float(dump.edge_tolerance.max())  # BRep_Tool::MaxTolerance: the same numbers, the same max
+        lower = _diagonal_from_dump(dump, worst)
+    else:
+        worst = BRep_Tool.MaxTolerance_s(shape, TopAbs_EDGE)
+        lower = _diagonal_at_least(shape, worst)
     file_test = declared is not None and worst > TOL_REL_DECLARED * declared
-    if worst <= (TOL_REL_DECLARED_MODEL if file_test else TOL_REL_MODEL) * _diagonal_at_least(shape, worst):
+    if worst <= (TOL_REL_DECLARED_MODEL if file_test else TOL_REL_MODEL) * lower:
         return []  # neither test below can fire: skip the bounding box (OCCT boxes every face's surface)
     box = Bnd_Box()
     BRepBndLib.Add_s(shape, box, False)
@@ -56,10 +67,13 @@ def tolerance_warnings(shape: TopoDS_Shape, units: str, declared: float | None =
     too_big_for_file = file_test and worst > TOL_REL_DECLARED_MODEL * diag
     if not (too_big_for_model or too_big_for_file):
         return []
-    edges = TopTools_IndexedMapOfShape()
-    TopExp.MapShapes_s(shape, TopAbs_EDGE, edges)
-    worst_id = next(i for i in range(1, edges.Extent() + 1)
-                    if BRep_Tool.Tolerance_s(TopoDS.Edge_s(edges.FindKey(i))) == worst)
+    if dump is not None and len(dump.edge_tolerance):
+        worst_id = int(dump.edge_tolerance.argmax()) + 1  # the first of MapShapes order, as below
+    else:
+        edges = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(shape, TopAbs_EDGE, edges)
+        worst_id = next(i for i in range(1, edges.Extent() + 1)
+                        if BRep_Tool.Tolerance_s(TopoDS.Edge_s(edges.FindKey(i))) == worst)
     decl = f", declared uncertainty {declared:.3g} {units}" if declared is not None else ""
     return [f"loose tolerance: edge {worst_id} has tolerance {worst:.3g} {units}, {worst / diag:.2g} of the "
             f"model size {diag:.4g} {units}{decl}; vertices may lie off their curves"]
@@ -86,6 +100,15 @@ def _diagonal_at_least(shape: TopoDS_Shape, worst: float, samples: int = 32) -> 
         slack = max(slack, BRep_Tool.Tolerance_s(v))
     diag = math.dist(lo, hi)
     return max(diag - 2 * math.sqrt(3) * (slack + worst), 0.0)
+
+
+def _diagonal_from_dump(dump: ShapeDump, worst: float) -> float:
+    """:func:`_diagonal_at_least` from every vertex of the dump (a tighter bound, and no OCP call)."""
+    points = dump.vertex_points
+    if not len(points):
+        return 0.0
+    diag = math.dist(points.min(axis=0).tolist(), points.max(axis=0).tolist())
+    return max(diag - 2 * math.sqrt(3) * (float(dump.vertex_tolerance.max()) + worst), 0.0)
 
 
 def _compound(shapes: list[TopoDS_Shape]) -> TopoDS_Shape:
@@ -121,18 +144,27 @@ def _from_object(source: Any) -> LoadedShape:
                          "Workplane/Shape, a build123d shape or a TopoDS_Shape")
     if shape.IsNull() or not TopExp_Explorer(shape, TopAbs_EDGE).More():  # (no map of every edge)
         raise InputError(f"{desc}: empty shape (no edges)")
-    return LoadedShape(shape=shape, source=desc, units="mm", warnings=tolerance_warnings(shape, "mm"))
+    return LoadedShape(shape=shape, source=desc, units="mm")
 
 
-def load_shape(source: Any, *, allow_partial: bool = False) -> LoadedShape:
+def load_shape(source: Any, *, allow_partial: bool = False, tolerance_scan: bool = True) -> LoadedShape:
     """Load ``source``: a STEP (.step/.stp), IGES (.igs/.iges) or OCCT BREP (.brep) path (str or
     PathLike, suffix in any case), or an in-memory shape.
 
     Files are transferred with OCCT's defaults, which convert lengths to millimetres (``units``
     reports the unit after transfer); BREP files and in-memory shapes carry no unit and are taken as
     millimetres. A file that OCCT transfers only in part raises :class:`InputError` unless
-    ``allow_partial``, which keeps what did transfer and says what was lost in ``warnings``.
+    ``allow_partial``, which keeps what did transfer and says what was lost in ``warnings``. With
+    ``tolerance_scan`` the warnings end with :func:`tolerance_warnings`' (a caller that reads the shape in one
+    call anyway, as ``refine_shape`` does, scans it from that read instead).
     """
+    loaded = _load(source, allow_partial)
+    if tolerance_scan:
+        loaded.warnings += tolerance_warnings(loaded.shape, loaded.units, loaded.declared)
+    return loaded
+
+
+def _load(source: Any, allow_partial: bool) -> LoadedShape:
     if not isinstance(source, (str, os.PathLike)):
         return _from_object(source)
     given = os.fspath(source)

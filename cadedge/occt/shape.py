@@ -30,7 +30,7 @@ from ..target import MIN_CLOSED_SEGMENTS
 from .edgecurve import EdgeCurve
 from .edgetable import EdgeTable, TableCurves, refine_table
 from .localald import check_ald_for, edge_targets
-from .reader import load_shape
+from .reader import load_shape, tolerance_warnings
 from .topology import Topology, curve_type_name
 from .vertexgrowth import grade_vertices
 
@@ -93,34 +93,34 @@ def _refine_edge(topo: Topology, i: int, vpoints: np.ndarray, src: str, opts: di
                          evaluations=grid.evaluations, **common)
 
 
-def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np.ndarray,
-                 topo: Topology) -> list[tuple | None]:
-    """Grids of the table's ``rows`` in one compiled call, anchored on their vertices: per row, its (params,
-    points, estimate, raw_estimate, evaluations), or None where the per-edge path must refine the edge."""
-    ends = np.array([topo.edge_vertices[i] for i in table.rows[rows]], dtype=np.int64).reshape(-1, 2) - 1
+def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np.ndarray, topo: Topology,
+                 tolerance: list[float]) -> list[tuple[ShapeEdgeGrid, str | None] | None]:
+    """Grids of the table's ``rows`` in one compiled call, anchored on their vertices: per row, its grid and the
+    note it adds (or None), or None where the per-edge path must refine the edge (the compiled path could not
+    finish it alike, or a closed edge got fewer than ``MIN_CLOSED_SEGMENTS`` segments: see refine_target)."""
+    edge_ids = table.rows[rows]
+    ends = [topo.edge_vertices[i] for i in edge_ids]
+    at = np.array(ends, dtype=np.int64).reshape(-1, 2) - 1
+    ald = targets[edge_ids]
     status, offsets, params, points, estimate, raw, evaluations = refine_table(
-        table, rows, targets[table.rows[rows]], vpoints[ends[:, 0]], vpoints[ends[:, 1]])
-    at = offsets.tolist()
-    return [None if failed else (params[lo:hi], points[lo:hi], est, raw_est, evals)
-            for failed, lo, hi, est, raw_est, evals in zip(status.tolist(), at, at[1:], estimate.tolist(),
-                                                           raw.tolist(), evaluations.tolist())]
-
-
-def _table_edge(topo: Topology, i: int, kind, row: tuple | None, ald: float, notes: list[str],
-                tolerance: float) -> ShapeEdgeGrid | None:
-    """Edge ``i``'s grid from its row of a compiled chunk, or None where the per-edge path must refine it."""
-    if row is None:
-        return None
-    params, points, estimate, raw_estimate, evaluations = row
-    v1, v2 = topo.edge_vertices[i]
-    if v1 == v2 and len(params) - 1 < MIN_CLOSED_SEGMENTS:  # a closed edge: see refine_target
-        return None
-    if estimate > ald and raw_estimate <= ald:
-        notes.append(f"edge {i + 1}: ald {estimate:.3g} after snapping the ends to the vertices "
-                     f"(vertices lie off the curve by up to {tolerance:.3g})")
-    return ShapeEdgeGrid(id=i + 1, vertices=(v1, v2), degenerate=False, closed=v1 == v2,
-                         faces=list(topo.edge_faces[i]), tolerance=tolerance, curve=curve_type_name(kind),
-                         params=params, points=points, ald_estimate=estimate, evaluations=evaluations)
+        table, rows, ald, vpoints[at[:, 0]], vpoints[at[:, 1]])
+    bounds = offsets.tolist()
+    faces = topo.edge_faces
+    out: list[tuple[ShapeEdgeGrid, str | None] | None] = []
+    for i, (v1, v2), name, failed, lo, hi, est, raw_est, evals, target in zip(
+            edge_ids, ends, table.names[rows], status.tolist(), bounds, bounds[1:], estimate.tolist(), raw.tolist(),
+            evaluations.tolist(), ald.tolist()):
+        if failed or (v1 == v2 and hi - lo - 1 < MIN_CLOSED_SEGMENTS):
+            out.append(None)
+            continue
+        note = None
+        if est > target and raw_est <= target:
+            note = (f"edge {i + 1}: ald {est:.3g} after snapping the ends to the vertices "
+                    f"(vertices lie off the curve by up to {tolerance[i]:.3g})")
+        out.append((ShapeEdgeGrid(id=i + 1, vertices=(v1, v2), degenerate=False, closed=v1 == v2,
+                                  faces=list(faces[i]), tolerance=tolerance[i], curve=name, params=params[lo:hi],
+                                  points=points[lo:hi], ald_estimate=est, evaluations=evals), note))
+    return out
 
 
 def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = None,
@@ -142,11 +142,12 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     opts = refine_options(ald, min_length, max_length, max_growth)  # before the (possibly slow) read
     local = check_ald_for(ald_for)
     t0 = time.perf_counter()
-    loaded = load_shape(source, allow_partial=allow_partial)
+    loaded = load_shape(source, allow_partial=allow_partial, tolerance_scan=False)
     try:
         topo = Topology(loaded.shape)
     except GeometryError as exc:
         raise GeometryError(f"{loaded.source}: {exc}") from exc
+    loaded.warnings += tolerance_warnings(loaded.shape, loaded.units, loaded.declared, topo.dump)
     try:
         targets, local_records, notes = edge_targets(local, topo, opts["ald"])
     except InputError as exc:
@@ -155,25 +156,26 @@ def refine_shape(source: Any, *, ald: float = 1e-3, min_length: float | None = N
     edge_tolerance, vertex_tolerance = topo.tolerances()
     total = len(topo.edges)
     batched = opts["min_length"] is None and opts["max_length"] is None and opts["max_growth"] is None
-    table = EdgeTable(topo.edges, [i for i in range(total) if not topo.is_degenerate(i)] if batched else [],
-                      topo.dump)
+    table = EdgeTable(topo.edges, topo.non_degenerate() if batched else [], topo.dump)
     row_of = {i: r for r, i in enumerate(table.rows)}
     edges: list[ShapeEdgeGrid] = []
     curves: dict[int, EdgeCurve] = {}  # built by the per-edge path; the table's are built on demand
     segments = 0
     done = 0  # table rows refined so far
     start, chunk = 0, []  # the rows refined by the last compiled call, from row start
-    ald_of = targets.tolist()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CadedgeWarning)  # collected per edge in notes instead
         for i in range(total):
             r = row_of.get(i)
             if r is not None and r >= done:  # refine the next rows of the table in one compiled call
                 start, done = r, min(r + CHUNK, len(table))
-                chunk = _refine_rows(table, slice(start, done), targets, vpoints, topo)
-            grid = (_table_edge(topo, i, table.kinds[r], chunk[r - start], ald_of[i], notes, edge_tolerance[i])
-                    if r is not None else None)
-            if grid is None:
+                chunk = _refine_rows(table, slice(start, done), targets, vpoints, topo, edge_tolerance)
+            made = chunk[r - start] if r is not None else None
+            if made is not None:
+                grid, note = made
+                if note is not None:
+                    notes.append(note)
+            else:
                 edge_opts = {**opts, "ald": float(targets[i])}  # the edge's own target (ald_for)
                 grid = _refine_edge(topo, i, vpoints, loaded.source, edge_opts, notes, curves, edge_tolerance[i])
             edges.append(grid)

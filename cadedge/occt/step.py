@@ -134,10 +134,6 @@ def transfer_step(path: Path, given: str, *, isolate: bool = True) -> Transferre
 
 def read_step(path: Path, given: str, *, allow_partial: bool = False) -> LoadedShape:
     """Read and transfer a STEP file; InputError for bad, empty or (unless allowed) partial files."""
-    from .reader import tolerance_warnings
-
     t = transfer_step(path, given)
-    loaded = accept(LoadedShape(shape=t.shape, source=path.name, units=t.units, warnings=t.warnings), t.done,
-                    given, "STEP", allow_partial)
-    loaded.warnings += tolerance_warnings(t.shape, t.units, t.declared)
-    return loaded
+    return accept(LoadedShape(shape=t.shape, source=path.name, units=t.units, warnings=t.warnings,
+                              declared=t.declared), t.done, given, "STEP", allow_partial)

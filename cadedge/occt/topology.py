@@ -156,6 +156,12 @@ class Topology:
             return self._degenerate[i]
         return bool(BRep_Tool.Degenerated_s(self.edges[i]))
 
+    def non_degenerate(self) -> list[int]:
+        """The indices of the edges that are not degenerate, increasing."""
+        if self._degenerate is not None:
+            return [i for i, flag in enumerate(self._degenerate) if not flag]
+        return [i for i in range(len(self.edges)) if not self.is_degenerate(i)]
+
     def is_closed(self, i: int) -> bool:
         """True when the edge starts and ends at the same vertex (a full circle, a closed spline)."""
         return self.edge_vertices[i][0] == self.edge_vertices[i][1]
