@@ -21,7 +21,8 @@ A new child replays what the progress file says the killed one achieved: each fa
 strategy that meshed it, and attempts that failed are not tried again. After :data:`SOFT_SHARE` of the
 timeout the child starts no new attempts (the faces left fail with "out of time"), and an attempt still
 running at :data:`KILL_SHARE` of it is killed, so a replay has the rest of the time to deliver what was
-meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing.
+meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing. The face
+optimiser, which improves meshed faces, may go on past the soft deadline up to :data:`FINISH_SHARE`.
 
 The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
 hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
@@ -56,6 +57,10 @@ FACE_SHARE = 0.2
 SOFT_SHARE = 0.6
 #: Share of the timeout at which a running face attempt is killed (the replay gets the rest).
 KILL_SHARE = 0.7
+#: Share of the timeout after which the child's optional steps stop (the face optimiser, which also runs
+#: past :data:`SOFT_SHARE`: a model whose meshing used the soft deadline still gets its worst faces
+#: optimised); the rest is for the re-check, reading the mesh back and writing it.
+FINISH_SHARE = 0.85
 #: A face attempt that computes little (a child blocked, not busy) counts as hung after this many times
 #: ``face_timeout`` on the clock.
 WALL_SLACK = 3.0
@@ -192,6 +197,7 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     deadline = t0 + timeout
     kill_at = t0 + KILL_SHARE * timeout
     job.deadline = time.time() + SOFT_SHARE * timeout
+    job.finish_by = time.time() + FINISH_SHARE * timeout
     events: list[str] = []
     skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
     known_ok: dict[int, int] = dict(job.known_ok)

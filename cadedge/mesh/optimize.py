@@ -73,10 +73,13 @@ STUCK_SLACK = 0.1
 #: angle move (the same gains on the cylinder's caps in 60% of the time).
 FOCUS = 3.0
 #: The optimiser's time budget: this share of the CPU time the job took before it (reading the shape,
-#: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds, and never past the job's soft deadline
-#: (CPU time: a loaded machine slows the optimiser as much as what came before it). Each
-#: face (worst first) may use :data:`FACE_SHARE` of what is left, or more if its triangles are a larger
-#: share of those still to improve; a face out of time keeps its last stage's result (or gmsh's).
+#: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds (CPU time: a loaded machine slows the
+#: optimiser as much as what came before it), and never past the job's ``finish_by`` on the clock
+#: (:data:`~cadedge.mesh.isolate.FINISH_SHARE` of the timeout; past the soft deadline too, which only
+#: stops meshing: under load mesh_T106_V3's meshing used the soft deadline and every face kept gmsh's
+#: 0.1-degree triangles). Each face (worst first) may use :data:`FACE_SHARE` of what is left, or more if
+#: its triangles are a larger share of those still to improve; a face out of time keeps its last stage's
+#: result (or gmsh's).
 BUDGET_SHARE = 1.0
 MIN_BUDGET = 30.0
 FACE_SHARE = 0.5
@@ -281,14 +284,17 @@ def _face_min_angle(surface: int) -> float:
 
 def after_generate(ctx) -> None:
     """Hook (after the area-target pass): improve every meshed face (:func:`smooth_face`), worst smallest
-    angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`, in CPU time;
-    on a slow machine a large model gets part of the faces: the worst go first). A first sweep gives each
+    angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`, in CPU time,
+    and ``ctx.job.finish_by`` on the clock; on a slow machine a large model gets part of the faces: the
+    worst go first). Each face it changed is delivered at once (``ctx.deliver``). A first sweep gives each
     face one round of the later stages, a second the rest of :data:`STAGE_ROUNDS` to the faces it
     changed that set the mesh's smallest angle (within :data:`SWEEP_MARGIN`, under
     :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW`), so one large face does not take the time of the others. The faces whose mesh changed land in ``ctx.smoothed``."""
     import time
 
     import gmsh
+
+    from .worker import _corners
 
     opts = ctx.job.options.get("fidelity") or {}
     areas = np.asarray(opts.get("brep_areas", []), dtype=float)
@@ -298,6 +304,8 @@ def after_generate(ctx) -> None:
     kept: list[int] = []
     cpu = time.process_time()
     cpu_end = cpu + max(MIN_BUDGET, BUDGET_SHARE * (cpu - ctx.cpu_started))  # the job's CPU time so far
+    end = ctx.job.finish_by  # on the clock; the soft deadline (ctx.job.deadline) bounds meshing, not this
+    deliver = ctx.deliver or (lambda dim, tag, corners: None)
     todo = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok]
     for passes, rounds in ((PASSES, 1), (0, STAGE_ROUNDS - 1)):
         worst = {s: _face_min_angle(s) for s in todo}
@@ -307,7 +315,7 @@ def after_generate(ctx) -> None:
         changed = []
         for s in todo:  # worst smallest angle first; faces without a triangle worth moving are left alone
             cpu = time.process_time()
-            if cpu > cpu_end or (ctx.job.deadline is not None and time.time() > ctx.job.deadline):
+            if cpu > cpu_end or (end is not None and time.time() > end):
                 break  # out of the optimiser's time: the faces left keep their triangles
             share = max(FACE_SHARE, size[s] / left if left > 0 else 1.0)
             left -= size[s]
@@ -316,10 +324,11 @@ def after_generate(ctx) -> None:
             # a face whose mesh and B-rep areas disagree (not converging) keeps its deficit within a slack
             slack = STUCK_SLACK * target if target is not None and f in stuck else 0.0
             if smooth_face(s, brep_area=area, target=target, slack=slack, passes=passes, rounds=rounds,
-                           deadline=ctx.job.deadline, cpu_deadline=cpu + share * (cpu_end - cpu)):
+                           deadline=end, cpu_deadline=cpu + share * (cpu_end - cpu)):
                 changed.append(s)
                 kept.append(f)
                 ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
+                deliver(2, f, _corners(2, s))  # a child killed at the hard timeout hands this face over
         floor = min((_face_min_angle(s) for s, o in ctx.outcomes.items() if o.ok), default=180.0)
         todo = [s for s in changed if _face_min_angle(s) < min(floor + SWEEP_MARGIN, COLLAPSE_BELOW)]
     ctx.smoothed = sorted(set(kept))

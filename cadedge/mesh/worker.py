@@ -61,6 +61,7 @@ class MeshJob:
     skip: dict[int, dict[int, str]] = field(default_factory=dict)  # face -> {strategy index: reason}
     known_ok: dict[int, int] = field(default_factory=dict)  # face -> strategy that meshed it in an earlier run
     deadline: float | None = None  # time.time() after which only known_ok attempts start
+    finish_by: float | None = None  # time.time() after which no optional step (the optimiser) goes on
     no_batch: set[int] = field(default_factory=set)  # faces meshed one by one (their batch hung or crashed)
     no_refine: set[int] = field(default_factory=set)  # faces not to mesh again finer (that hung or crashed)
     hooks: dict[str, list[str]] = field(default_factory=dict)
