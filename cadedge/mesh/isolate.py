@@ -8,8 +8,8 @@ caller) writes a progress line before each step and each face attempt. The watch
   a new child runs the job again without it (the face goes on to the next strategy with other sizes: the
   other algorithms on the same sizes tend to hang as well, and finer sizes take longer still). CPU time,
   because on a loaded machine a face that takes 20 s alone takes several times that on the clock. A batch
-  of first attempts that hangs or crashes is done again face by face; a face meshed again finer for the
-  surface target (``refine F``) that hangs or crashes is kept as it was first meshed;
+  of first attempts that hangs or crashes is done again face by face; faces meshed again finer for the
+  surface target (``refine F1 F2 ...``) that hang or crash are kept as they were first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
 - the whole job passes ``timeout``: the faces the children had meshed (each child appends every face it
@@ -235,11 +235,13 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                 events.append(f"faces {', '.join(words[1:])}: meshing them together in one gmsh call: "
                               f"{run.detail}; they were meshed one by one in a new process")
                 continue
-            if words[:1] == ["refine"] and len(words) == 2:
+            if words[:1] == ["refine"] and len(words) >= 2:  # one face, or several meshed again in one call
                 _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-                job.no_refine.add(int(words[1]))
-                events.append(f"face {words[1]}: meshing it again finer for the surface target {run.detail}; "
-                              "it was kept as first meshed")
+                job.no_refine.update(int(w) for w in words[1:])
+                what = f"face {words[1]}: meshing it" if len(words) == 2 else \
+                    f"faces {', '.join(words[1:])}: meshing them together"
+                events.append(f"{what} again finer for the surface target {run.detail}; "
+                              f"{'it was' if len(words) == 2 else 'they were'} kept as first meshed")
                 continue
             if words[:1] != ["face"] or len(words) != 3:
                 where = f" while gmsh was at step '{run.last}'" if run.last else ""
