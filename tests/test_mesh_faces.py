@@ -191,7 +191,7 @@ def test_a_hard_timeout_after_the_re_mesh_delivers_the_final_mesh(cylinder):
     done = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"]})
     took = time.monotonic() - t0
     assert np.sum(done.triangle_faces == FAULT_FACE) > np.sum(first.triangle_faces == FAULT_FACE)
-    # the soft deadline (0.6 of the timeout) stops the face optimiser, which would give other triangles:
+    # finish_by (0.85 of the timeout) stops the face optimiser, which would give other triangles:
     # the timeout leaves the killed run more than twice what the finished run took (on a loaded machine too)
     killed = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"],
                                          "before_write": ["mesh_faults:hang_before_writing"]},

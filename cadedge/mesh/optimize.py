@@ -68,8 +68,8 @@ WORST = 20
 #: A face not converging (its mesh and B-rep areas disagree: see :mod:`cadedge.mesh.fidelity`) is over
 #: its target whatever the optimiser does; its deficit may grow by this share of the target (LLNL
 #: boxed_sphere's faces over the target kept 20-23 degree triangles when any growth was refused), or by
-#: :data:`STUCK_OWN` of its own deficit where that is more (boxed_sphere's 16 small B-spline faces, 30%
-#: off: at 1e-3 a tenth of the target refused every move and kept 4-degree triangles).
+#: :data:`STUCK_OWN` of its own deficit where that is more (boxed_sphere's small B-spline faces, 30% off:
+#: at 1e-3 a tenth of the target refused every move and kept 4-degree triangles).
 STUCK_SLACK = 0.1
 STUCK_OWN = 0.01
 #: After the first round only nodes near triangles within this many degrees of the face's smallest

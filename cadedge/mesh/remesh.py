@@ -1,4 +1,4 @@
-"""Inside the gmsh job: several faces meshed again in one gmsh call, each with its own curvature sizes.
+"""Inside the gmsh job: faces meshed again with like curvature sizes share one gmsh call.
 
 Every ``gmsh.model.mesh.generate`` call also walks the whole model (it turns every element back to first
 order, orients every curve and surface mesh, measures every element's quality), so meshing faces again one
