@@ -46,6 +46,14 @@ def hang_refining(ctx) -> None:
             time.sleep(1)
 
 
+def hang_refining_together(ctx) -> None:
+    """As :func:`hang_refining`, for faces 1 and 3 meshed again together in one gmsh call (``refine 1 3``)."""
+    if not {1, 3} <= ctx.job.no_refine:
+        ctx.progress("refine 1 3")
+        while True:
+            time.sleep(1)
+
+
 def hang_after_meshing(ctx) -> None:
     """Never return once every face is meshed (only the job's hard timeout ends it)."""
     while True:

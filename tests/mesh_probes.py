@@ -11,3 +11,8 @@ def curve_segments(ctx) -> dict:
     return {"segments": {t: len(gmsh.model.mesh.getElementsByType(1, t)[0]) for _, t in gmsh.model.getEntities(1)},
             "curve_of_edge": {eid: m.tag for eid, m in ctx.emap.edges.items()},
             "unmatched_curves": list(ctx.emap.unmatched_curves)}
+
+
+def smoothed(ctx) -> list[int]:
+    """``after_mesh`` hook: the faces the face optimiser changed (``cadedge.mesh.optimize``)."""
+    return list(getattr(ctx, "smoothed", []))

@@ -73,6 +73,26 @@ def test_a_hang_while_meshing_a_face_again_finer_keeps_it_as_first_meshed(cylind
     assert any(f"face {FAULT_FACE}: meshing it again finer" in n for n in result.notes)
 
 
+def test_a_hang_while_meshing_faces_again_together_keeps_them_all_as_first_meshed(cylinder):
+    """Faces meshed again in one gmsh call (``refine F1 F2``): a hang there bars all of them."""
+    result = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:hang_refining_together"]}, timeout=120,
+                        face_timeout=2)
+    _every_face(result)
+    assert any("faces 1, 3: meshing them together again finer" in n for n in result.notes)
+
+
+def test_faces_meshed_again_share_a_gmsh_call_within_five_percent():
+    """Re-meshes are grouped by curvature count (each gmsh call walks the whole model): counts within
+    :data:`~cadedge.mesh.remesh.SHARE` share a call at the largest, never coarser than a face needs."""
+    from cadedge.mesh.remesh import BATCH_FACES, groups
+
+    got = groups({1: 20.0, 2: 20.9, 3: 30.0, 4: 20.4, 5: 31.0, 6: 40.0})
+    assert got == [(20.9, [1, 4, 2]), (31.0, [3, 5]), (40.0, [6])]
+    assert groups({1: 20.0, 2: 20.5}, share=1.0) == [(20.0, [1]), (20.5, [2])]
+    many = groups({s: 10.0 for s in range(1, 2 * BATCH_FACES + 2)})
+    assert [len(g) for _, g in many] == [BATCH_FACES, BATCH_FACES, 1]
+
+
 def _box_and_open_face():
     """A 10 mm box and, beside it, a planar face whose wire is two disjoint segments: gmsh cannot fix that
     wire with or without its wire fixing ("Could not fix wire in surface 7")."""
@@ -171,7 +191,7 @@ def test_a_hard_timeout_after_the_re_mesh_delivers_the_final_mesh(cylinder):
     done = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"]})
     took = time.monotonic() - t0
     assert np.sum(done.triangle_faces == FAULT_FACE) > np.sum(first.triangle_faces == FAULT_FACE)
-    # the soft deadline (0.6 of the timeout) stops the face optimiser, which would give other triangles:
+    # finish_by (0.85 of the timeout) stops the face optimiser, which would give other triangles:
     # the timeout leaves the killed run more than twice what the finished run took (on a loaded machine too)
     killed = mesh_shape(cylinder, hooks={"after_generate": ["mesh_faults:remesh_finer"],
                                          "before_write": ["mesh_faults:hang_before_writing"]},

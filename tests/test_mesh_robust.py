@@ -359,6 +359,27 @@ def test_faces_an_earlier_child_delivered_are_kept_when_the_last_one_did_not_mes
     assert _with_earlier_faces(full, str(path), job(), {}) is None  # nothing to add
 
 
+def test_the_optimiser_runs_past_the_soft_deadline_until_finish_by(cylinder):
+    """Meshing that used the soft deadline (mesh_T106_V3 under load) still leaves the face optimiser its
+    time up to ``finish_by``; past ``finish_by`` it leaves every face as gmsh made it."""
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    def job(finish_by: float) -> MeshJob:
+        return MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape),
+                       grid=dataclasses.replace(cylinder, shape=None), field=SizeField(cylinder), mode="nodes",
+                       known_ok={f: 0 for f in range(1, cylinder.faces + 1)}, deadline=time.time() - 1,
+                       finish_by=finish_by, hooks={"after_generate": ["cadedge.mesh.optimize:after_generate"],
+                                                   "after_mesh": ["mesh_probes:smoothed"]})
+
+    late = run_job(job(time.time() + 120))
+    assert all(o.ok for o in late.faces)
+    assert late.extras["mesh_probes:smoothed"]  # past the soft deadline, faces were still improved
+    over = run_job(job(time.time() - 1))
+    assert all(o.ok for o in over.faces) and over.extras["mesh_probes:smoothed"] == []
+
+
 def test_past_the_deadline_with_nothing_meshed_the_first_faces_are_still_tried(cylinder):
     """A child restarted after the soft deadline when nothing was meshed before (its batch of first
     attempts hung, as on mesh_T106_V3 in sizes mode under load) meshes faces until one is meshed, so the

@@ -3,8 +3,9 @@
 A model's fidelity is its worst face. Sizes chosen per surface type before meshing leave many curved
 faces well under it (a fillet at 3e-3 beside a planar face at 5.6e-3), and their extra triangles buy
 nothing. Each such face is meshed again with ``Mesh.MeshSizeFromCurvature`` lowered by the measured
-margin (deficit ~ N**-2) and kept only when it has fewer triangles and stays within the level; otherwise
-it is meshed again as it was (gmsh is deterministic). Only the face's interior changes: its boundary
+margin (deficit ~ N**-2; faces of like counts together, see :mod:`cadedge.mesh.remesh`) and kept only
+when it has fewer triangles and stays within the level; otherwise it is meshed again as it was (gmsh is
+deterministic). Only the face's interior changes: its boundary
 nodes stay, so neighbours stay conforming.
 """
 
@@ -30,28 +31,32 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
     kept a coarser mesh."""
     import gmsh
 
-    from .fidelity import gmsh_surface_areas, remesh_face
+    from .fidelity import gmsh_surface_areas
+    from .interior import SIZES
+    from .remesh import groups, remesh_group
 
     face_of = ctx.emap.face_of_surface
     say = ctx.progress or (lambda line: None)
     kept: dict[int, float] = {}
-    for s, d in measured.items():
-        if abs(d) >= BELOW * level or not np.isfinite(d):
-            continue
+    coarser = {s: per_circle[s] * float(np.clip(np.sqrt(max(abs(d), 1e-12) / (AIM * level)), *FACTOR))
+               for s, d in measured.items() if abs(d) < BELOW * level and np.isfinite(d)}
+    for n, group in groups(coarser, apart=set(SIZES.faces)):  # faces of like counts in one gmsh call (see remesh.py)
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
             break
-        f = face_of.get(s, s)
-        old_n = per_circle[s]
-        n = old_n * float(np.clip(np.sqrt(max(abs(d), 1e-12) / (AIM * level)), *FACTOR))
-        before = len(gmsh.model.mesh.getElementsByType(2, s)[0])
-        say(f"refine {f}")  # same watchdog line as a refinement: a hang here keeps the face as first meshed
-        redo = remesh_face(s, n, face_of)
-        better = redo.ok and len(gmsh.model.mesh.getElementsByType(2, s)[0]) < before and abs(
-            deficit(s, gmsh_surface_areas([s])[s])) <= level
-        if not better:  # mesh it again as it was
-            redo = remesh_face(s, old_n, face_of)
-        else:
-            kept[f] = n
-        ctx.outcomes[s] = redo
-        say(f"refined {f}")
+        faces = " ".join(str(face_of.get(s, s)) for s in group)
+        before = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in group}
+        say(f"refine {faces}")  # same watchdog line as a refinement: a hang here keeps them as first meshed
+        redo = remesh_group(group, n, face_of)
+        areas = gmsh_surface_areas([s for s in group if redo[s].ok])
+        back = {}
+        for s in group:
+            if redo[s].ok and len(gmsh.model.mesh.getElementsByType(2, s)[0]) < before[s] and abs(
+                    deficit(s, areas[s])) <= level:
+                kept[face_of.get(s, s)] = n
+            else:  # mesh it again as it was
+                back[s] = per_circle[s]
+        for n_back, again in groups(back, share=1.0, apart=set(SIZES.faces)):
+            redo.update(remesh_group(again, n_back, face_of))
+        ctx.outcomes.update(redo)
+        say(f"refined {faces}")
     return kept

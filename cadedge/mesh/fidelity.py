@@ -406,7 +406,8 @@ def after_generate(ctx) -> None:
 
     from .coarsen import coarsen
     from .generate import mesh_faces
-    from .interior import use_per_circle
+    from .interior import SIZES, use_per_circle
+    from .remesh import groups, remesh_group
 
     opts = ctx.job.options.get("fidelity")
     if not opts:
@@ -430,36 +431,42 @@ def after_generate(ctx) -> None:
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
             break  # out of the job's time: what is meshed stays, the report names what is over
         measured = {s: deficit(s, a) for s, a in gmsh_surface_areas(pending).items()}
+        back: dict[int, float] = {}
         for s, d in measured.items():  # finer did not help: the mesh's face is not the B-rep's
             if (s in last and abs(d) > CONVERGED * abs(last[s])) or (
                     s not in last and abs(d) > max(DISAGREE * target, DISAGREE_FLOOR)):
                 stuck.append(face_of.get(s, s))
                 if s in last:  # its finer mesh bought nothing: back to the first (LLNL boxed_sphere: 24
                     f = face_of.get(s, s)  # cylinders 2.8% off at any size, 3x the triangles once refined)
-                    say(f"refine {f}")
-                    ctx.outcomes[s] = remesh_face(s, opts["face_per_circle"].get(f, n0), face_of)
+                    back[s] = opts["face_per_circle"].get(f, n0)
                     per_face.pop(f, None)
-                    say(f"refined {f}")
+        for n, group in groups(back, share=1.0, apart=set(SIZES.faces)):  # faces of equal sizes in one gmsh call (see remesh.py)
+            say("refine " + " ".join(str(face_of.get(s, s)) for s in group))
+            ctx.outcomes.update(remesh_group(group, n, face_of))
+            say("refined " + " ".join(str(face_of.get(s, s)) for s in group))
         pending = [s for s, d in measured.items()
                    if abs(d) > target and face_of.get(s, s) not in stuck and face_of.get(s, s) not in no_refine]
         if not pending or k == PASSES:
             break
-        for s in pending:
+        old = {s: per_face.get(face_of.get(s, s), opts["face_per_circle"].get(face_of.get(s, s), n0))
+               for s in pending}
+        finer = {s: old[s] * float(np.clip(np.sqrt(abs(measured[s]) / (AIM * target)), 1.25, 3.0))
+                 for s in pending}
+        for n_group, group in groups(finer, apart=set(SIZES.faces)):
             if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
                 break
-            f = face_of.get(s, s)
-            say(f"refine {f}")  # the watchdog bounds it; a hang or crash here keeps the face as first meshed
-            old_n = per_face.get(f, opts["face_per_circle"].get(f, n0))
-            n = old_n * float(np.clip(np.sqrt(abs(measured[s]) / (AIM * target)), 1.25, 3.0))
-            redo = remesh_face(s, n, face_of)
-            if not redo.ok:  # keep what met the boundary before: mesh it again as it was
-                use_per_circle(s, old_n)
-                redo = mesh_faces([s], face_of)[s]
-                n = old_n
-            ctx.outcomes[s] = redo
-            per_face[f] = n
-            last[s] = measured[s]
-            say(f"refined {f}")
+            faces = " ".join(str(face_of.get(s, s)) for s in group)
+            say(f"refine {faces}")  # the watchdog bounds it; a hang or crash here keeps them as first meshed
+            for s, redo in remesh_group(group, n_group, face_of).items():
+                n = n_group
+                if not redo.ok:  # keep what met the boundary before: mesh it again as it was
+                    use_per_circle(s, old[s])
+                    redo = mesh_faces([s], face_of)[s]
+                    n = old[s]
+                ctx.outcomes[s] = redo
+                per_face[face_of.get(s, s)] = n
+                last[s] = measured[s]
+            say(f"refined {faces}")
     ok = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) not in stuck]
     final = {s: deficit(s, a) for s, a in gmsh_surface_areas(ok).items()}
     level = min(max(map(abs, final.values()), default=0.0), target)

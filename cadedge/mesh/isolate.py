@@ -8,8 +8,8 @@ caller) writes a progress line before each step and each face attempt. The watch
   a new child runs the job again without it (the face goes on to the next strategy with other sizes: the
   other algorithms on the same sizes tend to hang as well, and finer sizes take longer still). CPU time,
   because on a loaded machine a face that takes 20 s alone takes several times that on the clock. A batch
-  of first attempts that hangs or crashes is done again face by face; a face meshed again finer for the
-  surface target (``refine F``) that hangs or crashes is kept as it was first meshed;
+  of first attempts that hangs or crashes is done again face by face; faces meshed again finer for the
+  surface target (``refine F1 F2 ...``) that hang or crash are kept as they were first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
 - the whole job passes ``timeout``: the faces the children had meshed (each child appends every face it
@@ -22,7 +22,8 @@ strategy that meshed it, and attempts that failed are not tried again. After :da
 timeout the child starts no new attempts (the faces left fail with "out of time"), and an attempt still
 running at :data:`KILL_SHARE` of it is killed, so a replay has the rest of the time to deliver what was
 meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing. Faces an
-earlier child delivered that the last one did not mesh again are added to its mesh.
+earlier child delivered that the last one did not mesh again are added to its mesh. The face optimiser,
+which improves meshed faces, may go on past the soft deadline up to :data:`FINISH_SHARE`.
 
 The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
 hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
@@ -57,6 +58,10 @@ FACE_SHARE = 0.2
 SOFT_SHARE = 0.6
 #: Share of the timeout at which a running face attempt is killed (the replay gets the rest).
 KILL_SHARE = 0.7
+#: Share of the timeout after which the child's optional steps stop (the face optimiser, which also runs
+#: past :data:`SOFT_SHARE`: a model whose meshing used the soft deadline still gets its worst faces
+#: optimised); the rest is for the re-check, reading the mesh back and writing it.
+FINISH_SHARE = 0.85
 #: A face attempt that computes little (a child blocked, not busy) counts as hung after this many times
 #: ``face_timeout`` on the clock.
 WALL_SLACK = 3.0
@@ -193,6 +198,7 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     deadline = t0 + timeout
     kill_at = t0 + KILL_SHARE * timeout
     job.deadline = time.time() + SOFT_SHARE * timeout
+    job.finish_by = time.time() + FINISH_SHARE * timeout
     events: list[str] = []
     skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
     known_ok: dict[int, int] = dict(job.known_ok)
@@ -235,11 +241,13 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                 events.append(f"faces {', '.join(words[1:])}: meshing them together in one gmsh call: "
                               f"{run.detail}; they were meshed one by one in a new process")
                 continue
-            if words[:1] == ["refine"] and len(words) == 2:
+            if words[:1] == ["refine"] and len(words) >= 2:  # one face, or several meshed again in one call
                 _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-                job.no_refine.add(int(words[1]))
-                events.append(f"face {words[1]}: meshing it again finer for the surface target {run.detail}; "
-                              "it was kept as first meshed")
+                job.no_refine.update(int(w) for w in words[1:])
+                what = f"face {words[1]}: meshing it" if len(words) == 2 else \
+                    f"faces {', '.join(words[1:])}: meshing them together"
+                events.append(f"{what} again finer for the surface target {run.detail}; "
+                              f"{'it was' if len(words) == 2 else 'they were'} kept as first meshed")
                 continue
             if words[:1] != ["face"] or len(words) != 3:
                 where = f" while gmsh was at step '{run.last}'" if run.last else ""

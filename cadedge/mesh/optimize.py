@@ -67,16 +67,22 @@ SWEEP_MARGIN = 2.0
 WORST = 20
 #: A face not converging (its mesh and B-rep areas disagree: see :mod:`cadedge.mesh.fidelity`) is over
 #: its target whatever the optimiser does; its deficit may grow by this share of the target (LLNL
-#: boxed_sphere's faces over the target kept 20-23 degree triangles when any growth was refused).
+#: boxed_sphere's faces over the target kept 20-23 degree triangles when any growth was refused), or by
+#: :data:`STUCK_OWN` of its own deficit where that is more (boxed_sphere's small B-spline faces, 30% off:
+#: at 1e-3 a tenth of the target refused every move and kept 4-degree triangles).
 STUCK_SLACK = 0.1
+STUCK_OWN = 0.01
 #: After the first round only nodes near triangles within this many degrees of the face's smallest
 #: angle move (the same gains on the cylinder's caps in 60% of the time).
 FOCUS = 3.0
 #: The optimiser's time budget: this share of the CPU time the job took before it (reading the shape,
-#: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds, and never past the job's soft deadline
-#: (CPU time: a loaded machine slows the optimiser as much as what came before it). Each
-#: face (worst first) may use :data:`FACE_SHARE` of what is left, or more if its triangles are a larger
-#: share of those still to improve; a face out of time keeps its last stage's result (or gmsh's).
+#: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds (CPU time: a loaded machine slows the
+#: optimiser as much as what came before it), and never past the job's ``finish_by`` on the clock
+#: (:data:`~cadedge.mesh.isolate.FINISH_SHARE` of the timeout; past the soft deadline too, which only
+#: stops meshing: under load mesh_T106_V3's meshing used the soft deadline and every face kept gmsh's
+#: 0.1-degree triangles). Each face (worst first) may use :data:`FACE_SHARE` of what is left, or more if
+#: its triangles are a larger share of those still to improve; a face out of time keeps its last stage's
+#: result (or gmsh's).
 BUDGET_SHARE = 1.0
 MIN_BUDGET = 30.0
 FACE_SHARE = 0.5
@@ -162,8 +168,8 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
 
 
 def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = None, slack: float = 0.0,
-                passes: int = PASSES, rounds: int = STAGE_ROUNDS, deadline: float | None = None,
-                cpu_deadline: float | None = None) -> bool:
+                own_slack: float = 0.0, passes: int = PASSES, rounds: int = STAGE_ROUNDS,
+                deadline: float | None = None, cpu_deadline: float | None = None) -> bool:
     """Improve one meshed gmsh surface: ``passes`` times edge swaps (:func:`flip_edges`, never a curve
     segment) then smoothing of its interior nodes (:func:`smooth_nodes`, :func:`climb_nodes`); then the
     :data:`LATER_STAGES` (with edge collapses while its smallest angle is under
@@ -171,7 +177,8 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     face (:meth:`_Face.better_than`), repeated for up to ``rounds`` rounds while a round improves it
     (``passes=0``: the later stages only). A result replaces the face's mesh only if its
     smallest angle does not fall and its area deficit (against ``brep_area``) stays within ``target`` or
-    does not grow (by more than ``slack``); a face that lost nodes is written again (its interior nodes and triangles; its curves'
+    does not grow (by more than ``slack`` or ``own_slack`` times its deficit as gmsh meshed it); a face
+    that lost nodes is written again (its interior nodes and triangles; its curves'
     nodes stay). No pass or move starts after ``deadline`` (``time.time()``) or ``cpu_deadline``
     (``time.process_time()``). Returns whether the face's mesh changed."""
     import time
@@ -218,7 +225,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
             return False
         if target is not None and brep_area > 0:
             d0, d1 = abs(1.0 - _area(x0, tri0) / brep_area), abs(1.0 - _area(face.x, face.tri) / brep_area)
-            return d1 <= max(target, d0) + slack
+            return d1 <= max(target, d0) + max(slack, own_slack * d0)
         return True
 
     best = _improve(start, fixed, project, passes, late) if passes else start
@@ -281,14 +288,17 @@ def _face_min_angle(surface: int) -> float:
 
 def after_generate(ctx) -> None:
     """Hook (after the area-target pass): improve every meshed face (:func:`smooth_face`), worst smallest
-    angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`, in CPU time;
-    on a slow machine a large model gets part of the faces: the worst go first). A first sweep gives each
+    angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`, in CPU time,
+    and ``ctx.job.finish_by`` on the clock; on a slow machine a large model gets part of the faces: the
+    worst go first). Each face it changed is delivered at once (``ctx.deliver``). A first sweep gives each
     face one round of the later stages, a second the rest of :data:`STAGE_ROUNDS` to the faces it
     changed that set the mesh's smallest angle (within :data:`SWEEP_MARGIN`, under
     :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW`), so one large face does not take the time of the others. The faces whose mesh changed land in ``ctx.smoothed``."""
     import time
 
     import gmsh
+
+    from .worker import _corners
 
     opts = ctx.job.options.get("fidelity") or {}
     areas = np.asarray(opts.get("brep_areas", []), dtype=float)
@@ -298,6 +308,8 @@ def after_generate(ctx) -> None:
     kept: list[int] = []
     cpu = time.process_time()
     cpu_end = cpu + max(MIN_BUDGET, BUDGET_SHARE * (cpu - ctx.cpu_started))  # the job's CPU time so far
+    end = ctx.job.finish_by  # on the clock; the soft deadline (ctx.job.deadline) bounds meshing, not this
+    deliver = ctx.deliver or (lambda dim, tag, corners: None)
     todo = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok]
     for passes, rounds in ((PASSES, 1), (0, STAGE_ROUNDS - 1)):
         worst = {s: _face_min_angle(s) for s in todo}
@@ -307,7 +319,7 @@ def after_generate(ctx) -> None:
         changed = []
         for s in todo:  # worst smallest angle first; faces without a triangle worth moving are left alone
             cpu = time.process_time()
-            if cpu > cpu_end or (ctx.job.deadline is not None and time.time() > ctx.job.deadline):
+            if cpu > cpu_end or (end is not None and time.time() > end):
                 break  # out of the optimiser's time: the faces left keep their triangles
             share = max(FACE_SHARE, size[s] / left if left > 0 else 1.0)
             left -= size[s]
@@ -315,11 +327,13 @@ def after_generate(ctx) -> None:
             area = float(areas[f - 1]) if 1 <= f <= len(areas) else 0.0
             # a face whose mesh and B-rep areas disagree (not converging) keeps its deficit within a slack
             slack = STUCK_SLACK * target if target is not None and f in stuck else 0.0
-            if smooth_face(s, brep_area=area, target=target, slack=slack, passes=passes, rounds=rounds,
-                           deadline=ctx.job.deadline, cpu_deadline=cpu + share * (cpu_end - cpu)):
+            if smooth_face(s, brep_area=area, target=target, slack=slack, own_slack=STUCK_OWN if slack else 0.0,
+                           passes=passes, rounds=rounds,
+                           deadline=end, cpu_deadline=cpu + share * (cpu_end - cpu)):
                 changed.append(s)
                 kept.append(f)
                 ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
+                deliver(2, f, _corners(2, s))  # a child killed at the hard timeout hands this face over
         floor = min((_face_min_angle(s) for s, o in ctx.outcomes.items() if o.ok), default=180.0)
         todo = [s for s in changed if _face_min_angle(s) < min(floor + SWEEP_MARGIN, COLLAPSE_BELOW)]
     ctx.smoothed = sorted(set(kept))

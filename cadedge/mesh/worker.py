@@ -13,8 +13,9 @@ hang or exhausted memory costs that child, never the caller. Steps, in order:
    a progress line (``face F K``, or ``batch F1 F2 ...`` before a batch of first attempts) and **hooks
    "before_face"** (``context.face``, ``context.strategy`` set) before each attempt (the parent's
    watchdog reads the line); **hooks "after_generate"** (a hook may clear faces and mesh them again with
-   ``mesh_faces``, updating ``context.outcomes``, after a ``refine F`` line through ``context.progress``
-   for each face; faces in ``job.no_refine`` are not meshed again);
+   ``mesh_faces``, updating ``context.outcomes``, after a ``refine F1 F2 ...`` line through
+   ``context.progress`` for each face or group of faces meshed together; faces in ``job.no_refine`` are
+   not meshed again);
 5. read the mesh back; **hooks "before_write"**; write ``job.output`` if asked; **hooks "after_mesh"**.
 
 Hooks are ``"module:function"`` names in ``job.hooks[stage]``, imported in the child and called as
@@ -61,6 +62,7 @@ class MeshJob:
     skip: dict[int, dict[int, str]] = field(default_factory=dict)  # face -> {strategy index: reason}
     known_ok: dict[int, int] = field(default_factory=dict)  # face -> strategy that meshed it in an earlier run
     deadline: float | None = None  # time.time() after which only known_ok attempts start
+    finish_by: float | None = None  # time.time() after which no optional step (the optimiser) goes on
     no_batch: set[int] = field(default_factory=set)  # faces meshed one by one (their batch hung or crashed)
     no_refine: set[int] = field(default_factory=set)  # faces not to mesh again finer (that hung or crashed)
     hooks: dict[str, list[str]] = field(default_factory=dict)
@@ -258,7 +260,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
 
     ``deliver(dim, id, corners)`` gets the mesh as it is made, so a parent that must kill this process at
     its hard timeout still has it: ``(2, face, triangles (m, 3, 3))`` as soon as a face is meshed, again
-    when it is meshed finer (``refined F``) and once more after the ``after_generate`` hooks (the final
+    when it is meshed finer (``refined F1 F2 ...``) and once more after the ``after_generate`` hooks (the final
     mesh), ``(2, face, None)`` when a meshed face is cleared, and ``(1, edge, segments (k, 2, 3))`` for
     every matched edge once its curve is meshed and again after the faces (strategies may split a curve
     or replace its mesh). Later records of the same entity replace earlier ones."""
@@ -275,8 +277,10 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         if progress is not None:
             progress(line)
         words = line.split()
-        if deliver is not None and words[:1] == ["refined"] and len(words) == 2 and int(words[1]) in emap.faces:
-            deliver(2, int(words[1]), _corners(2, emap.faces[int(words[1])]))  # the finer mesh
+        if deliver is not None and words[:1] == ["refined"]:
+            for f in (int(w) for w in words[1:]):
+                if f in emap.faces:
+                    deliver(2, f, _corners(2, emap.faces[f]))  # the finer mesh
 
     def deliver_edges() -> None:
         if deliver is not None:

@@ -1,0 +1,71 @@
+"""Inside the gmsh job: faces meshed again with like curvature sizes share one gmsh call.
+
+Every ``gmsh.model.mesh.generate`` call also walks the whole model (it turns every element back to first
+order, orients every curve and surface mesh, measures every element's quality), so meshing faces again one
+call each grew with the model: LLNL boxed_sphere at ALD 1e-3 (192 faces, 470k triangles) spent 0.8 s a
+call, 63 s for the 79 faces the surface target meshed again finer or back as first meshed. Faces whose
+``Mesh.MeshSizeFromCurvature`` is within 5% (boxed_sphere's families of identical faces) share one call
+here, at the largest of their counts.
+Only the faces' interiors change: their boundary curves keep their nodes, so neighbours stay conforming.
+"""
+
+from __future__ import annotations
+
+#: Faces meshed again in one gmsh call, at most (the watchdog bounds a call like one face attempt).
+BATCH_FACES = 24
+#: Faces whose per-circle counts are within this factor share a call, all at the largest of them (a
+#: face meshed up to this much finer than it needs: about 10% more triangles at most on that face).
+#: Identical faces are measured a few percent apart (their meshes are not identical).
+SHARE = 1.05
+
+
+def groups(per_circle: dict[int, float], share: float = SHARE, *,
+           apart: frozenset[int] | set[int] = frozenset()) -> list[tuple[float, list[int]]]:
+    """The gmsh surfaces of ``per_circle`` (surface -> count it needs) in groups whose counts are within
+    ``share`` of each other (1: equal counts only), each at most :data:`BATCH_FACES` long, with the count
+    to mesh the group with (its largest): ``[(count, surfaces), ...]``, smallest counts first. Surfaces in
+    ``apart`` (sized by :data:`cadedge.mesh.interior.SIZES`, with gmsh's curvature sizes off) never share
+    a group with the others (sized by gmsh's curvature sizes)."""
+    out: list[tuple[float, list[int]]] = []
+    for part in ([s for s in per_circle if s not in apart], [s for s in per_circle if s in apart]):
+        group: list[int] = []
+        for s in sorted(part, key=lambda s: (per_circle[s], s)):
+            if group and (per_circle[s] > share * per_circle[group[0]] or len(group) == BATCH_FACES):
+                out.append((per_circle[group[-1]], group))
+                group = []
+            group.append(s)
+        if group:
+            out.append((per_circle[group[-1]], group))
+    return sorted(out, key=lambda g: (g[0], g[1][0]))
+
+
+def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
+    """Mesh gmsh ``surfaces`` again from scratch in one call at ``per_circle`` triangles per ``2 pi`` (see
+    :func:`cadedge.mesh.interior.use_per_circle`); a face that call fails is meshed again on its own through every strategy
+    (:func:`cadedge.mesh.fidelity.remesh_face`). Returns each surface's
+    :class:`~cadedge.mesh.generate.FaceOutcome`."""
+    import gmsh
+
+    from .fidelity import remesh_face
+    from .generate import STRATEGIES, FaceOutcome, _attempt_many
+    from .interior import use_per_circle
+
+    for s in surfaces:  # one group is all sampled or all not (see groups), so the gmsh option agrees
+        use_per_circle(s, per_circle)
+    gmsh.model.mesh.clear([(2, s) for s in surfaces])
+    gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
+    gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
+    gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
+    try:
+        reasons = _attempt_many(surfaces, STRATEGIES[0])
+    finally:
+        gmsh.model.setVisibility(gmsh.model.getEntities(), 1)
+        gmsh.option.setNumber("Mesh.MeshOnlyVisible", 0)
+    out = {}
+    for s in surfaces:
+        if reasons[s] is None:
+            out[s] = FaceOutcome(face=face_of.get(s, s), surface=s, strategy=STRATEGIES[0].name,
+                                 triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
+        else:
+            out[s] = remesh_face(s, per_circle, face_of)
+    return out
