@@ -91,6 +91,8 @@ def test_faces_meshed_again_share_a_gmsh_call_within_five_percent():
     assert groups({1: 20.0, 2: 20.5}, share=1.0) == [(20.0, [1]), (20.5, [2])]
     many = groups({s: 10.0 for s in range(1, 2 * BATCH_FACES + 2)})
     assert [len(g) for _, g in many] == [BATCH_FACES, BATCH_FACES, 1]
+    # faces on the k**-1/2 size callback (gmsh's curvature sizes off) never share a call with the others
+    assert groups({1: 20.0, 2: 20.4, 3: 20.2}, apart={2}) == [(20.2, [1, 3]), (20.4, [2])]
 
 
 def _box_and_open_face():
