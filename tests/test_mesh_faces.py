@@ -252,3 +252,28 @@ def test_two_faces_on_one_boundary_loop_get_interior_nodes():
         assert all(o.ok for o in ctx.outcomes.values()) and _overlapping_faces([1, 2]) == {}
         assert all(len(gmsh.model.mesh.getNodes(2, s, includeBoundary=False)[0]) for s in (1, 2))
         assert any("faces 1, 2: triangulated from their boundary nodes alone" in n for n in notes)
+
+
+def test_a_face_retried_on_curves_gmsh_already_meshed_keeps_every_curve_mesh():
+    """A face that reaches the own-curve strategy when all its curves were replaced already (by a
+    neighbour) has nothing to replace: ``gmsh.model.mesh.clear([])`` would delete the whole model's mesh,
+    and every face after it failed with no nodes on its boundary (mesh_T106_V3 at ALD 1e-3: 0 of 8)."""
+    import gmsh
+
+    from cadedge.mesh.generate import clear, mesh_faces, remesh_curves
+    from cadedge.mesh.gmsh_model import gmsh_session, surface_curve_uses
+
+    with gmsh_session():
+        gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        gmsh.model.mesh.generate(1)
+        nodes = len(gmsh.model.mesh.getNodes()[0])
+        clear([])
+        assert remesh_curves([]) == []
+        assert len(gmsh.model.mesh.getNodes()[0]) == nodes
+        surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        own = set(surface_curve_uses(surfaces[0]))  # as if a neighbour had replaced them
+        out = mesh_faces(surfaces, {}, skip={surfaces[0]: {k: "failed before" for k in range(8)}},
+                         own_curves=own)
+        assert all(o.ok for o in out.values())
+        assert out[surfaces[0]].strategy == STRATEGIES[8].name

@@ -203,9 +203,17 @@ def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
         if surface_ok(s):
             out[s] = None
         else:
-            gmsh.model.mesh.clear([(2, s)])
+            clear([(2, s)])
             out[s] = _reason(s, log, exc, alone=len(surfaces) == 1)
     return out
+
+
+def clear(dim_tags: list[tuple[int, int]]) -> None:
+    """Delete the mesh of ``dim_tags``; nothing for an empty list (``gmsh.model.mesh.clear([])`` deletes the
+    whole model's mesh, imposed curve grids included: on mesh_T106_V3 a face retried on curves gmsh had
+    already meshed once cleared every curve, and every face then failed with no boundary nodes)."""
+    if dim_tags:
+        gmsh.model.mesh.clear(dim_tags)
 
 
 def _curve_chain(curve: int) -> tuple[np.ndarray, np.ndarray]:
@@ -241,7 +249,7 @@ def split_curves(curves: list[int]) -> list[int]:
         if not np.all(np.isfinite(u)) or not np.all(np.diff(u) > 0):
             continue
         users = [int(s) for s in gmsh.model.getAdjacencies(1, c)[0]]
-        gmsh.model.mesh.clear([(2, s) for s in users])
+        clear([(2, s) for s in users])
         touched.update(users)
         mid_u = 0.5 * (u[:-1] + u[1:])
         mid_x = np.asarray(gmsh.model.getValue(1, c, mid_u.tolist()), dtype=float).reshape(-1, 3)
@@ -249,7 +257,7 @@ def split_curves(curves: list[int]) -> list[int]:
         tags, coords, _ = gmsh.model.mesh.getNodes(1, c, includeBoundary=False)
         x_of = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords).reshape(-1, 3)))
         inner_x = np.array([x_of[t] for t in inner_tags.tolist()]).reshape(-1, 3)
-        gmsh.model.mesh.clear([(1, c)])
+        clear([(1, c)])
         first = int(gmsh.model.mesh.getMaxNodeTag()) + 1
         new_tags = np.arange(first, first + len(mid_u), dtype=np.int64)
         n_in = len(inner_tags)
@@ -271,12 +279,14 @@ def remesh_curves(curves: list[int]) -> list[int]:
     """Replace the 1-D mesh of ``curves`` by gmsh's own (sized by the current size field); the faces using
     them are cleared first and returned, to be meshed again, with every other face whose mesh gmsh's 1-D
     step wiped (``generate(1)`` clears all 2-D meshes, visible or not)."""
+    if not curves:  # all of them replaced already (generate(1) would still wipe every face's mesh)
+        return []
     touched: set[int] = set()
     for c in curves:
         touched.update(int(s) for s in gmsh.model.getAdjacencies(1, c)[0])
     meshed = {t for _, t in gmsh.model.getEntities(2) if len(gmsh.model.mesh.getElementsByType(2, t)[0])}
-    gmsh.model.mesh.clear([(2, s) for s in sorted(touched)])
-    gmsh.model.mesh.clear([(1, c) for c in curves])
+    clear([(2, s) for s in sorted(touched)])
+    clear([(1, c) for c in curves])
     visible = [(1, c) for c in curves]
     gmsh.model.setVisibility(visible, 1)
     try:

@@ -47,12 +47,12 @@ def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]
     import gmsh
 
     from .fidelity import remesh_face
-    from .generate import STRATEGIES, FaceOutcome, _attempt_many
+    from .generate import STRATEGIES, FaceOutcome, _attempt_many, clear
     from .interior import use_per_circle
 
     for s in surfaces:  # one group is all sampled or all not (see groups), so the gmsh option agrees
         use_per_circle(s, per_circle)
-    gmsh.model.mesh.clear([(2, s) for s in surfaces])
+    clear([(2, s) for s in surfaces])
     gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
     gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
