@@ -102,24 +102,6 @@ def test_vertex_grading_on_a_model_with_many_small_edges(corpus_dir):
         assert max(e.ald_estimate for e in grid.edges if not e.degenerate) <= 1e-3
 
 
-def test_vertex_grading_at_the_mesh_default_keeps_the_fewer_of_split_and_re_placed(corpus_dir):
-    """At 2.0 an edge over its vertex cap is split and re-placed, and the re-placement kept where it meets
-    the limits with fewer segments: wing_fuselage's tiny edges beside long B-splines took 612 segments
-    split alone, 418 so. Every limit and target is still met, and the vertex points stay."""
-    pytest.importorskip("OCP")
-    from cadedge import refine_shape
-
-    path = corpus_dir / "live-clones__gmsh__wing_fuselage.step"
-    plain = refine_shape(path, ald=1e-3)
-    grid = refine_shape(path, ald=1e-3, max_growth=2.0)
-    assert not [w for w in grid.warnings if "max_growth" in w]
-    assert _growth_at_vertices(grid) <= 2.0 * (1 + 1e-6) and _growth_in_edges(grid) <= 2.0 * (1 + 1e-6)
-    assert grid.segments <= 450
-    for e, p in zip(grid.edges, plain.edges):
-        assert e.degenerate or (e.ald_estimate <= 1e-3 and np.all(np.diff(e.params) > 0))
-        assert np.array_equal(e.points[[0, -1]], p.points[[0, -1]])
-
-
 def test_fit_to_sizes_reuses_the_grid_curves_or_builds_them_once(fixtures_dir):
     pytest.importorskip("OCP")
     import dataclasses

@@ -4,21 +4,19 @@ Within an edge ``refine_curve`` limits growth; across a vertex the end segments 
 unrelated. Here each edge end gets a cap, ``g`` times the shortest end segment at its vertex, and the
 edges are changed until their end segments respect the caps and adjacent segments differ by at most
 ``g``. Caps are recomputed round after round until nothing changes, since changing an edge's far end
-changes the shortest end segment at its other vertex. Two ways to change an edge:
+changes the shortest end segment at its other vertex. Two regimes:
 
-- Splitting. A segment of length ``L`` too long next to an allowed size ``A`` (``g`` times the short
-  neighbour, or the cap) is split into ``A`` on the short side and ``L - A`` when ``L >= 2 A``, else
-  into two halves; repeated, this grades geometrically away from the short side, and the other points
-  stay where they are. No piece is made shorter than ``1/g`` of the shortest segment on the edge or at
-  its vertices, nor than ``1/g`` of the shortest segment of the whole shape before grading, so it
-  terminates. Below the golden ratio it cannot settle: a segment cut in two leaves a far piece of at
-  most ``g / (1 + g)`` of it, which an equal neighbour exceeds ``g``-fold, so every segment to the
-  edge's far end is cut, and through the caps every edge beyond (917_fusee went from 3,340 segments
-  to 87,567 at 1.5), so it is used only from the golden ratio up (the mesh default 2.0 among them).
-- Re-placement. An edge over a cap has its nodes re-placed along a size field graded from its capped
-  ends (:func:`cadedge.splitting.regrade`), its deficit kept within its target. Below the golden ratio
-  it is the only way; from it up, it is kept where it meets the limits with fewer segments than
-  splitting.
+- ``g`` at least the golden ratio (the mesh default 2.0): splitting. A segment of length ``L`` too
+  long next to an allowed size ``A`` (``g`` times the short neighbour, or the cap) is split into ``A``
+  on the short side and ``L - A`` when ``L >= 2 A``, else into two halves; repeated, this grades
+  geometrically away from the short side, and the other points stay where they are. No piece is made
+  shorter than ``1/g`` of the shortest segment on the edge or at its vertices, nor than ``1/g`` of the
+  shortest segment of the whole shape before grading, so it terminates.
+- ``g`` below the golden ratio: re-placement. There splitting cannot stop (a segment cut in two
+  leaves a far piece of at most ``g / (1 + g)`` of it, which an equal neighbour exceeds ``g``-fold, so
+  every segment to the edge's far end is cut, and through the caps every edge beyond: 917_fusee went
+  from 3,340 segments to 87,567 at 1.5). An edge over a cap has its nodes re-placed along a size field
+  graded from its capped ends (:func:`cadedge.splitting.regrade`), its deficit kept within its target.
 
 New points lie on the curve; vertex points stay bit-identical. Splitting only lengthens the polyline,
 so the deficit only falls; a re-placement is checked against the edge's target. Grids are replaced,
@@ -68,8 +66,8 @@ def _allowed(seg: np.ndarray, g: float, caps: tuple[float | None, float | None])
 
 
 def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | None, float | None],
-              floor: float) -> ShapeEdgeGrid:
-    """``e`` split until caps and growth hold (``e`` itself when nothing was split).
+              floor: float) -> tuple[ShapeEdgeGrid, int, bool]:
+    """``e`` split until caps and growth hold: (the new grid, points inserted, all limits met).
 
     No piece shorter than ``floor`` is made, which bounds the work; for ``g < sqrt(2)`` that can
     leave a limit unmet.
@@ -94,9 +92,12 @@ def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | 
             break  # the point fell on a node: this segment cannot be split further
         params, points = longer
         seg = row_norms(np.diff(points, axis=0))
-    if len(params) == len(e.params):
-        return e
-    return dataclasses.replace(e, params=params, points=points, evaluations=evaluations)
+    else:
+        count = MAX_SPLITS
+    met = count < MAX_SPLITS and not np.any(seg > _allowed(seg, g, caps)[0] * (1 + SLACK))
+    if count == 0:
+        return e, 0, met
+    return dataclasses.replace(e, params=params, points=points, evaluations=evaluations), count, met
 
 
 def _end_segments(edges: list[ShapeEdgeGrid]) -> dict[int, list[float]]:
@@ -152,57 +153,35 @@ def _regraded(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, sizes: tuple[float |
     return dataclasses.replace(e, params=params, points=points, evaluations=e.evaluations + calls)
 
 
-def _meets(e: ShapeEdgeGrid, g: float, caps: tuple[float | None, float | None]) -> bool:
-    """Whether ``e``'s segments respect ``g`` and its end caps."""
-    seg = e.segment_lengths
-    return not np.any(seg > _allowed(seg, g, caps)[0] * (1 + SLACK))
-
-
-def _grade_rounds(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: float,
+def _regrade_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: float,
                   targets: Sequence[float], totals: Mapping[int, float]) -> tuple[list[ShapeEdgeGrid], list[str]]:
-    """Change the edges round after round until none changes: (new edges, notes naming what is unmet).
+    """Re-place the edges whose end segments exceed their vertex caps along size fields that start at
+    ``sqrt(g)`` times the shortest end segment at each capped end (midway, on a log scale, between
+    that segment and its cap), round after round until no end exceeds its cap: (new edges, notes).
 
-    An edge whose end segment exceeds its vertex cap is re-placed along a size field that starts at
-    ``sqrt(g)`` times the shortest end segment at each capped end (midway, on a log scale, between that
-    segment and its cap). Below the golden ratio that is all (splitting would cascade, :data:`GOLDEN`).
-    At or above it every edge is also split until its caps and ``g`` hold (:func:`_fix_edge`), and the
-    re-placement is kept only when it meets them with fewer segments: splitting keeps the nodes where
-    they are but grades each long segment by itself (wing_fuselage at ALD 1e-3: 612 segments split,
-    418 with the choice). Past half of :data:`MAX_ROUNDS` only splitting goes on, which settles.
+    No splitting follows: below the golden ratio it would cascade (:data:`GOLDEN`). The notes name
+    what is left unmet.
     """
     edges = list(edges)
-    split = g >= GOLDEN
-    live = [e for e in edges if not e.degenerate and e.segments]
-    lowest = min(float(e.segment_lengths.min()) for e in live) / g
-    settled = False
-    for rnd in range(MAX_ROUNDS):
+    for _ in range(MAX_ROUNDS):
         caps = _caps(edges, g)
         changed = False
         for k, e in enumerate(edges):
-            if e.degenerate or e.segments == 0:
+            if e.degenerate or e.segments == 0 or k not in totals:
                 continue
             ends = (caps.get(e.vertices[0]), caps.get(e.vertices[1]))
-            new = e
-            if split:
-                floor = max(lowest, min([float(e.segment_lengths.min())] + [c / g for c in ends if c is not None]) / g)
-                new = _fix_edge(e, curves[e.id], g, ends, floor)
-            over = any(c is not None and s > c * (1 + SLACK) for s, c in zip(e.spacing, ends))
-            if over and k in totals and (not split or rnd < MAX_ROUNDS // 2):
-                sizes = (None if ends[0] is None else ends[0] / math.sqrt(g),
-                         None if ends[1] is None else ends[1] / math.sqrt(g))
-                placed = _regraded(e, curves[e.id], g, sizes, float(targets[k]), totals[k])
-                if not split or (placed is not e and placed.segments < new.segments and _meets(placed, g, ends)):
-                    new = placed
-            edges[k] = new
-            changed = changed or new is not e
+            if not any(c is not None and s > c * (1 + SLACK) for s, c in zip(e.spacing, ends)):
+                continue
+            sizes = (None if ends[0] is None else ends[0] / math.sqrt(g),
+                     None if ends[1] is None else ends[1] / math.sqrt(g))
+            edges[k] = _regraded(e, curves[e.id], g, sizes, float(targets[k]), totals[k])
+            changed = changed or edges[k] is not e
         if not changed:
-            settled = True
             break
-    notes = [] if settled else [f"max_growth {g:g} across vertices not settled after {MAX_ROUNDS} rounds"]
     ends_at = _end_segments(edges)
-    notes += [f"vertex {v}: max_growth {g:g} across vertices not met: its end segments differ up to "
-              f"{max(s) / min(s):.3g}-fold" for v, s in sorted(ends_at.items())
-              if len(s) > 1 and max(s) > g * min(s) * (1 + SLACK)]
+    notes = [f"vertex {v}: max_growth {g:g} across vertices not met: its end segments differ up to "
+             f"{max(s) / min(s):.3g}-fold" for v, s in sorted(ends_at.items())
+             if len(s) > 1 and max(s) > g * min(s) * (1 + SLACK)]
     for k, e in enumerate(edges):
         if not e.degenerate and e.segments > 1 and worst_growth(e.points) > g * (1 + SLACK):
             notes.append(f"edge {k + 1}: max_growth {g:g} not met everywhere: worst ratio of adjacent "
@@ -221,9 +200,39 @@ def grade_vertices(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], 
     edges = list(edges)
     totals = {k: e.length / (1.0 - e.ald_estimate) for k, e in enumerate(edges)
               if not e.degenerate and e.ald_estimate < 1.0 and e.length > 0.0}
-    if not any(not e.degenerate and e.segments for e in edges):
+    live = [e for e in edges if not e.degenerate and e.segments]
+    if not live:
         return edges, []
-    edges, notes = _grade_rounds(edges, curves, g, targets, totals)
+    if g < GOLDEN:
+        edges, notes = _regrade_ends(edges, curves, g, targets, totals)
+    else:
+        edges, notes = _split_ends(edges, curves, g, live)
     for k, total in totals.items():
         edges[k] = dataclasses.replace(edges[k], ald_estimate=max(1.0 - edges[k].length / total, 0.0))
+    return edges, notes
+
+
+def _split_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: float,
+                live: list[ShapeEdgeGrid]) -> tuple[list[ShapeEdgeGrid], list[str]]:
+    """Split every edge until its vertex caps and ``g`` hold, round after round (``g`` at least the
+    golden ratio, where splitting settles): (new edges, notes)."""
+    notes: list[str] = []
+    met: dict[int, bool] = {}
+    lowest = min(float(e.segment_lengths.min()) for e in live) / g
+    for _ in range(MAX_ROUNDS):
+        caps = _caps(edges, g)
+        changed = False
+        for k, e in enumerate(edges):
+            if e.degenerate or e.segments == 0:
+                continue
+            ends = (caps.get(e.vertices[0]), caps.get(e.vertices[1]))
+            floor = max(lowest, min([float(e.segment_lengths.min())] + [c / g for c in ends if c is not None]) / g)
+            edges[k], inserted, met[k] = _fix_edge(e, curves[e.id], g, ends, floor)
+            changed = changed or inserted > 0
+        if not changed:
+            break
+    else:
+        notes.append(f"max_growth {g:g} across vertices not settled after {MAX_ROUNDS} rounds")
+    notes += [f"edge {k + 1}: max_growth {g:g} not met everywhere (splitting would need pieces shorter "
+              "than the edge's shortest segment)" for k, ok in sorted(met.items()) if not ok]
     return edges, notes
