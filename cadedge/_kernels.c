@@ -700,19 +700,7 @@ int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_
     }
     for (Py_ssize_t m = 0; m < nu; m++) {
         double x = u[m];
-        Py_ssize_t lo = 0, hi = nk; /* first knot > x (numpy's searchsorted, side="right") */
-        while (lo < hi) {
-            Py_ssize_t mid = (lo + hi) / 2;
-            if (knots[mid] <= x)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        Py_ssize_t span = lo - 1;
-        if (span < degree)
-            span = degree;
-        if (span > n - 1)
-            span = n - 1;
+        Py_ssize_t span = knot_span(knots, nk, n, degree, x);
         if (dim == 3)
             de_boor_point(knots, coef, span, degree, 3, x, d, out + m * 3);
         else if (dim == 4)

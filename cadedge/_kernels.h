@@ -43,6 +43,26 @@ static inline double gain(const double *pa, Py_ssize_t i, const double *pm, Py_s
     return dmax(t - distance(pa, i, pb, k), 0.0);
 }
 
+/* The B-spline knot span of x: the last knot <= x (numpy's searchsorted, side="right", less one), clamped to
+ * [degree, n - 1] so the ends evaluate on the first and last spans. */
+static inline Py_ssize_t knot_span(const double *knots, Py_ssize_t nk, Py_ssize_t n, long degree, double x)
+{
+    Py_ssize_t lo = 0, hi = nk; /* first knot > x */
+    while (lo < hi) {
+        Py_ssize_t mid = (lo + hi) / 2;
+        if (knots[mid] <= x)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    Py_ssize_t span = lo - 1;
+    if (span < degree)
+        span = degree;
+    if (span > n - 1)
+        span = n - 1;
+    return span;
+}
+
 /* One exploration level over n live triples; returns the number split (-1: out of memory). */
 Py_ssize_t ck_classify(Py_ssize_t n, const double *ua, const double *um, const double *ub, const double *pa,
                        const double *pm, const double *pb, const double *ratio, double tol, double *scale,

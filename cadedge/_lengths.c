@@ -78,19 +78,7 @@ static double speed(const Curve *c, double u)
             double start = knots[p], m = fmod(u - start, c->period);
             x = start + (m < 0 ? m + c->period : m);
         }
-        Py_ssize_t lo = 0, hi = c->nk; /* first knot > x */
-        while (lo < hi) {
-            Py_ssize_t mid = (lo + hi) / 2;
-            if (knots[mid] <= x)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        Py_ssize_t span = lo - 1;
-        if (span < p)
-            span = p;
-        if (span > n - 1)
-            span = n - 1;
+        Py_ssize_t span = knot_span(knots, c->nk, n, p, x);
         double *t = c->tri;
         for (long j = 0; j <= p; j++)
             for (Py_ssize_t k = 0; k < dim; k++)

@@ -226,26 +226,16 @@ def _cli_hung_in_gmsh(tmp_path):
     return proc, child
 
 
-def test_cli_ctrl_c_is_one_line_and_kills_gmsh(tmp_path):
+@pytest.mark.parametrize("sig, code, word", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
+def test_cli_interrupt_is_one_line_and_kills_gmsh(tmp_path, sig, code, word):
+    """Ctrl-C, and SIGTERM (``kill``, ``timeout``, a job scheduler) the same way: one line, exit 130 or 143,
+    the gmsh child killed, no output file (SIGTERM used to end the process with no line at all)."""
     proc, child = _cli_hung_in_gmsh(tmp_path)
     time.sleep(1.0)  # into the hung face attempt
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130
-    assert err.strip() == "cadedge mesh: cyl.step: interrupted"
-    assert not child.is_running() or child.status() == psutil.STATUS_ZOMBIE
-    assert not (tmp_path / "c.msh").exists()
-
-
-def test_cli_sigterm_is_one_line_and_kills_gmsh(tmp_path):
-    """SIGTERM (``kill``, ``timeout``, a job scheduler) takes Ctrl-C's way out: one "terminated" line, exit
-    143, the gmsh child killed, no output file (it used to end the process with no line at all)."""
-    proc, child = _cli_hung_in_gmsh(tmp_path)
-    time.sleep(1.0)  # into the hung face attempt
-    proc.send_signal(signal.SIGTERM)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 143
-    assert err.strip() == "cadedge mesh: cyl.step: terminated"
+    assert proc.returncode == code
+    assert err.strip() == f"cadedge mesh: cyl.step: {word}"
     assert not child.is_running() or child.status() == psutil.STATUS_ZOMBIE
     assert not (tmp_path / "c.msh").exists()
 
