@@ -1,9 +1,10 @@
 """Per-face area deficit: how far a face's triangles are from its B-rep area.
 
 The area deficit of a face is ``1 - mesh area / B-rep area`` (B-rep area from OCCT's
-``BRepGProp::SurfaceProperties``, cross-checked: :mod:`cadedge.occt.areas`), the 2-simplex sibling of the edges' arc-length deficit. It is signed:
-flat triangles inscribed in a convex surface lose area (positive), while a plate whose hole is an
-inscribed polygon gains some (negative). The target is ``|deficit| <= surface_ald`` on every face.
+``BRepGProp::SurfaceProperties``, cross-checked: :mod:`cadedge.occt.areas`), the 2-simplex sibling of
+the edges' arc-length deficit. It is signed: flat triangles inscribed in a convex surface lose area
+(positive), while a plate whose hole is an inscribed polygon gains some (negative). The target is
+``|deficit| <= surface_ald`` on every face.
 """
 
 from __future__ import annotations
@@ -440,7 +441,8 @@ def after_generate(ctx) -> None:
                     f = face_of.get(s, s)  # cylinders 2.8% off at any size, 3x the triangles once refined)
                     back[s] = opts["face_per_circle"].get(f, n0)
                     per_face.pop(f, None)
-        for n, group in groups(back, share=1.0, apart=set(SIZES.faces)):  # faces of equal sizes in one gmsh call (see remesh.py)
+        # faces of equal sizes in one gmsh call (see remesh.py)
+        for n, group in groups(back, share=1.0, apart=set(SIZES.faces)):
             say("refine " + " ".join(str(face_of.get(s, s)) for s in group))
             ctx.outcomes.update(remesh_group(group, n, face_of))
             say("refined " + " ".join(str(face_of.get(s, s)) for s in group))
