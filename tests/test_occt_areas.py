@@ -14,9 +14,9 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace,
 from OCP.Geom import Geom_OffsetSurface  # noqa: E402
 from OCP.GeomAPI import GeomAPI_Interpolate, GeomAPI_PointsToBSplineSurface  # noqa: E402
 from OCP.gp import gp_Pnt  # noqa: E402
-from OCP.TColgp import TColgp_Array2OfPnt, TColgp_HArray1OfPnt  # noqa: E402
 
 from cadedge.occt.areas import _area_element, domain_area, face_area, face_areas  # noqa: E402
+from cadedge.occt.compat import TColgp_Array2OfPnt, TColgp_HArray1OfPnt  # noqa: E402
 from cadedge.occt.reader import load_shape  # noqa: E402
 from cadedge.occt.topology import Topology  # noqa: E402
 

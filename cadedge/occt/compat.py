@@ -13,6 +13,7 @@ from __future__ import annotations
 try:  # OCP 8.0
     from OCP.collections import Array1_double as TColStd_Array1OfReal
     from OCP.collections import Array1_gp_Pnt as TColgp_Array1OfPnt
+    from OCP.collections import Array2_gp_Pnt as TColgp_Array2OfPnt
     from OCP.collections import HArray1_gp_Pnt as TColgp_HArray1OfPnt
     from OCP.collections import Array1_int as TColStd_Array1OfInteger
     from OCP.collections import \
@@ -23,7 +24,7 @@ try:  # OCP 8.0
     from OCP.collections import Sequence_TCollection_AsciiString as TColStd_SequenceOfAsciiString
     from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence
 except ImportError:  # OCP 7.9
-    from OCP.TColgp import TColgp_Array1OfPnt
+    from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
     from OCP.TColgp import TColgp_HArray1OfPnt
     from OCP.TDF import TDF_LabelSequence
     from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_SequenceOfAsciiString
@@ -45,5 +46,5 @@ class _TopoDSNamespace:
 TopoDS = _topods_module.TopoDS if hasattr(_topods_module.TopoDS, "Edge_s") else _TopoDSNamespace()
 
 __all__ = ["TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
-           "TColgp_Array1OfPnt", "TColgp_HArray1OfPnt", "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape",
-           "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
+           "TColgp_Array1OfPnt", "TColgp_Array2OfPnt", "TColgp_HArray1OfPnt", "TDF_LabelSequence",
+           "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
