@@ -32,15 +32,14 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
     import gmsh
 
     from .fidelity import gmsh_surface_areas
-    from .interior import SIZES
-    from .remesh import groups, remesh_group
+    from .remesh import job_groups, remesh_group
 
     face_of = ctx.emap.face_of_surface
     say = ctx.progress or (lambda line: None)
     kept: dict[int, float] = {}
     coarser = {s: per_circle[s] * float(np.clip(np.sqrt(max(abs(d), 1e-12) / (AIM * level)), *FACTOR))
                for s, d in measured.items() if abs(d) < BELOW * level and np.isfinite(d)}
-    for n, group in groups(coarser, apart=set(SIZES.faces)):  # faces of like counts in one gmsh call (see remesh.py)
+    for n, group in job_groups(coarser):  # faces of like counts in one gmsh call (see remesh.py)
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
             break
         faces = " ".join(str(face_of.get(s, s)) for s in group)
@@ -55,7 +54,7 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
                 kept[face_of.get(s, s)] = n
             else:  # mesh it again as it was
                 back[s] = per_circle[s]
-        for n_back, again in groups(back, share=1.0, apart=set(SIZES.faces)):
+        for n_back, again in job_groups(back, share=1.0):
             redo.update(remesh_group(again, n_back, face_of))
         ctx.outcomes.update(redo)
         say(f"refined {faces}")

@@ -407,8 +407,8 @@ def after_generate(ctx) -> None:
 
     from .coarsen import coarsen
     from .generate import mesh_faces
-    from .interior import SIZES, use_per_circle
-    from .remesh import groups, remesh_group
+    from .interior import use_per_circle
+    from .remesh import job_groups, remesh_group
 
     opts = ctx.job.options.get("fidelity")
     if not opts:
@@ -441,8 +441,7 @@ def after_generate(ctx) -> None:
                     f = face_of.get(s, s)  # cylinders 2.8% off at any size, 3x the triangles once refined)
                     back[s] = opts["face_per_circle"].get(f, n0)
                     per_face.pop(f, None)
-        # faces of equal sizes in one gmsh call (see remesh.py)
-        for n, group in groups(back, share=1.0, apart=set(SIZES.faces)):
+        for n, group in job_groups(back, share=1.0):  # faces of equal sizes in one gmsh call (see remesh.py)
             say("refine " + " ".join(str(face_of.get(s, s)) for s in group))
             ctx.outcomes.update(remesh_group(group, n, face_of))
             say("refined " + " ".join(str(face_of.get(s, s)) for s in group))
@@ -454,7 +453,7 @@ def after_generate(ctx) -> None:
                for s in pending}
         finer = {s: old[s] * float(np.clip(np.sqrt(abs(measured[s]) / (AIM * target)), 1.25, 3.0))
                  for s in pending}
-        for n_group, group in groups(finer, apart=set(SIZES.faces)):
+        for n_group, group in job_groups(finer):
             if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
                 break
             faces = " ".join(str(face_of.get(s, s)) for s in group)

@@ -39,18 +39,27 @@ def groups(per_circle: dict[int, float], share: float = SHARE, *,
     return sorted(out, key=lambda g: (g[0], g[1][0]))
 
 
+def job_groups(per_circle: dict[int, float], share: float = SHARE) -> list[tuple[float, list[int]]]:
+    """:func:`groups` for this job's surfaces: those the ``k**-1/2`` callback sizes
+    (:data:`cadedge.mesh.interior.SIZES`) apart from those on gmsh's curvature sizes, since one gmsh call
+    has one ``Mesh.MeshSizeFromCurvature`` setting."""
+    from .interior import SIZES
+
+    return groups(per_circle, share, apart=set(SIZES.faces))
+
+
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
-    """Mesh gmsh ``surfaces`` again from scratch in one call at ``per_circle`` triangles per ``2 pi`` (see
-    :func:`cadedge.mesh.interior.use_per_circle`); a face that call fails is meshed again on its own through every strategy
-    (:func:`cadedge.mesh.fidelity.remesh_face`). Returns each surface's
-    :class:`~cadedge.mesh.generate.FaceOutcome`."""
+    """Mesh gmsh ``surfaces`` (one group of :func:`job_groups`) again from scratch in one call at
+    ``per_circle`` triangles per ``2 pi`` (see :func:`cadedge.mesh.interior.use_per_circle`); a face that
+    call fails is meshed again on its own through every strategy (:func:`cadedge.mesh.fidelity.remesh_face`).
+    Returns each surface's :class:`~cadedge.mesh.generate.FaceOutcome`."""
     import gmsh
 
     from .fidelity import remesh_face
     from .generate import STRATEGIES, FaceOutcome, _attempt_many, clear
     from .interior import use_per_circle
 
-    for s in surfaces:  # one group is all sampled or all not (see groups), so the gmsh option agrees
+    for s in surfaces:  # one group is all sampled or all not (see job_groups), so the gmsh option agrees
         use_per_circle(s, per_circle)
     clear([(2, s) for s in surfaces])
     gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
