@@ -46,6 +46,11 @@ def hang_or_refine(input: str, output: str, options: dict[str, Any]) -> dict[str
     return refine_task(input, output, options)
 
 
+def unpublishable_refine(input: str, output: str, options: dict[str, Any]) -> dict[str, Any]:
+    """Refine, with a summary that msgpack cannot carry (a ``Path`` in it): it cannot travel as an event."""
+    return {**refine_task(input, output, options), "written": Path(output)}
+
+
 def wait_for_workers(address: str, n: int) -> None:
     """Wait until the scheduler at ``address`` has ``n`` workers: the nannies restart killed workers in
     their own time (a fresh interpreter importing distributed: tens of seconds on a loaded machine, longer

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from batch_tasks import (CRASH_STEM, HANG_STEM, crash_or_refine, hang_or_refine, local_cluster, probe_and_refine,
+                         unpublishable_refine,
                          wait_for_workers)
 from cadedge.batch import INDEX_NAME, WORKER_DIED, BatchIndex, expand_inputs, output_names, run_batch
 from cadedge.errors import InputError
@@ -141,6 +142,30 @@ def test_real_refine_on_cluster_with_duplicate_stems(tmp_path, scheduler):
     with BatchIndex(out / INDEX_NAME) as index:
         assert json.loads(index.get(str(CORPUS / CORPUS_SMALL[-1])).warnings) == list(warned[CORPUS_SMALL[-1]])
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary files left
+
+
+def test_a_summary_is_in_hand_when_its_task_is_done(tmp_path, scheduler):
+    """The worker logs the summary as an event ahead of the task's end: no fetch from the worker needed."""
+    from distributed import Client, wait
+
+    from cadedge.batch import refine_task
+    from cadedge.batch.runner import _publishing
+
+    got = {}
+    options = {"ald": ALD, "min_length": None, "max_length": None, "max_growth": None}
+    with Client(scheduler) as client:
+        client.subscribe_topic("cadedge-test-summary", lambda event: got.update({event[1]["key"]: event[1]}))
+        future = client.submit(_publishing, refine_task, "cadedge-test-summary", "one-key",
+                               str(FIXTURES / "cylinder.step"), str(tmp_path / "c.json"), options, pure=False, key="one-key")
+        wait([future])
+        assert got["one-key"]["summary"]["edges"] == 3  # recorded before the future turned done
+        assert future.result()["segments"] == got["one-key"]["summary"]["segments"]
+
+
+def test_a_summary_that_cannot_travel_as_an_event_is_fetched(tmp_path, scheduler):
+    inputs = copy_fixtures(tmp_path / "in", ["cylinder", "sphere"])
+    report = run_batch(inputs, tmp_path / "out", ald=ALD, scheduler=scheduler, task=unpublishable_refine)
+    assert report.all_ok and sorted(r.edges for r in report.results) == [3, 3]
 
 
 def test_worker_killed_mid_run_fails_that_input_only(tmp_path, scheduler):
