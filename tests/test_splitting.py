@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from cadedge.splitting import (insert_points, limit_growth, point_at_arc, points_at_distances, split_evenly,
-                               worst_growth)
+from cadedge.splitting import (insert_points, limit_growth, point_at_arc, points_at_distances, split_by_arc,
+                               split_evenly, split_segments, worst_growth)
 
 
 def _circle(u):
@@ -24,6 +24,23 @@ def test_insert_points_merges_by_parameter_keeps_old_samples_and_copies():
 def test_split_evenly_cuts_equal_parameter_steps():
     assert np.allclose(split_evenly(np.array([0.0, 1.0, 3.0]), np.array([2, 4])), [0.5, 1.5, 2.0, 2.5])
     assert len(split_evenly(np.array([0.0, 1.0]), np.array([1]))) == 0
+
+
+def _cubic(u):
+    """A straight line whose parameter speed varies a hundredfold over [0.1, 1]: x = u**3."""
+    u = np.asarray(u, dtype=float)
+    return np.c_[u ** 3, np.zeros_like(u), np.zeros_like(u)]
+
+
+def test_split_by_arc_cuts_equal_lengths_where_the_parameter_speed_varies():
+    u, p = np.array([0.1, 0.5, 1.0]), _cubic([0.1, 0.5, 1.0])
+    new_u, new_p = split_by_arc(u, p, np.array([1, 4]), _cubic)
+    assert len(new_u) == 3 and np.all((new_u > 0.5) & (new_u < 1.0)) and np.allclose(new_p, _cubic(new_u))
+    _, grid = split_segments(u, p, np.array([1, 4]), _cubic)
+    pieces = np.diff(grid[1:, 0])
+    assert np.allclose(pieces, pieces.mean(), rtol=1e-3)  # equal parameter steps: 0.28 down to 0.05
+    assert np.ptp(np.diff(_cubic(np.linspace(0.5, 1.0, 5))[:, 0])) > 0.2
+    assert len(split_by_arc(u, p, np.array([1, 1]), _cubic)[0]) == 0
 
 
 def test_point_at_arc_measures_from_either_end():

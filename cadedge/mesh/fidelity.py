@@ -171,7 +171,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     """A copy of ``grid`` whose edge segments suit the surface target of every face they bound, and the
     summed unsigned sliver estimate of each face's boundary before the splits (index ``id - 1``).
 
-    Two reasons to split a segment (into equal parameter steps on its OCCT curve; grid points are kept,
+    Two reasons to split a segment (into pieces of equal arc length on its OCCT curve; grid points are kept,
     nodes only added, so both faces of an edge still share its nodes):
 
     - its face is curved across it: longer than ``ratio`` times the face's curvature size there (see

@@ -22,7 +22,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
 
     Per face, the size at a boundary segment's midpoint is ``min_i (h_i + growth * d_i)`` over that face's
     own boundary grid points (:class:`~cadedge.mesh.sizes.SizeField` of the face's edges); segments longer
-    than ``ratio`` times it are split into equal parameter steps on the OCCT curve (ends and grid points
+    than ``ratio`` times it are split into pieces of equal arc length on the OCCT curve (ends and grid points
     kept, so shared edges stay conforming). A few passes let the splits spread along the boundary.
     """
     import dataclasses
@@ -31,7 +31,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
 
     from ..errors import GeometryError, InputError
     from ..shapegrid import with_edges
-    from ..splitting import insert_points, split_evenly
+    from ..splitting import insert_points, split_by_arc
     from .proximity import _LazyCurves
     from .sizes import SizeField
 
@@ -68,8 +68,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
                 continue
             try:
                 curve = curves[e.id]
-                new_u = split_evenly(e.params, k)
-                new_p = curve.evaluate(new_u)
+                new_u, new_p = split_by_arc(e.params, e.points, k, curve.evaluate)
             except (GeometryError, Standard_Failure):
                 continue
             if np.max(np.linalg.norm(curve.evaluate(e.params[[0, -1]]) - e.points[[0, -1]], axis=1)) > max(

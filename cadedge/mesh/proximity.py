@@ -4,7 +4,7 @@ An edge grid meets its ALD with very few segments on straight edges; but a face 
 24 mm segment 7 mm from a hole meshed at 0.5 mm can only be filled with slivers next to that
 segment, whatever the interior sizes. Before the grids are imposed, every segment longer than
 ``ratio`` (3) times the size field at its midpoint (graded from all edges' spacings, so a nearby edge
-counts even when it is not adjacent) is split into equal parameter steps on its OCCT curve
+counts even when it is not adjacent) is split into pieces of equal arc length on its OCCT curve
 (:mod:`cadedge.splitting`; the curves ``refine_shape`` built, kept on the grid). Edge ends are never
 moved, so shared vertices stay bit-identical, and splitting only lowers the ALD.
 """

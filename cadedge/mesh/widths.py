@@ -7,7 +7,7 @@ see it, since it grows from spacings, not from distances. Here the local width o
 segment is the distance from the segment's midpoint to the face's other boundary segments, leaving out
 the segment's own edge and the edges that share a B-rep vertex with it (a face that narrows to a corner
 has no width there: the corner's angle forces its triangles, see :mod:`cadedge.mesh.quality`). Segments
-longer than :data:`WIDTH_RATIO` times that width are split into equal parameter steps on their OCCT curve,
+longer than :data:`WIDTH_RATIO` times that width are split into pieces of equal arc length on their OCCT curve,
 pass after pass: near a tiny edge the splits halve towards it, so the boundary is graded down to the tiny
 edge's length instead of jumping to it. Grid points are kept and edge ends never move.
 
