@@ -13,11 +13,11 @@ cq = pytest.importorskip("cadquery")
 
 from cadedge.cli import main  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
-from cadedge.mesh.fidelity import brep_face_areas, fit_boundaries, surface_types  # noqa: E402
+from cadedge.mesh.fidelity import _sagittas, brep_face_areas, fit_boundaries, surface_types  # noqa: E402
 from cadedge.mesh.quality import triangle_angles  # noqa: E402
 from cadedge.mesh.report import build_report  # noqa: E402
 
-from conftest import FIXTURES  # noqa: E402
+from conftest import CORPUS, FIXTURES  # noqa: E402
 
 
 def _sphere():
@@ -206,3 +206,31 @@ def test_an_offset_face_is_measured_against_its_true_area():
     offset = [f for f in result.report.faces if f.surface == "OffsetSurface"]
     assert len(offset) == 1 and abs(offset[0].area_deficit) <= 1e-3, offset
     assert result.report.worst_deficit <= 1e-3 and not result.report.over_target
+
+
+def test_a_sagitta_is_the_height_across_the_chord_whatever_the_parameter_speed():
+    def line(u):  # x = u**3: the mid-parameter point lies far along the chord, not off it
+        u = np.asarray(u, dtype=float)
+        return np.c_[u ** 3, np.zeros_like(u), np.zeros_like(u)]
+
+    u = np.array([0.1, 0.6, 1.0])
+    assert np.allclose(_sagittas(u, line(u), line), 0.0, atol=1e-15)
+
+    def arc(u):  # a unit circle run at a varying speed: angle = u**2
+        u = np.asarray(u, dtype=float)
+        return np.c_[np.cos(u ** 2), np.sin(u ** 2), np.zeros_like(u)]
+
+    u = np.array([0.0, 1.0])
+    height = np.linalg.norm(_sagittas(u, arc(u), arc)[0])
+    assert 0.9 * (1 - np.cos(0.5)) < height <= 1 - np.cos(0.5) + 1e-12  # the arc's own sagitta, nearly
+
+
+@pytest.mark.corpus
+def test_loose_bspline_model_meshes_on_its_own_grids_with_good_angles():
+    """mesh_T106_V3 (unsewn faces, B-spline curves of uneven parameter speed): splitting by parameter
+    and mid-parameter sagittas once split its boundaries to 0.02 mm; faces then failed boundary
+    recovery and fell back to gmsh's curve meshes, down to 2.1 degrees."""
+    result = mesh_shape(CORPUS / "live-clones__gmsh__mesh_T106_V3.step", ald=1e-2)
+    assert len(result.faces) == 8 and all(f.strategy == "Frontal-Delaunay" for f in result.faces)
+    assert not result.own_mesh_edges
+    assert result.report.worst_deficit <= 1e-2 and result.report.min_angle > 10.0
