@@ -103,11 +103,25 @@ def split_by_arc(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
     return u, evaluate(u)
 
 
-def split_segments(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
-                   evaluate: Evaluate) -> tuple[np.ndarray, np.ndarray]:
-    """A new grid: segment ``k`` cut into ``pieces[k]`` pieces of equal arc length (:func:`split_by_arc`),
-    the new points on the curve (``evaluate(u) -> (n, 3)``); the old samples stay as they are."""
-    new_u, new_p = split_by_arc(params, points, pieces, evaluate)
+#: How :func:`split_segments` spaces its cuts.
+SPACINGS = ("arc", "parameter")
+
+
+def split_segments(params: np.ndarray, points: np.ndarray, pieces: np.ndarray, evaluate: Evaluate, *,
+                   spacing: str = "arc") -> tuple[np.ndarray, np.ndarray]:
+    """A new grid: segment ``k`` cut into ``pieces[k]`` pieces, the new points on the curve
+    (``evaluate(u) -> (n, 3)``); the old samples stay as they are.
+
+    ``spacing``: ``"arc"`` (pieces of equal arc length, :func:`split_by_arc`) or ``"parameter"`` (equal
+    parameter steps, :func:`split_evenly`: finer where the curve's parameter slows, which on curves that
+    run into a pole or a pointed tip is where the face's curvature grows)."""
+    if spacing == "arc":
+        new_u, new_p = split_by_arc(params, points, pieces, evaluate)
+    elif spacing == "parameter":
+        new_u = split_evenly(params, np.asarray(pieces, dtype=int))
+        new_p = evaluate(new_u)
+    else:
+        raise ValueError(f"spacing must be one of {SPACINGS}, got {spacing!r}")
     return insert_points(params, points, new_u, new_p)
 
 

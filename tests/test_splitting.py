@@ -41,6 +41,10 @@ def test_split_by_arc_cuts_equal_lengths_where_the_parameter_speed_varies():
     assert np.allclose(pieces, pieces.mean(), rtol=1e-3)  # equal parameter steps: 0.28 down to 0.05
     assert np.ptp(np.diff(_cubic(np.linspace(0.5, 1.0, 5))[:, 0])) > 0.2
     assert len(split_by_arc(u, p, np.array([1, 1]), _cubic)[0]) == 0
+    steps, _ = split_segments(u, p, np.array([1, 4]), _cubic, spacing="parameter")
+    assert np.allclose(steps, [0.1, 0.5, 0.625, 0.75, 0.875, 1.0])
+    with pytest.raises(ValueError, match="spacing"):
+        split_segments(u, p, np.array([1, 4]), _cubic, spacing="even")
 
 
 def test_point_at_arc_measures_from_either_end():

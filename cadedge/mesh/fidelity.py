@@ -171,8 +171,14 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     """A copy of ``grid`` whose edge segments suit the surface target of every face they bound, and the
     summed unsigned sliver estimate of each face's boundary before the splits (index ``id - 1``).
 
-    Two reasons to split a segment (into pieces of equal arc length on its OCCT curve; grid points are kept,
-    nodes only added, so both faces of an edge still share its nodes):
+    Two reasons to split a segment (into equal parameter steps on its OCCT curve; grid points are kept,
+    nodes only added, so both faces of an edge still share its nodes). Equal parameter steps, unlike the
+    equal arc lengths of the later passes: wing_fuselage's fuselage meridians slow their parameter towards
+    the pointed tail, where the surface's curvature grows without bound, and there equal arc lengths left
+    10 mm segments beside the tip (faces 1 and 8 were then triangulated from their boundary nodes alone
+    and meshed again far finer: 78 206 triangles at ALD 1e-2 against 38 102). The pieces' sizes come from
+    this fit's own rules, so a short piece here is not copied along the boundary as a proximity pass
+    copies a size (see :func:`cadedge.splitting.split_by_arc`):
 
     - its face is curved across it: longer than ``ratio`` times the face's curvature size there (see
       :func:`per_circle`; :data:`STRAIGHT_RATIO` times on a straight edge, see :data:`STRAIGHT_TOL`);
@@ -240,7 +246,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                                                       nan=1).astype(int))
         if not np.any(pieces > 1):
             continue
-        params, points = split_segments(e.params, e.points, pieces, curve.evaluate)
+        params, points = split_segments(e.params, e.points, pieces, curve.evaluate, spacing="parameter")
         edges[i] = dataclasses.replace(e, params=params, points=points)
     return with_edges(grid, edges), gross
 
