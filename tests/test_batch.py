@@ -154,9 +154,11 @@ def test_a_summary_is_in_hand_when_its_task_is_done(tmp_path, scheduler):
     got = {}
     options = {"ald": ALD, "min_length": None, "max_length": None, "max_growth": None}
     with Client(scheduler) as client:
-        client.subscribe_topic("cadedge-test-summary", lambda event: got.update({event[1]["key"]: event[1]}))
+        client.subscribe_topic("cadedge-test-summary",
+                               lambda event: got.update({event[1]["key"]: event[1]}))
         future = client.submit(_publishing, refine_task, "cadedge-test-summary", "one-key",
-                               str(FIXTURES / "cylinder.step"), str(tmp_path / "c.json"), options, pure=False, key="one-key")
+                               str(FIXTURES / "cylinder.step"), str(tmp_path / "c.json"), options,
+                               pure=False, key="one-key")
         wait([future])
         assert got["one-key"]["summary"]["edges"] == 3  # recorded before the future turned done
         assert future.result()["segments"] == got["one-key"]["summary"]["segments"]

@@ -4,7 +4,8 @@ Tasks are submitted no faster than the cluster has threads, so a submitted task 
 waiting on a worker behind another would share its fate if that worker died, and its clock would run)
 and the scheduler never holds thousands of keys. A task's clock starts when the scheduler first
 reports it processing on a worker; the scheduler is asked only about tasks not ended within
-:data:`POLL_SECONDS` of their submission (the clock only matters to time a task out). Failures are isolated per input:
+:data:`POLL_SECONDS` of their submission (the clock only matters to time a task out). Failures are
+isolated per input:
 
 - the task raises: failed with the exception's type and message;
 - the worker process dies (OCCT crash, kill, out of memory): dask's ``KilledWorker``; our own
@@ -14,13 +15,14 @@ reports it processing on a worker; the scheduler is asked only about tasks not e
 
 A task's summary reaches the client with its end: the worker logs it as a dask event on a topic
 this client subscribes to, sent on the same stream and before the message that the task finished,
-so the summary is in hand when its future is done and no round trip fetches it (about 3 ms a file,
-as much again was one ``processing`` query per task: on a local cluster the per-file cost beyond
-the task's own clock fell from about 17 ms to 10, the rest being dask's own dispatch and report). A summary that cannot travel as an event (a custom
-task's, not msgpack-serialisable) stays on its worker until fetched, and a worker stuck in C code
-holding the GIL answers nothing, not even for a summary it already holds. So summaries are in hand
-before the freed threads get new jobs (a next job hanging on the same worker would otherwise block
-the fetch, and with it the loop that times the hang out), and each fetch is bounded: a summary that
+so the summary is in hand when its future is done and no round trip fetches it. That round trip was
+about 3 ms a file, and one ``processing`` query per task as much again: on a local cluster the cost
+per file beyond the task's own clock fell from about 17 ms to 10, the rest being dask's own dispatch
+and report. A summary that cannot travel as an event (a custom task's, not msgpack-serialisable)
+stays on its worker until fetched, and a worker stuck in C code holding the GIL answers nothing, not
+even for a summary it already holds. So summaries are in hand before the freed threads get new jobs
+(a next job hanging on the same worker would otherwise block the fetch, and with it the loop that
+times the hang out), and each fetch is bounded: a summary that
 cannot be fetched in time is tried again on later rounds, and if its worker is restarted the
 scheduler computes it again.
 """
