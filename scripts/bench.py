@@ -2,6 +2,7 @@
 
     python scripts/bench.py [--eps 1e-2 1e-3 1e-4] [--quick] [--file PATH ...] [--no-gmsh] [--no-dp]
                             [--json OUT.json] [--from-json OUT.json] [--write] [--startup [REPEATS]]
+                            [--batch [ROUNDS]]
 
 For every model (the STEP corpus, found as ``scripts/corpus_path.py`` says, and ``fixtures/``; ``--quick`` a small subset)
 and every ``eps``, in one process on the same loaded shape (STEP reading excluded everywhere):
@@ -28,6 +29,9 @@ pass. *time/tuning* puts cadedge's time against OCCT's whole tuning instead (wha
 reach the same per-model guarantee); it is reported, not judged.
 ``--startup`` first measures, per model, fresh-process ``cadedge info`` and ``cadedge refine --ald 1e-3``
 against a Python that only imports OCP and reads the file (``scripts/startup.py``; targets 1.15x and 1.3x).
+``--batch`` last runs ``cadedge batch``'s throughput over the corpus with one and two workers, ROUNDS
+interleaved rounds (default 3), the shortest *run s* kept (``scripts/bench_batch.py``; target 3: two
+workers at least 1.7x one, at most 10% per file beyond read + refine + write); it prints its table.
 ``--write`` puts the tables and figures into ``docs/performance.md`` / ``docs/figures/``.
 """
 
@@ -398,6 +402,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--startup", type=int, metavar="REPEATS", nargs="?", const=3,
                     help="also the fresh-process start-up table (scripts/startup.py), each command run REPEATS "
                          "times (default 3)")
+    ap.add_argument("--batch", type=int, metavar="ROUNDS", nargs="?", const=3,
+                    help="also the batch throughput table (scripts/bench_batch.py) over the corpus, ROUNDS "
+                         "interleaved rounds of one and two workers (default 3)")
     args = ap.parse_args(argv)
     paths = args.file or files(args.quick)
     startup_table = None
@@ -415,6 +422,12 @@ def main(argv: list[str] | None = None) -> int:
     tot = totals(rows)
     print("\n".join(tot))
     table = "\n".join([HEADER, RULE] + [format_row(r) for r in rows] + tot)
+    if args.batch:  # fresh processes with their own clusters, after everything else of this run
+        print("\ncadedge batch over the corpus, ald 1e-3 (target 3):")
+        from bench_batch import table as batch_table  # a sibling, like corpus_path
+
+        for line in batch_table(require_corpus(), 1e-3, [1, 2], args.batch):
+            print(line, flush=True)
     if args.json:
         atomic_write_bytes(args.json, json.dumps(rows, indent=1).encode())
     if args.write:

@@ -33,6 +33,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Iterator
 
 from corpus_path import require_corpus
 
@@ -95,25 +96,33 @@ def run(source: Path, args: argparse.Namespace) -> None:
     print(f"corpus {args.corpus} x {args.copies} ({n} files), ald {args.ald:g}, "
           f"{platform.processor() or platform.machine()}, python {platform.python_version()}, "
           f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
-    print("\n" + HEADER)
-    print("|" + "---:|" * (HEADER.count("|") - 1))
+    print()
+    for line in table(source, args.ald, args.workers, args.repeat):
+        print(line, flush=True)
+
+
+def table(source: Path, ald: float, workers: list[int], rounds: int) -> Iterator[str]:
+    """The Markdown table's lines (header first), each worker count's row as soon as it is known:
+    ``rounds`` rounds of one batch per worker count, the run with the shortest *run s* kept per count."""
+    yield HEADER
+    yield "|" + "---:|" * (HEADER.count("|") - 1)
     # rounds interleave the worker counts, so a slow spell of a shared host falls on all of them alike
-    runs: dict[int, list[dict]] = {w: [] for w in args.workers}
-    for _ in range(args.repeat):
-        for w in args.workers:
-            runs[w].append(bench(source, args.ald, w))
+    runs: dict[int, list[dict]] = {w: [] for w in workers}
+    for _ in range(rounds):
+        for w in workers:
+            runs[w].append(bench(source, ald, w))
     base = None
-    for w in args.workers:
+    for w in workers:
         best = min(runs[w], key=lambda r: r["run"])
         per_min = 60.0 * best["files"] / best["command"]
         per_min_up = 60.0 * best["files"] / best["run"]
         base = base or (per_min, per_min_up)
         # worker-seconds while the cluster is up that no task (read + refine + write) accounts for
         beyond = (w * best["run"] - best["task_seconds"]) / best["task_seconds"]
-        print(f"| {w} | {best['files']} | {best['ok']} | {best['failed']} | {best['command']:.1f} | {per_min:.1f} "
-              f"| {per_min / base[0]:.2f}x | {best['start']:.1f} | {best['run']:.1f} | {best['close']:.1f} "
-              f"| {per_min_up:.1f} | {per_min_up / base[1]:.2f}x | {best['task_seconds']:.1f} "
-              f"| {100 * beyond:.0f}% |", flush=True)
+        yield (f"| {w} | {best['files']} | {best['ok']} | {best['failed']} | {best['command']:.1f} | {per_min:.1f} "
+               f"| {per_min / base[0]:.2f}x | {best['start']:.1f} | {best['run']:.1f} | {best['close']:.1f} "
+               f"| {per_min_up:.1f} | {per_min_up / base[1]:.2f}x | {best['task_seconds']:.1f} "
+               f"| {100 * beyond:.0f}% |")
 
 
 if __name__ == "__main__":
