@@ -31,7 +31,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
 
     from ..errors import GeometryError, InputError
     from ..shapegrid import with_edges
-    from ..splitting import insert_points, split_by_arc
+    from ..splitting import split_segments
     from .proximity import _LazyCurves
     from .sizes import SizeField
 
@@ -68,13 +68,15 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
                 continue
             try:
                 curve = curves[e.id]
-                new_u, new_p = split_by_arc(e.params, e.points, k, curve.evaluate)
             except (GeometryError, Standard_Failure):
                 continue
             if np.max(np.linalg.norm(curve.evaluate(e.params[[0, -1]]) - e.points[[0, -1]], axis=1)) > max(
                     10 * e.tolerance, 1e-7 * (1 + float(np.abs(e.points).max()))):
                 continue  # the grid's parameters are not this curve's: leave the edge alone
-            params, points = insert_points(e.params, e.points, new_u, new_p)
+            try:
+                params, points = split_segments(e.params, e.points, k, curve.evaluate)
+            except (GeometryError, Standard_Failure):
+                continue
             edges[i] = dataclasses.replace(e, params=params, points=points)
             changed = True
         if not changed:
