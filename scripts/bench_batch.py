@@ -102,8 +102,8 @@ def run(source: Path, args: argparse.Namespace) -> None:
 
 
 def table(source: Path, ald: float, workers: list[int], rounds: int) -> Iterator[str]:
-    """The Markdown table's lines (header first), each worker count's row as soon as it is known:
-    ``rounds`` rounds of one batch per worker count, the run with the shortest *run s* kept per count."""
+    """The Markdown table's lines: the header at once, the rows once every round has run (``rounds``
+    rounds of one batch per worker count; per count, the run with the shortest *run s*)."""
     yield HEADER
     yield "|" + "---:|" * (HEADER.count("|") - 1)
     # rounds interleave the worker counts, so a slow spell of a shared host falls on all of them alike
