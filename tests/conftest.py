@@ -95,3 +95,32 @@ def corpus_dir() -> Path:
     if CORPUS_DIR is None:
         pytest.skip(NO_CORPUS)
     return CORPUS_DIR
+
+
+@pytest.fixture(scope="session")
+def gapped_box_step(tmp_path_factory) -> Path:
+    """A 12 x 8 x 5 box whose faces were moved apart by up to 0.02, sewn at 0.1 and written as STEP: read
+    back, each face has pcurves of its own with gaps of about 0.02 between one and the next, and edges
+    with tolerances of 0.014-0.028."""
+    pytest.importorskip("OCP")
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Sewing, BRepBuilderAPI_Transform
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Trsf, gp_Vec
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+
+    from cadedge.occt.loading import quiet_occt
+    from cadedge.occt.topology import Topology
+
+    sew = BRepBuilderAPI_Sewing(0.1)
+    for i, face in enumerate(Topology(BRepPrimAPI_MakeBox(12.0, 8.0, 5.0).Shape()).faces):
+        d = 0.01 * ((i * 7919) % 5 - 2)
+        move = gp_Trsf()
+        move.SetTranslation(gp_Vec(d, -0.5 * d, 0.7 * d))
+        sew.Add(BRepBuilderAPI_Transform(face, move, True).Shape())
+    sew.Perform()
+    path = tmp_path_factory.mktemp("gapped") / "gapped_box.step"
+    with quiet_occt():
+        writer = STEPControl_Writer()
+        writer.Transfer(sew.SewedShape(), STEPControl_AsIs)
+        writer.Write(str(path))
+    return path
