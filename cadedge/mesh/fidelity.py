@@ -84,6 +84,18 @@ def surface_types(shape: object) -> list[str]:
     return [surface_type_name(BRepAdaptor_Surface(f)) for f in Topology(shape).faces]
 
 
+def meshed_kinds(shape: object, kinds: list[str] | None = None) -> list[str]:
+    """The surface types faces are meshed as: OCCT's (``kinds``, default :func:`surface_types`), with
+    ``Plane`` for every face that is planar whatever its type (:mod:`cadedge.occt.planes`): its triangles
+    cover exactly its boundary polygon, so it is fitted and checked as a plane and not sized by curvature."""
+    from ..occt.planes import planar_faces
+
+    kinds = list(surface_types(shape) if kinds is None else kinds)
+    for f in planar_faces(shape):
+        kinds[f - 1] = "Plane"
+    return kinds
+
+
 def surface_type_name(surface) -> str:
     """The type name of a ``BRepAdaptor_Surface`` (its ``GeomAbs_SurfaceType`` without the prefix)."""
     return str(surface.GetType()).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
@@ -138,7 +150,7 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
     from .planar import planar_polygon_areas
 
     areas = brep_face_areas(grid.shape) if brep_areas is None else np.asarray(brep_areas, dtype=float)
-    kinds = surface_types(grid.shape) if kinds is None else kinds
+    kinds = meshed_kinds(grid.shape) if kinds is None else kinds
     planes = [i + 1 for i, k in enumerate(kinds) if k == "Plane" and areas[i] > 0]
     limit = AIM * surface_ald
 
@@ -281,9 +293,10 @@ def prepare(grid, surface_ald: float) -> tuple[object, dict]:
     areas and surface types, the boundary-fitted grid (:func:`fit_boundaries`) and the job settings."""
     areas = brep_face_areas(grid.shape)
     kinds = surface_types(grid.shape)
-    fitted = fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=kinds)
-    opts = settings(surface_ald, areas, kinds)
-    opts["surface_types"] = kinds
+    meshed_as = meshed_kinds(grid.shape, kinds)
+    fitted = fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=meshed_as)
+    opts = settings(surface_ald, areas, meshed_as)
+    opts["surface_types"] = kinds  # the report names OCCT's types
     return fitted, opts
 
 
@@ -369,9 +382,9 @@ def before_generate(ctx) -> None:
     if opts:
         configure_curvature_sizes(opts["per_circle"], MIN_SIZE_SHARE * ctx.job.field.min_size)
         kinds = opts.get("surface_types") or []
-        install([s for f, s in sorted(ctx.emap.faces.items()) if ctx.job.mode == "nodes"
-                 and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE])
         curved = set(opts["curved_faces"])
+        install([s for f, s in sorted(ctx.emap.faces.items()) if ctx.job.mode == "nodes"
+                 and f in curved and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE])
         planes = [s for f, s in ctx.emap.faces.items() if f not in curved]
         if planes:
             grow_planes(ctx.job.field, INTERIOR_GROWTH * ctx.job.field.growth, planes)

@@ -20,18 +20,19 @@ def polygon_area(points_2d: np.ndarray) -> float:
 
 
 def planar_polygon_areas(shape: object, grid, faces: list[int]) -> dict[int, float]:
-    """Area enclosed by the grid nodes of each planar face in ``faces`` (ids), holes subtracted.
+    """Area enclosed by the grid nodes of each planar face in ``faces`` (ids; planar whatever the surface
+    type, :mod:`cadedge.occt.planes`), holes subtracted.
 
     Each wire is walked in order (``BRepTools_WireExplorer``), each edge's grid points taken in the
     direction the wire uses it, projected on the face's plane; the signed areas of the wires are summed
     (outer wire and holes run opposite ways) and the absolute value taken, so the face's orientation does
     not matter. A face with an edge that has no usable grid, or a wire the walk cannot follow, is left out."""
-    from OCP.BRepAdaptor import BRepAdaptor_Surface
     from OCP.BRepTools import BRepTools_WireExplorer
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
     from OCP.TopExp import TopExp, TopExp_Explorer
 
     from ..occt.compat import TopoDS, TopTools_IndexedMapOfShape
+    from ..occt.planes import plane_of
 
     edge_map, face_map = TopTools_IndexedMapOfShape(), TopTools_IndexedMapOfShape()
     TopExp.MapShapes_s(shape, TopAbs_EDGE, edge_map)
@@ -40,9 +41,10 @@ def planar_polygon_areas(shape: object, grid, faces: list[int]) -> dict[int, flo
     out: dict[int, float] = {}
     for fid in faces:
         face = TopoDS.Face_s(face_map.FindKey(fid).Oriented(TopAbs_FORWARD))
-        plane = BRepAdaptor_Surface(face).Plane().Position()
-        origin = np.array(plane.Location().Coord())
-        axes = np.array([plane.XDirection().Coord(), plane.YDirection().Coord()])
+        plane = plane_of(face)
+        if plane is None:  # not planar after all: nothing exact to say
+            continue
+        origin, axes = plane[0], np.array(plane[1:])
         total, usable = 0.0, True
         wires = TopExp_Explorer(face, TopAbs_WIRE)
         while wires.More() and usable:

@@ -124,20 +124,23 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  brep_areas: np.ndarray, surface_types: list[str], surface_ald: float | None = None,
                  failed: dict[int, str] | None = None, vertex_points: np.ndarray | None = None,
                  stuck: list[int] | tuple[int, ...] = (),
-                 tolerances: dict[int, tuple[float, float]] | None = None) -> MeshReport:
+                 tolerances: dict[int, tuple[float, float]] | None = None,
+                 planar: set[int] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
 
     ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
     (to tell small angles forced by a sharp face corner from the mesher's own slivers); ``stuck`` the faces
     whose deficit finer meshes did not reduce, or was too large to come from meshing; ``tolerances`` maps
     a face to its edges' largest tolerance and the share of its area they leave open
-    (:func:`tolerance_bands`): a face over target within that share is reported as such.
+    (:func:`tolerance_bands`): a face over target within that share is reported as such; ``planar`` the
+    faces meshed as planes (default: those of type ``Plane``).
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     tri_faces = np.asarray(triangle_faces, dtype=np.int64)
     n = len(brep_areas)
     failed = failed or {}
+    planar = {i + 1 for i, k in enumerate(surface_types) if k == "Plane"} if planar is None else planar
     mesh_areas = face_mesh_areas(nodes, tris, tri_faces, n)
     deficits = area_deficits(mesh_areas, brep_areas)
     angles = triangle_angles(nodes, tris) if len(tris) else np.zeros((0, 3))
@@ -156,7 +159,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             rec.status, rec.note = "failed", failed.get(fid, "no triangles")
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
-            rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid))
+            rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar)
         elif rec.area_deficit is None:
             rec.note = "the B-rep face has no area (degenerate)"
         faces.append(rec)
@@ -169,7 +172,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                       worst_deficit=max(measured) if measured else None, small_angles=smalls)
 
 
-def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None) -> str:
+def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None, planar: bool) -> str:
     """Why a meshed face is over the target."""
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
         return (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} from its "
@@ -179,7 +182,7 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
         return ("not meshed finer, or finer meshes did not reduce it: the meshed face and its B-rep area "
                 "disagree by more than meshing explains (loose tolerances, or a trimming read differently by "
                 "gmsh and by OCCT's area integration)")
-    if rec.surface == "Plane":
+    if planar:
         return "a planar face: its area is set by its boundary polygon"
     return "still over after the face was meshed again finer"
 
@@ -212,4 +215,5 @@ def report_of(result, opts: dict) -> MeshReport | None:
     return build_report(result.nodes, result.triangles, result.triangle_faces, brep_areas=opts["brep_areas"],
                         surface_types=opts["surface_types"], surface_ald=opts["surface_ald"], failed=failed,
                         vertex_points=vertex_points, stuck=extras.get("stuck", ()),
-                        tolerances=tolerance_bands(result.grid, opts["brep_areas"]))
+                        tolerances=tolerance_bands(result.grid, opts["brep_areas"]),
+                        planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]))
