@@ -2,7 +2,8 @@
 
 A model's fidelity is its worst face. Sizes chosen per surface type before meshing leave many curved
 faces well under it (a fillet at 3e-3 beside a planar face at 5.6e-3), and their extra triangles buy
-nothing. Each such face is meshed again with ``Mesh.MeshSizeFromCurvature`` lowered by the measured
+nothing. The level they may coarsen to is the worst face, or a share of the target where the worst face
+is far under it (``COARSEN_FLOOR`` in :mod:`cadedge.mesh.fidelity`). Each such face is meshed again with ``Mesh.MeshSizeFromCurvature`` lowered by the measured
 margin (deficit ~ N**-2; faces of like counts together, see :mod:`cadedge.mesh.remesh`) and kept only
 when it has fewer triangles and stays within the level; otherwise it is meshed again as it was (gmsh is
 deterministic). Only the face's interior changes: its boundary
