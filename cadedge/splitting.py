@@ -103,6 +103,14 @@ def split_by_arc(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
     return u, evaluate(u)
 
 
+def fits_curve(params: np.ndarray, points: np.ndarray, evaluate: Evaluate, tolerance: float) -> bool:
+    """Whether the curve (``evaluate``) puts a grid's end parameters at its end points, within 10 times
+    the edge's ``tolerance`` or 1e-7 of the grid's extent: a grid whose parameters are not this curve's
+    must not be split through it (its new points would land elsewhere on the curve)."""
+    off = row_norms(evaluate(params[[0, -1]]) - points[[0, -1]])
+    return float(np.max(off)) <= max(10 * tolerance, 1e-7 * (1 + float(np.abs(points).max())))
+
+
 #: How :func:`split_segments` spaces its cuts.
 SPACINGS = ("arc", "parameter")
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from cadedge.splitting import (insert_points, limit_growth, point_at_arc, points_at_distances, split_by_arc,
-                               split_evenly, split_segments, worst_growth)
+from cadedge.splitting import (fits_curve, insert_points, limit_growth, point_at_arc, points_at_distances,
+                               split_by_arc, split_evenly, split_segments, worst_growth)
 
 
 def _circle(u):
@@ -45,6 +45,14 @@ def test_split_by_arc_cuts_equal_lengths_where_the_parameter_speed_varies():
     assert np.allclose(steps, [0.1, 0.5, 0.625, 0.75, 0.875, 1.0])
     with pytest.raises(ValueError, match="spacing"):
         split_segments(u, p, np.array([1, 4]), _cubic, spacing="even")
+
+
+def test_a_grid_fits_its_curve_only_where_its_end_parameters_give_its_end_points():
+    u = np.array([0.0, 0.5, 1.0])
+    assert fits_curve(u, _circle(u), _circle, 1e-7)
+    shifted = _circle(u + 1e-4)  # a grid of the same curve in another parametrisation
+    assert not fits_curve(u, shifted, _circle, 1e-7)
+    assert fits_curve(u, shifted, _circle, 1e-5)  # within 10 x the edge's tolerance
 
 
 def test_point_at_arc_measures_from_either_end():

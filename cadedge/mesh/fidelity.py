@@ -209,7 +209,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     from ..occt.edgecurve import EdgeCurve
     from ..occt.topology import Topology
     from ..shapegrid import with_edges
-    from ..splitting import split_segments
+    from ..splitting import fits_curve, split_segments
 
     topo = Topology(grid.shape)
     areas = brep_areas
@@ -233,8 +233,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
             continue
         try:
             curve = EdgeCurve(topo.edges[e.id - 1], e.id)
-            if np.max(np.linalg.norm(curve.evaluate(e.params[[0, -1]]) - e.points[[0, -1]], axis=1)) > max(
-                    10 * e.tolerance, 1e-7 * (1 + float(np.abs(e.points).max()))):
+            if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
                 continue  # the grid's parameters are not this curve's: leave the edge alone
             mid_u = 0.5 * (e.params[:-1] + e.params[1:])
             sagitta = _sagittas(e.params, e.points, curve.evaluate)

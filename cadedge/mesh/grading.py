@@ -31,7 +31,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
 
     from ..errors import GeometryError, InputError
     from ..shapegrid import with_edges
-    from ..splitting import split_segments
+    from ..splitting import fits_curve, split_segments
     from .proximity import _LazyCurves
     from .sizes import SizeField
 
@@ -70,8 +70,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
                 curve = curves[e.id]
             except (GeometryError, Standard_Failure):
                 continue
-            if np.max(np.linalg.norm(curve.evaluate(e.params[[0, -1]]) - e.points[[0, -1]], axis=1)) > max(
-                    10 * e.tolerance, 1e-7 * (1 + float(np.abs(e.points).max()))):
+            if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
                 continue  # the grid's parameters are not this curve's: leave the edge alone
             try:
                 params, points = split_segments(e.params, e.points, k, curve.evaluate)
