@@ -19,7 +19,8 @@ degrees, and seconds:
 
 A tuned mesher that cannot reach cadedge's worst face within the tries shows its closest run, marked
 ``(not reached)``. Faces cadedge names as not converging (their meshed and B-rep areas disagree at any
-size, in every mesher) are left out of the worst face of all three meshers, marked ``[k left out]``:
+size, in every mesher) or as within what their edges' tolerances allow (report reason ``tolerances``)
+are left out of the worst face of all three meshers, marked ``[k left out]``:
 with them in, the worst face is theirs and says nothing of the others (gmsh matches them by area and
 centre of mass). Faces a mesher left empty are counted in the note, not in the worst deficit. Seconds
 are those of the retained run (not of the search). Prints a markdown table (the one in docs/mesh.md):
@@ -216,6 +217,7 @@ def cadedge_run(path: Path, eps: float, timeout: float) -> tuple[dict, object]:
     seconds = time.perf_counter() - t0
     rep = r.report
     stuck = set((r.extras.get(AFTER_MESH_HOOK) or {}).get("stuck", ()))
+    stuck |= {f.face for f in (rep.over_target if rep else []) if f.reason == "tolerances"}
     kept = [abs(f.area_deficit) for f in (rep.faces if rep else []) if f.area_deficit is not None
             and f.face not in stuck]
     out = {"triangles": len(r.triangles), "worst": max(kept, default=float("nan")), "empty": len(r.failures),
@@ -269,7 +271,7 @@ def main() -> int:
             if args.cadedge_only:
                 over = [f.face for f in result.report.over_target] if result.report else []
                 print(f"| {path.name} | {eps:g} | {_cell(ours)} | forced < 5 deg: {ours['forced']}, faces over "
-                      f"target: {over or 'none'} |", flush=True)
+                      f"target: {over or 'none'}, left out: {ours['stuck'] or 'none'} |", flush=True)
                 continue
             ours["left_out"] = len(ours["stuck"])
             keys = face_keys(shape, areas, ours["stuck"])

@@ -139,10 +139,12 @@ def test_a_gapped_box_meshes_to_its_closed_face_areas_and_names_its_tolerances(g
                        brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
                        surface_ald=1e-9, tolerances=bands)
     assert len(rep.over_target) == 6 and all("tolerances allow" in f.note for f in rep.over_target)
+    assert {f.reason for f in rep.over_target} == {"tolerances"}
     rep = build_report(result.nodes, result.triangles, result.triangle_faces,
                        brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
                        surface_ald=1e-9)
     assert not any("tolerances allow" in f.note for f in rep.over_target)
+    assert {f.reason for f in rep.over_target} == {"planar"}  # a box: every face a plane
 
 
 def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():

@@ -26,10 +26,17 @@ WORST = 5
 AFTER_MESH_HOOK = "cadedge.mesh.fidelity:after_mesh"
 
 
+#: Why a face is over the target (``FaceReport.reason``): its deficit is within what its edges' tolerances
+#: allow; finer meshes did not reduce it (its meshed and B-rep areas disagree); a planar face (its boundary
+#: polygon sets its area); still over after it was meshed again finer.
+OVER_REASONS = ("tolerances", "not converging", "planar", "still over")
+
+
 @dataclass
 class FaceReport:
     """One B-rep face. ``status``: ``ok``, ``over target`` (meshed, area deficit above the target) or
-    ``failed`` (not meshed); ``note`` says why when it is not ok."""
+    ``failed`` (not meshed); ``note`` says why when it is not ok, and for a face over target ``reason``
+    says it as one of :data:`OVER_REASONS` (else empty)."""
 
     face: int
     surface: str
@@ -41,6 +48,7 @@ class FaceReport:
     below_20: float
     status: str = "ok"
     note: str = ""
+    reason: str = ""
 
 
 @dataclass
@@ -159,7 +167,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             rec.status, rec.note = "failed", failed.get(fid, "no triangles")
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
-            rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar)
+            rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar)
         elif rec.area_deficit is None:
             rec.note = "the B-rep face has no area (degenerate)"
         faces.append(rec)
@@ -172,19 +180,20 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                       worst_deficit=max(measured) if measured else None, small_angles=smalls)
 
 
-def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None, planar: bool) -> str:
-    """Why a meshed face is over the target."""
+def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None,
+               planar: bool) -> tuple[str, str]:
+    """Why a meshed face is over the target: its reason (one of :data:`OVER_REASONS`) and note."""
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
-        return (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} from its "
-                f"surface, and a boundary moved that far changes its area by up to {tolerance[1]:.2g} (loose "
-                "tolerances; the mesh follows the shared edges)")
+        return "tolerances", (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} "
+                              f"from its surface, and a boundary moved that far changes its area by up to "
+                              f"{tolerance[1]:.2g} (loose tolerances; the mesh follows the shared edges)")
     if stuck:
-        return ("not meshed finer, or finer meshes did not reduce it: the meshed face and its B-rep area "
-                "disagree by more than meshing explains (loose tolerances, or a trimming read differently by "
-                "gmsh and by OCCT's area integration)")
+        return "not converging", ("not meshed finer, or finer meshes did not reduce it: the meshed face and its "
+                                  "B-rep area disagree by more than meshing explains (loose tolerances, or a "
+                                  "trimming read differently by gmsh and by OCCT's area integration)")
     if planar:
-        return "a planar face: its area is set by its boundary polygon"
-    return "still over after the face was meshed again finer"
+        return "planar", "a planar face: its area is set by its boundary polygon"
+    return "still over", "still over after the face was meshed again finer"
 
 
 def tolerance_bands(grid, brep_areas: np.ndarray) -> dict[int, tuple[float, float]]:
