@@ -84,3 +84,27 @@ def test_scale_spends_the_designed_deficit_within_the_size_bounds():
     goal = (2 * np.pi / n) ** 2 * da.sum()
     assert interior.predicted(np.minimum(capped / np.sqrt(k), hi), k, da) == pytest.approx(goal, rel=1e-9)
     assert capped > alpha
+
+
+def test_a_face_with_a_sharp_ridge_gets_a_size_floor_and_a_cylinder_does_not():
+    """A thin elliptic tube (semi-axes 10 and 0.05: curvature 4 000 at its ends, 5e-4 at its sides) would
+    be sized down to the smallest size along its ends; its floor fills it with about
+    MAX_FACE_TRIANGLES triangles, and the callback holds its sizes at it. A cylinder's curvature is even:
+    no floor."""
+    from cadedge.mesh.generate import MAX_FACE_TRIANGLES
+
+    with gmsh_session():
+        tube = gmsh.model.occ.extrude([(1, gmsh.model.occ.addEllipse(0, 0, 0, 10.0, 0.05))], 0, 0, 5.0)
+        pipe = gmsh.model.occ.addCylinder(30, 0, 0, 0, 0, 5.0, 2.0)
+        gmsh.model.occ.synchronize()
+        (ridged,) = [t for d, t in tube if d == 2]
+        side = next(s for _, s in gmsh.model.getBoundary([(3, pipe)]) if gmsh.model.getType(2, s) != "Plane")
+        areas = {s: gmsh.model.occ.getMass(2, s) for s in (ridged, side)}
+        floors = interior.size_floors(areas, 1e-4)
+        assert list(floors) == [ridged]
+        assert floors[ridged] == pytest.approx(np.sqrt(2.3 * areas[ridged] / MAX_FACE_TRIANGLES))
+        assert interior.size_floors(areas, 1.0) == {}  # the floor under the smallest size: nothing to hold
+        interior.install([], floors)
+        assert interior.SIZES(2, ridged, 10.0, 0.0, 1.0, 1e-4) == floors[ridged]
+        assert interior.SIZES(2, ridged, 10.0, 0.0, 1.0, 7.0) == 7.0
+        assert interior.SIZES(2, side, 32.0, 0.0, 1.0, 1e-4) == 1e-4

@@ -379,18 +379,24 @@ def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
 
 def before_generate(ctx) -> None:
     """Hook: face interiors sized by curvature for the surface target (see :func:`per_circle`; in nodes
-    mode faces whose curvature varies as ``k**-1/2``, see :mod:`cadedge.mesh.interior`); planar interiors
-    grow from their boundaries at :data:`INTERIOR_GROWTH` times the job's growth."""
-    from .interior import CONSTANT_CURVATURE, install
+    mode faces whose curvature varies as ``k**-1/2``, see :mod:`cadedge.mesh.interior`; faces with sharp
+    ridges no finer than :func:`~cadedge.mesh.interior.size_floors`); planar interiors grow from their
+    boundaries at :data:`INTERIOR_GROWTH` times the job's growth."""
+    from .interior import CONSTANT_CURVATURE, install, size_floors
     from .sizes import configure_curvature_sizes
 
     opts = ctx.job.options.get("fidelity")
     if opts:
-        configure_curvature_sizes(opts["per_circle"], MIN_SIZE_SHARE * ctx.job.field.min_size)
+        min_size = MIN_SIZE_SHARE * ctx.job.field.min_size
+        configure_curvature_sizes(opts["per_circle"], min_size)
         kinds = opts.get("surface_types") or []
         curved = set(opts["curved_faces"])
+        areas = opts["brep_areas"]
+        floors = size_floors({s: areas[f - 1] for f, s in ctx.emap.faces.items() if f in curved
+                              and f <= len(areas)}, min_size)
         install([s for f, s in sorted(ctx.emap.faces.items()) if ctx.job.mode == "nodes"
-                 and f in curved and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE])
+                 and f in curved and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE], floors)
+        ctx.floored = {ctx.emap.face_of_surface.get(s, s): h for s, h in floors.items()}
         planes = [s for f, s in ctx.emap.faces.items() if f not in curved]
         if planes:
             grow_planes(ctx.job.field, INTERIOR_GROWTH * ctx.job.field.growth, planes)
@@ -526,7 +532,8 @@ def after_generate(ctx) -> None:
     coarser = coarsen(ctx, level=level, deficit=deficit, measured={s: final[s] for s in calm},
                       per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
-    ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "stuck": sorted(stuck)}
+    ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "stuck": sorted(stuck),
+                    "floored": dict(getattr(ctx, "floored", {}))}
 
 
 def after_mesh(ctx) -> dict:

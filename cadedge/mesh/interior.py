@@ -90,10 +90,12 @@ class _Face:
 
 
 class InteriorSizes:
-    """The ``k**-1/2`` sizes of the sampled faces; callable as gmsh's size callback."""
+    """The ``k**-1/2`` sizes of the sampled faces, and the smallest size of some faces
+    (:func:`size_floors`); callable as gmsh's size callback."""
 
     def __init__(self) -> None:
         self.faces: dict[int, _Face] = {}
+        self.floors: dict[int, float] = {}
 
     def sample(self, surface: int) -> bool:
         """Sample gmsh surface ``surface``'s curvature; False (left to gmsh) if it is flat or cannot be
@@ -141,26 +143,75 @@ class InteriorSizes:
         return True
 
     def __call__(self, dim: int, tag: int, x: float, y: float, z: float, lc: float) -> float:
-        face = self.faces.get(tag) if dim == 2 else None
-        if face is None or face.sizes is None:
+        if dim != 2:
             return lc
-        d, i = face.tree.query((x, y, z), k=NEAREST)
-        w = 1.0 / (d + 1e-12)
-        return min(lc, float(np.dot(w, face.sizes[i]) / w.sum()))
+        face = self.faces.get(tag)
+        if face is not None and face.sizes is not None:
+            d, i = face.tree.query((x, y, z), k=NEAREST)
+            w = 1.0 / (d + 1e-12)
+            lc = min(lc, float(np.dot(w, face.sizes[i]) / w.sum()))
+        return max(lc, self.floors.get(tag, 0.0))
 
 
 #: The sizes of the job running in this process (one gmsh model at a time).
 SIZES = InteriorSizes()
 
 
-def install(surfaces: list[int]) -> list[int]:
-    """Sample ``surfaces`` (gmsh tags of curved faces whose curvature varies) and make :data:`SIZES` gmsh's
-    size callback; returns the surfaces sampled."""
+def size_floors(surfaces: dict[int, float], min_size: float) -> dict[int, float]:
+    """The smallest size of the gmsh surfaces of ``surfaces`` (surface -> area) whose curvature has sharp
+    ridges (it spans more than :data:`SPREAD` between its 2nd and 98th percentiles on a grid of the
+    surface's parameters), where sizes at ``min_size`` would fill the face with more than
+    :data:`~cadedge.mesh.generate.MAX_FACE_TRIANGLES` triangles: the size that fills it with about that
+    many. gmsh's curvature sizes follow a ridge down to ``min_size``, a share of the finest edge spacing;
+    on a blade with a sharp trailing edge (a radius of 0.007 mm along a 390 mm2 face, 0.006 mm sizes)
+    gmsh ran out of time on the face with every strategy."""
+    from .generate import MAX_FACE_TRIANGLES
+
+    floors = {}
+    for s, area in surfaces.items():
+        floor = float(np.sqrt(2.3 * abs(area) / MAX_FACE_TRIANGLES))
+        if floor <= min_size:
+            continue
+        k, _ = _curvature_samples(s)
+        if len(k) >= NEAREST:
+            low, high = np.percentile(k, [2.0, 98.0])
+            if high > SPREAD * low:
+                floors[s] = floor
+    return floors
+
+
+def _curvature_samples(surface: int) -> tuple[np.ndarray, np.ndarray]:
+    """Largest |principal curvature| and area element on a :data:`SAMPLES` x :data:`SAMPLES` grid of a gmsh
+    surface's parameters (finite samples only; empty if gmsh cannot evaluate it)."""
+    import gmsh
+
+    try:
+        lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
+        t = (np.arange(SAMPLES) + 0.5) / SAMPLES
+        u, v = np.meshgrid(lo[0] + (hi[0] - lo[0]) * t, lo[1] + (hi[1] - lo[1]) * t)
+        uv = np.column_stack([u.ravel(), v.ravel()]).ravel().tolist()
+        kmax, kmin, _, _ = gmsh.model.getPrincipalCurvatures(surface, uv)
+        d = np.asarray(gmsh.model.getDerivative(2, surface, uv), dtype=float).reshape(-1, 6)
+    except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
+        return np.zeros(0), np.zeros(0)
+    k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
+    da = np.linalg.norm(np.cross(d[:, :3], d[:, 3:]), axis=1)
+    if len(k) != len(da):
+        return np.zeros(0), np.zeros(0)
+    good = np.isfinite(k) & np.isfinite(da)
+    return k[good], da[good]
+
+
+def install(surfaces: list[int], floors: dict[int, float] | None = None) -> list[int]:
+    """Sample ``surfaces`` (gmsh tags of curved faces whose curvature varies), keep the smallest sizes
+    ``floors`` (surface -> size) and make :data:`SIZES` gmsh's size callback if either is needed; returns
+    the surfaces sampled."""
     import gmsh
 
     SIZES.faces.clear()
+    SIZES.floors = dict(floors or {})
     done = [s for s in surfaces if SIZES.sample(s)]
-    if done:
+    if done or SIZES.floors:
         gmsh.model.mesh.setSizeCallback(SIZES)
     return done
 

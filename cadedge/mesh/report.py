@@ -27,9 +27,10 @@ AFTER_MESH_HOOK = "cadedge.mesh.fidelity:after_mesh"
 
 
 #: Why a face is over the target (``FaceReport.reason``): its deficit is within what its edges' tolerances
-#: allow; finer meshes did not reduce it (its meshed and B-rep areas disagree); a planar face (its boundary
-#: polygon sets its area); still over after it was meshed again finer.
-OVER_REASONS = ("tolerances", "not converging", "planar", "still over")
+#: allow; its sizes were held above a floor on a sharp ridge of its surface; finer meshes did not reduce it
+#: (its meshed and B-rep areas disagree); a planar face (its boundary polygon sets its area); still over
+#: after it was meshed again finer.
+OVER_REASONS = ("tolerances", "size floor", "not converging", "planar", "still over")
 
 
 @dataclass
@@ -133,7 +134,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  failed: dict[int, str] | None = None, vertex_points: np.ndarray | None = None,
                  stuck: list[int] | tuple[int, ...] = (),
                  tolerances: dict[int, tuple[float, float]] | None = None,
-                 planar: set[int] | None = None) -> MeshReport:
+                 planar: set[int] | None = None, floored: dict[int, float] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
 
     ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
@@ -141,7 +142,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     whose deficit finer meshes did not reduce, or was too large to come from meshing; ``tolerances`` maps
     a face to its edges' largest tolerance and the share of its area they leave open
     (:func:`tolerance_bands`): a face over target within that share is reported as such; ``planar`` the
-    faces meshed as planes (default: those of type ``Plane``).
+    faces meshed as planes (default: those of type ``Plane``); ``floored`` the faces whose sizes were held
+    at or above a floor (face -> size, :func:`cadedge.mesh.interior.size_floors`).
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -167,7 +169,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             rec.status, rec.note = "failed", failed.get(fid, "no triangles")
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
-            rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar)
+            rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar,
+                                              (floored or {}).get(fid))
         elif rec.area_deficit is None:
             rec.note = "the B-rep face has no area (degenerate)"
         faces.append(rec)
@@ -180,13 +183,17 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                       worst_deficit=max(measured) if measured else None, small_angles=smalls)
 
 
-def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None,
-               planar: bool) -> tuple[str, str]:
+def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None, planar: bool,
+               floor: float | None) -> tuple[str, str]:
     """Why a meshed face is over the target: its reason (one of :data:`OVER_REASONS`) and note."""
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
         return "tolerances", (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} "
                               f"from its surface, and a boundary moved that far changes its area by up to "
                               f"{tolerance[1]:.2g} (loose tolerances; the mesh follows the shared edges)")
+    if floor is not None:
+        return "size floor", (f"its surface has a sharp ridge: its triangles were held at {floor:.2g} or more "
+                              "(the face's triangle budget), where curvature sizes would go down to a share of "
+                              "the finest edge spacing and gmsh runs out of time")
     if stuck:
         return "not converging", ("not meshed finer, or finer meshes did not reduce it: the meshed face and its "
                                   "B-rep area disagree by more than meshing explains (loose tolerances, or a "
@@ -225,4 +232,5 @@ def report_of(result, opts: dict) -> MeshReport | None:
                         surface_types=opts["surface_types"], surface_ald=opts["surface_ald"], failed=failed,
                         vertex_points=vertex_points, stuck=extras.get("stuck", ()),
                         tolerances=tolerance_bands(result.grid, opts["brep_areas"]),
-                        planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]))
+                        planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]),
+                        floored=extras.get("floored"))
