@@ -151,14 +151,13 @@ def uniform_curvature_size(surface: int, per_circle: float) -> float | None:
     """One size for the whole face: ``2 pi / (per_circle * k)`` with ``k`` a high percentile of the largest
     principal curvature sampled on a grid of the surface's parameters, no smaller than the size giving
     :data:`MAX_FACE_TRIANGLES` on the face's area. None when the face is flat or gmsh cannot sample it."""
+    from .interior import surface_samples
+
+    samples = surface_samples(surface, CURVATURE_SAMPLES)
+    if samples is None:
+        return None
+    k = samples[1][np.isfinite(samples[1])]
     try:
-        lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
-        t = (np.arange(CURVATURE_SAMPLES) + 0.5) / CURVATURE_SAMPLES
-        u, v = np.meshgrid(lo[0] + (hi[0] - lo[0]) * t, lo[1] + (hi[1] - lo[1]) * t)
-        uv = np.column_stack([u.ravel(), v.ravel()]).ravel().tolist()
-        kmax, kmin, _, _ = gmsh.model.getPrincipalCurvatures(surface, uv)
-        k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
-        k = k[np.isfinite(k)]
         area = float(gmsh.model.occ.getMass(2, surface))
     except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
         return None

@@ -100,23 +100,14 @@ class InteriorSizes:
     def sample(self, surface: int) -> bool:
         """Sample gmsh surface ``surface``'s curvature; False (left to gmsh) if it is flat or cannot be
         sampled."""
-        import gmsh
         from scipy.spatial import cKDTree
 
-        try:
-            lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
-            t = (np.arange(SAMPLES) + 0.5) / SAMPLES
-            u, v = np.meshgrid(lo[0] + (hi[0] - lo[0]) * t, lo[1] + (hi[1] - lo[1]) * t)
-            uv = np.column_stack([u.ravel(), v.ravel()]).ravel().tolist()
-            x = np.asarray(gmsh.model.getValue(2, surface, uv), dtype=float).reshape(-1, 3)
-            kmax, kmin, _, _ = gmsh.model.getPrincipalCurvatures(surface, uv)
-            d = np.asarray(gmsh.model.getDerivative(2, surface, uv), dtype=float).reshape(-1, 6)
-        except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
+        samples = surface_samples(surface)
+        if samples is None:
             return False
-        k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
-        da = np.linalg.norm(np.cross(d[:, :3], d[:, 3:]), axis=1)
+        x, k, da = samples
         good = np.isfinite(k) & np.isfinite(da) & np.all(np.isfinite(x), axis=1)
-        if len(k) != len(x) or len(da) != len(x) or good.sum() < NEAREST or not np.sum(da[good] * k[good]) > 0:
+        if good.sum() < NEAREST or not np.sum(da[good] * k[good]) > 0:
             return False
         low, high = np.percentile(k[good], [2.0, 98.0])
         if not high <= SPREAD * low:
@@ -172,7 +163,8 @@ def size_floors(surfaces: dict[int, float], min_size: float) -> dict[int, float]
         floor = float(np.sqrt(2.3 * abs(area) / MAX_FACE_TRIANGLES))
         if floor <= min_size:
             continue
-        k, _ = _curvature_samples(s)
+        samples = surface_samples(s)
+        k = samples[1][np.isfinite(samples[1])] if samples is not None else np.zeros(0)
         if len(k) >= NEAREST:
             low, high = np.percentile(k, [2.0, 98.0])
             if high > SPREAD * low:
@@ -180,26 +172,27 @@ def size_floors(surfaces: dict[int, float], min_size: float) -> dict[int, float]
     return floors
 
 
-def _curvature_samples(surface: int) -> tuple[np.ndarray, np.ndarray]:
-    """Largest |principal curvature| and area element on a :data:`SAMPLES` x :data:`SAMPLES` grid of a gmsh
-    surface's parameters (finite samples only; empty if gmsh cannot evaluate it)."""
+def surface_samples(surface: int, n: int = SAMPLES) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Points (m, 3), largest |principal curvature| (m,) and area element (m,) of gmsh surface ``surface``
+    on an ``n`` x ``n`` grid of its parameters (cell centres), as gmsh gives them (not filtered); None if
+    gmsh cannot evaluate it."""
     import gmsh
 
     try:
         lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
-        t = (np.arange(SAMPLES) + 0.5) / SAMPLES
+        t = (np.arange(n) + 0.5) / n
         u, v = np.meshgrid(lo[0] + (hi[0] - lo[0]) * t, lo[1] + (hi[1] - lo[1]) * t)
         uv = np.column_stack([u.ravel(), v.ravel()]).ravel().tolist()
+        x = np.asarray(gmsh.model.getValue(2, surface, uv), dtype=float).reshape(-1, 3)
         kmax, kmin, _, _ = gmsh.model.getPrincipalCurvatures(surface, uv)
         d = np.asarray(gmsh.model.getDerivative(2, surface, uv), dtype=float).reshape(-1, 6)
     except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
-        return np.zeros(0), np.zeros(0)
+        return None
     k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
     da = np.linalg.norm(np.cross(d[:, :3], d[:, 3:]), axis=1)
-    if len(k) != len(da):
-        return np.zeros(0), np.zeros(0)
-    good = np.isfinite(k) & np.isfinite(da)
-    return k[good], da[good]
+    if len(k) != len(x) or len(da) != len(x):
+        return None
+    return x, k, da
 
 
 def install(surfaces: list[int], floors: dict[int, float] | None = None) -> list[int]:
