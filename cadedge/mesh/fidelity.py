@@ -396,7 +396,7 @@ def before_generate(ctx) -> None:
                               and f <= len(areas)}, min_size)
         install([s for f, s in sorted(ctx.emap.faces.items()) if ctx.job.mode == "nodes"
                  and f in curved and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE], floors)
-        ctx.floored = {ctx.emap.face_of_surface.get(s, s): h for s, h in floors.items()}
+        ctx.floored = floors  # gmsh surface -> its size floor
         planes = [s for f, s in ctx.emap.faces.items() if f not in curved]
         if planes:
             grow_planes(ctx.job.field, INTERIOR_GROWTH * ctx.job.field.growth, planes)
@@ -483,6 +483,7 @@ def after_generate(ctx) -> None:
     last: dict[int, float] = {}
     no_refine = ctx.job.no_refine
     say = ctx.progress or (lambda line: None)
+    floored = getattr(ctx, "floored", {})  # held at a size floor: finer sizes do not apply there
     pending = [s for s, o in ctx.outcomes.items() if o.ok and face_of.get(s, s) in curved]
     for k in range(PASSES + 1):
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
@@ -501,8 +502,8 @@ def after_generate(ctx) -> None:
             say("refine " + " ".join(str(face_of.get(s, s)) for s in group))
             ctx.outcomes.update(remesh_group(group, n, face_of))
             say("refined " + " ".join(str(face_of.get(s, s)) for s in group))
-        pending = [s for s, d in measured.items()
-                   if abs(d) > target and face_of.get(s, s) not in stuck and face_of.get(s, s) not in no_refine]
+        pending = [s for s, d in measured.items() if abs(d) > target and face_of.get(s, s) not in stuck
+                   and face_of.get(s, s) not in no_refine and s not in floored]
         if not pending or k == PASSES:
             break
         old = {s: per_face.get(face_of.get(s, s), opts["face_per_circle"].get(face_of.get(s, s), n0))
@@ -533,7 +534,7 @@ def after_generate(ctx) -> None:
                       per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
     ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "stuck": sorted(stuck),
-                    "floored": dict(getattr(ctx, "floored", {}))}
+                    "floored": {face_of.get(s, s): h for s, h in floored.items()}}
 
 
 def after_mesh(ctx) -> dict:
