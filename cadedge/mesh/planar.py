@@ -27,12 +27,12 @@ def planar_polygon_areas(shape: object, grid, faces: list[int]) -> dict[int, flo
     direction the wire uses it, projected on the face's plane; the signed areas of the wires are summed
     (outer wire and holes run opposite ways) and the absolute value taken, so the face's orientation does
     not matter. A face with an edge that has no usable grid, or a wire the walk cannot follow, is left out."""
-    from OCP.BRepTools import BRepTools_WireExplorer
-    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
-    from OCP.TopExp import TopExp, TopExp_Explorer
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_REVERSED
+    from OCP.TopExp import TopExp
 
     from ..occt.compat import TopoDS, TopTools_IndexedMapOfShape
     from ..occt.planes import plane_of
+    from ..occt.topology import walked_wires
 
     edge_map, face_map = TopTools_IndexedMapOfShape(), TopTools_IndexedMapOfShape()
     TopExp.MapShapes_s(shape, TopAbs_EDGE, edge_map)
@@ -42,33 +42,24 @@ def planar_polygon_areas(shape: object, grid, faces: list[int]) -> dict[int, flo
     for fid in faces:
         face = TopoDS.Face_s(face_map.FindKey(fid).Oriented(TopAbs_FORWARD))
         plane = plane_of(face)
-        if plane is None:  # not planar after all: nothing exact to say
+        wires = walked_wires(face)
+        if plane is None or wires is None:  # not planar after all, or a wire the walk cannot follow
             continue
         origin, axes = plane[0], np.array(plane[1:])
         total, usable = 0.0, True
-        wires = TopExp_Explorer(face, TopAbs_WIRE)
-        while wires.More() and usable:
-            wire = TopoDS.Wire_s(wires.Current())
-            walk = BRepTools_WireExplorer(wire, face)
-            loop, walked, count = [], 0, 0
-            edges = TopExp_Explorer(wire, TopAbs_EDGE)
-            while edges.More():
-                count += 1
-                edges.Next()
-            while walk.More():
-                walked += 1
-                edge = walk.Current()
+        for edges in wires:
+            loop = []
+            for edge in edges:
                 e = by_id.get(edge_map.FindIndex(edge))
                 if e is None or (len(e.points) < 2 and not e.degenerate):
                     usable = False
                     break
                 if not e.degenerate:
                     loop.append(e.points[::-1] if edge.Orientation() == TopAbs_REVERSED else e.points)
-                walk.Next()
-            usable = usable and walked == count  # the walk skipped an edge: the loop is not the wire
-            if usable and loop:
+            if not usable:
+                break
+            if loop:
                 total += polygon_area((np.vstack(loop) - origin) @ axes.T)
-            wires.Next()
         if usable:
             out[fid] = abs(total)
     return out

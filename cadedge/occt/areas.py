@@ -31,17 +31,17 @@ from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepGProp import BRepGProp
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
-from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
+from OCP.BRepTools import BRepTools
 from OCP.GProp import GProp_GProps
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
 from OCP.Standard import Standard_Failure
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_REVERSED, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_REVERSED
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
 
 from .compat import TopoDS
-from .topology import Topology
+from .topology import Topology, walked_wires
 
 #: Precision asked of OCCT's adaptive integration.
 AREA_EPS = 1e-6
@@ -128,26 +128,18 @@ def domain_area(face: TopoDS_Face, deflection: float) -> float | None:
 def _loops(face: TopoDS_Face) -> list[list[tuple[object, float, float]]] | None:
     """Each wire of a FORWARD ``face`` as the pcurves of its edges in walking order, each with the
     parameters it is walked from and to; None if an edge has no pcurve or the walk skips an edge."""
+    walked = walked_wires(face)
+    if walked is None:
+        return None
     loops = []
-    wires = TopExp_Explorer(face, TopAbs_WIRE)
-    while wires.More():
-        wire = TopoDS.Wire_s(wires.Current())
-        wires.Next()
-        count, edges = 0, TopExp_Explorer(wire, TopAbs_EDGE)
-        while edges.More():
-            count += 1
-            edges.Next()
-        loop, walk = [], BRepTools_WireExplorer(wire, face)
-        while walk.More():
-            edge = walk.Current()
-            walk.Next()
+    for edges in walked:
+        loop = []
+        for edge in edges:
             pcurve = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
             if pcurve is None:
                 return None
             a, b = BRep_Tool.Range_s(edge)
             loop.append((pcurve, b, a) if edge.Orientation() == TopAbs_REVERSED else (pcurve, a, b))
-        if len(loop) != count:  # the walk skipped an edge: the loop is not the wire
-            return None
         loops.append(loop)
     return loops
 

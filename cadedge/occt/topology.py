@@ -12,7 +12,8 @@ import functools
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.Standard import Standard_Failure
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
+from OCP.BRepTools import BRepTools_WireExplorer
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX, TopAbs_WIRE
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
 
@@ -35,6 +36,28 @@ def curve_type_name(kind) -> str:
     """The name in :data:`CURVE_TYPES` of a ``GeomAbs_CurveType`` (cached: ``str`` of an OCP enum
     costs about 14 us)."""
     return str(kind).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
+
+
+def walked_wires(face: TopoDS_Face) -> list[list[TopoDS_Edge]] | None:
+    """Each wire of ``face`` as its edges in walking order (``BRepTools_WireExplorer``), oriented as the face
+    uses them; None if a walk skips an edge (its loop would not be the wire)."""
+    loops = []
+    wires = TopExp_Explorer(face, TopAbs_WIRE)
+    while wires.More():
+        wire = TopoDS.Wire_s(wires.Current())
+        wires.Next()
+        count, edges = 0, TopExp_Explorer(wire, TopAbs_EDGE)
+        while edges.More():
+            count += 1
+            edges.Next()
+        loop, walk = [], BRepTools_WireExplorer(wire, face)
+        while walk.More():
+            loop.append(walk.Current())
+            walk.Next()
+        if len(loop) != count:
+            return None
+        loops.append(loop)
+    return loops
 
 
 def _shapes(shapes: TopTools_ListOfShape) -> list[TopoDS_Shape]:
