@@ -45,7 +45,7 @@ def refine_curve(curve: Any, domain: tuple[float, float] | None = None, *, ald: 
 
     >>> import numpy as np
     >>> g = refine_curve(lambda t: (np.cos(t), np.sin(t)), (0.0, np.pi / 2), ald=1e-3)
-    >>> g.ald_estimate <= 1e-3 and g.params[0] == 0.0 and g.params[-1] == np.pi / 2
+    >>> bool(g.ald_estimate <= 1e-3 and g.params[0] == 0.0 and g.params[-1] == np.pi / 2)
     True
     """
     c = as_curve(curve, domain)

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import io
+import re
+import sys
+
 import pytest
 
 pytest.importorskip("gmsh")
 trimesh = pytest.importorskip("trimesh")
 
 from cadedge.cli import main  # noqa: E402
+from cadedge.cli.mesh import StatusLine  # noqa: E402
 
 from conftest import FIXTURES  # noqa: E402
 
@@ -22,6 +27,31 @@ def test_mesh_msh_prints_the_check_and_exits_0(tmp_path, capsys):
     assert "edge-grid nodes in mesh:" in text.out
     assert text.err == ""
     assert out.read_text().startswith("$MeshFormat")
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_on_a_terminal_a_status_line_says_what_it_does_and_is_cleared(tmp_path, capsys, monkeypatch):
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    assert main(["mesh", CYL, "--ald", "1e-2", "-o", str(tmp_path / "cyl.msh")]) == 0
+    drawn = terminal.getvalue()
+    assert re.search(r"\r\x1b\[Kcadedge mesh: \d+ s: (refining edges|area target|meshing|gmsh)", drawn)
+    assert drawn.endswith("\r\x1b[K")  # cleared before the summary
+    assert "check: ok" in capsys.readouterr().out
+
+
+def test_the_status_line_stays_off_without_a_terminal_or_with_quiet(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(sys, "stderr", _Terminal())
+    status = StatusLine(stream=io.StringIO())  # not a terminal
+    status("meshing faces: 1/3 meshed")
+    status.close()
+    assert status.stream.getvalue() == ""
+    assert main(["mesh", CYL, "--ald", "1e-2", "-o", str(tmp_path / "cyl.msh"), "--quiet"]) == 0
+    assert sys.stderr.getvalue() == "" and capsys.readouterr().out == ""
 
 
 def test_mesh_stl_is_watertight(tmp_path, capsys):

@@ -58,11 +58,15 @@ def test_a_segfault_in_gmsh_costs_one_attempt(cylinder, tmp_path):
 
 def test_a_hang_in_gmsh_costs_one_attempt(cylinder):
     t0 = time.monotonic()
-    result = mesh_shape(cylinder, hooks={"before_face": ["mesh_faults:hang"]}, timeout=60, face_timeout=2)
+    said: list[str] = []
+    result = mesh_shape(cylinder, hooks={"before_face": ["mesh_faults:hang"]}, timeout=60, face_timeout=2,
+                        progress=said.append)
     assert time.monotonic() - t0 < 40
     _watertight_with_every_face(result)
     face = next(o for o in result.faces if o.face == FAULT_FACE)
     assert "hung" in face.attempts[0][1] and face.ok
+    assert any(s.startswith(f"face {FAULT_FACE}: hung") and "new process" in s for s in said)  # the status says so
+    assert f"meshing faces: {result.grid.faces}/{result.grid.faces} meshed" in " ".join(said)
 
 
 def test_a_crash_outside_the_faces_fails_the_run_not_the_caller(cylinder, tmp_path):

@@ -1,18 +1,23 @@
 """``cadedge mesh INPUT --ald EPS -o OUT``: surface mesh by gmsh on the edge grids, then the check.
 
 OUT's suffix picks the format: ``.msh``, ``.stl``, ``.vtk`` (the mesh) or ``.geo`` (spacing export plus a
-``.brep`` beside it, not meshed). Prints the watertight/conforming check; exit 0 when every face meshed
-and the check passed, 1 otherwise (failed faces, a gmsh crash or timeout: a short summary on stderr,
-every line naming INPUT as typed; ``--verbose`` for every attempt), 2 on bad input.
+``.brep`` beside it, not meshed). On a terminal, a status line on stderr says what it is doing while it
+works (seconds so far, the step, faces meshed) and is cleared before anything is printed. Prints the
+watertight/conforming check; exit 0 when every face meshed and the check passed, 1 otherwise (failed
+faces, a gmsh crash or timeout: a short summary on stderr, every line naming INPUT as typed;
+``--verbose`` for every attempt), 2 on bad input.
 """
 
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
+import threading
+import time
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 from ..errors import CadedgeError, CadedgeWarning, InputError
 from . import _interrupted, debug_traceback, stopped, without_name
@@ -49,7 +54,7 @@ def register(subparsers: Any) -> None:
                                                     "area deficit, min angle) as JSON")
     p.add_argument("--plot", metavar="FILE", help="also draw the mesh and the edge grids: .png (static) or .html "
                                                   "(interactive 3-D page, works offline)")
-    p.add_argument("--quiet", action="store_true", help="print only problems")
+    p.add_argument("--quiet", action="store_true", help="print only problems (no status line)")
     p.add_argument("--verbose", action="store_true", help="every failed attempt of every face, every note and "
                    "every warning")
     p.set_defaults(func=run)
@@ -100,11 +105,15 @@ def _run(args: argparse.Namespace) -> int:
     if args.plot:
         from ..plot import check_plot_path
         check_plot_path(args.plot)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
-        result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size,
-                            timeout=timeout, surface_ald=surface_ald,
-                            allow_partial=args.allow_partial, **opts)
+    status = StatusLine(stream=sys.stderr, enabled=False if args.quiet else None)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
+            result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size,
+                                timeout=timeout, surface_ald=surface_ald,
+                                allow_partial=args.allow_partial, progress=status, **opts)
+    finally:
+        status.close()
     if not args.quiet:
         for line in _summary(result, verbose=args.verbose):
             print(line)
@@ -128,6 +137,54 @@ def _run(args: argparse.Namespace) -> int:
     for problem in result.problems(verbose=args.verbose):
         _err(source, problem)
     return 0 if result.ok else 1
+
+
+class StatusLine:
+    """A ``progress(text)`` callback keeping one line on ``stream`` (``enabled=None``: only a terminal) with the
+    seconds so far and what the job is doing, redrawn every :data:`REDRAW` seconds from a thread (a face may
+    take a minute between two steps); :meth:`close` stops the thread and clears the line."""
+
+    def __init__(self, *, stream: IO[str], enabled: bool | None = None):
+        self.stream = stream
+        self.enabled = stream.isatty() if enabled is None else enabled
+        self.text, self.t0 = "", time.monotonic()
+        self.stop = threading.Event()
+        self.lock = threading.Lock()
+        self.thread: threading.Thread | None = None
+
+    def __call__(self, text: str) -> None:
+        if not self.enabled:
+            return
+        with self.lock:
+            self.text = text
+        if self.thread is None:
+            self.thread = threading.Thread(target=self._run, name="cadedge-status", daemon=True)
+            self.thread.start()
+
+    def _run(self) -> None:
+        while True:
+            self._draw()
+            if self.stop.wait(REDRAW):
+                return
+
+    def _draw(self) -> None:
+        width = max(shutil.get_terminal_size().columns - 1, 20)
+        with self.lock:
+            line = f"cadedge mesh: {time.monotonic() - self.t0:.0f} s: {self.text}"
+            self.stream.write("\r\x1b[K" + line[:width])
+            self.stream.flush()
+
+    def close(self) -> None:
+        if self.thread is not None:
+            self.stop.set()
+            self.thread.join()
+            self.thread = None
+            self.stream.write("\r\x1b[K")
+            self.stream.flush()
+
+
+#: Seconds between redraws of the status line.
+REDRAW = 0.25
 
 
 #: Warnings (from reading and refining) shown without ``--verbose``; the rest is counted.

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -100,14 +101,15 @@ class MeshResult:
 
 
 def _grid_of(source: Any, ald: float, min_length: float | None, max_length: float | None,
-             max_growth: float | None, allow_partial: bool) -> ShapeGrid:
+             max_growth: float | None, allow_partial: bool, say: Callable[[str], None]) -> ShapeGrid:
     if isinstance(source, ShapeGrid):
         if source.shape is None:
             raise InputError(f"{source.source}: the shape grid carries no OCCT shape to mesh")
         return source
     from .. import refine_shape
     return refine_shape(source, ald=ald, min_length=min_length, max_length=max_length, max_growth=max_growth,
-                        allow_partial=allow_partial)
+                        allow_partial=allow_partial,
+                        progress=lambda done, total: say(f"refining edges: {done}/{total}"))
 
 
 def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | None = None,
@@ -116,7 +118,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                max_size: float | None = None, timeout: float | None = None,
                face_timeout: float | None = None, hooks: dict[str, list[str]] | None = None,
                job_options: dict[str, Any] | None = None, surface_ald: float | None = None,
-               allow_partial: bool = False) -> MeshResult:
+               allow_partial: bool = False, progress: Callable[[str], None] | None = None) -> MeshResult:
     """Mesh every face of ``source`` (STEP path, cadquery/build123d/OCP shape, or a ``ShapeGrid``).
 
     ``ald``, ``min_length``, ``max_length``, ``max_growth`` go to :func:`cadedge.refine_shape` (ignored for
@@ -129,7 +131,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     :mod:`cadedge.mesh.worker`). Every face's area deficit ``1 - mesh area / B-rep area`` is aimed at
     ``|deficit| <= surface_ald`` (default ``ald``; see :mod:`cadedge.mesh.fidelity`) and measured in
     ``result.report``. ``allow_partial`` goes to :func:`cadedge.refine_shape` (a file OCCT transfers only
-    in part is an InputError without it). Raises
+    in part is an InputError without it). ``progress(text)``, if given, is called with what the job is doing
+    at each step (refining edges, each face meshed, ...; the CLI's status line), from this process. Raises
     :class:`InputError` on bad arguments or input; faces gmsh fails on, crashes and timeouts are returned
     in ``failures`` / ``error``, never raised.
     """
@@ -149,7 +152,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     from .spacing_geo import write_geo
 
     t0 = time.perf_counter()
-    grid = _grid_of(source, ald, min_length, max_length, max_growth, allow_partial)
+    say = progress or (lambda text: None)
+    grid = _grid_of(source, ald, min_length, max_length, max_growth, allow_partial, say)
     if not grid.faces:
         raise InputError(f"{grid.source}: the shape has no faces to mesh (only loose edges)")
 
@@ -168,6 +172,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         raise InputError(f"surface_ald must be a positive number, got {surface_ald!r}")
     if surface_ald is None:  # one knob: the edges' ALD (a ready grid's own) is the faces' area target too
         surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
+    say("area target: measuring the B-rep faces and fitting their boundaries")
     grid, fidelity = prepare(grid, surface_ald)  # faces' area target: boundary fit, curvature sizes
     hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
     if mode == "sizes":  # failed faces get their curves meshed at other sizes before the surface target
@@ -175,6 +180,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     job_options = {**(job_options or {}), "fidelity": fidelity}
     notes = []
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
+        say("fitting the edge grids to the face sizes")
         try:
             grid = fit_to_sizes(grid, make_field)
         except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
@@ -188,17 +194,18 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         max_size = cap
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
-                       job_options=job_options)
+                       job_options=job_options, say=say)
     result.notes[:0] = notes
     from .report import report_of
 
+    say("measuring the mesh's faces")
     result.report = report_of(result, fidelity)
     return result
 
 
 def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, *,
               timeout: float | None, face_timeout: float | None, hooks: dict[str, list[str]] | None,
-              job_options: dict[str, Any] | None) -> MeshResult:
+              job_options: dict[str, Any] | None, say: Callable[[str], None]) -> MeshResult:
     """Mesh in a child process (:func:`~cadedge.mesh.isolate.run_isolated`), then check in this one."""
     import dataclasses
 
@@ -206,11 +213,13 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .generate import FaceFailure
     from .gmsh_model import shape_to_brep
     from .isolate import DEFAULT_TIMEOUT, run_isolated
+    from .status import MeshStatus
     from .worker import MeshJob
 
     job = MeshJob(source=grid.source, brep=shape_to_brep(grid.shape), grid=dataclasses.replace(grid, shape=None, curves=None),
                   field=field_, mode=mode, hooks=dict(hooks or {}), options=dict(job_options or {}))
-    res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout)
+    res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout,
+                       progress=MeshStatus(say, faces=grid.faces))
     faces = list(res.faces)
     if res.error is not None:
         failures = [FaceFailure(face=f, surface=f, reason=res.error) for f in range(1, grid.faces + 1)]
@@ -218,6 +227,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         failures = [FaceFailure(face=o.face, surface=o.surface, reason=o.reason()) for o in faces if not o.ok]
     check = None
     if len(res.triangles):
+        say("checking the mesh")
         failed = {f.face for f in failures}
         grid_points = None
         if mode == "nodes":  # imposed grids whose faces all meshed must be there, node for node

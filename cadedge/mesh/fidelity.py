@@ -485,6 +485,7 @@ def after_generate(ctx) -> None:
     say = ctx.progress or (lambda line: None)
     floored = getattr(ctx, "floored", {})  # held at a size floor: finer sizes do not apply there
     pending = [s for s, o in ctx.outcomes.items() if o.ok and face_of.get(s, s) in curved]
+    say("measure")
     for k in range(PASSES + 1):
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
             break  # out of the job's time: what is meshed stays, the report names what is over

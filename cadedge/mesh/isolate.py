@@ -40,6 +40,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -119,6 +120,24 @@ def _last_line(path: str) -> str:
         return ""
 
 
+class _Tail:
+    """The complete lines appended to a progress file since the last call of :meth:`new`."""
+
+    def __init__(self, path: str):
+        self.path, self.offset = path, 0
+
+    def new(self) -> list[str]:
+        try:
+            with open(self.path, "rb") as f:
+                f.seek(self.offset)
+                data = f.read()
+        except OSError:
+            return []
+        end = data.rfind(b"\n") + 1
+        self.offset += end
+        return data[:end].decode(errors="replace").splitlines()
+
+
 def _progress(path: str) -> list[str]:
     try:
         with open(path, encoding="utf-8", errors="replace") as f:
@@ -140,7 +159,8 @@ def _learn(lines: list[str], skip: dict[int, dict[int, str]], known_ok: dict[int
             skip.setdefault(face, {})[k] = words[4] if len(words) > 4 else "failed"
 
 
-def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_timeout: float) -> _Run:
+def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_timeout: float,
+               progress: Callable[[str], None] | None = None) -> _Run:
     job_path, result_path, progress_path = (os.path.join(tmp, n) for n in ("job.pkl", "result.pkl", "progress"))
     for p in (result_path, progress_path):
         if os.path.exists(p):
@@ -154,6 +174,7 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
                                 start_new_session=True)
         last, since, cpu_since = "", time.monotonic(), 0.0
+        tail = _Tail(progress_path)
         try:
             while True:
                 try:
@@ -161,6 +182,9 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                     break
                 except subprocess.TimeoutExpired:
                     pass
+                finally:
+                    for line in tail.new() if progress is not None else ():
+                        progress(line)
                 now = time.monotonic()
                 line = _last_line(progress_path)
                 cpu = _cpu_seconds(proc.pid)
@@ -187,10 +211,12 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
 
 
 def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = DEFAULT_TIMEOUT,
-                 face_timeout: float | None = None) -> JobResult:
+                 face_timeout: float | None = None, progress: Callable[[str], None] | None = None) -> JobResult:
     """Run ``job`` in a child process (see the module doc); the mesh goes to ``output`` if anything meshed.
 
-    ``face_timeout`` defaults to :data:`FACE_SHARE` of ``timeout``. ``output`` is written atomically and
+    ``face_timeout`` defaults to :data:`FACE_SHARE` of ``timeout``. ``progress(line)``, if given, gets every
+    progress line of the children as it comes (see :mod:`cadedge.mesh.worker`), and ``restart REASON``
+    before a new child carries on (:class:`cadedge.mesh.status.MeshStatus` puts them in words). ``output`` is written atomically and
     only when the result has triangles; ``job.output`` is set here to a file in a private folder.
     """
     face_timeout = face_timeout or FACE_SHARE * timeout
@@ -207,7 +233,9 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
         job.output = os.path.join(tmp, "mesh" + output.suffix.lower()) if output is not None else None
         for _ in range(MAX_RESTARTS + 1):
             job.skip, job.known_ok = skip, known_ok
-            run = _run_child(job, tmp, deadline, kill_at, face_timeout)
+            if events and progress is not None:
+                progress(f"restart {events[-1]}")
+            run = _run_child(job, tmp, deadline, kill_at, face_timeout, progress)
             if run.status == "ok":
                 result = run.result
                 result.notes = events + result.notes

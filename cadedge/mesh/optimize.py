@@ -310,6 +310,7 @@ def after_generate(ctx) -> None:
     cpu_end = cpu + max(MIN_BUDGET, BUDGET_SHARE * (cpu - ctx.cpu_started))  # the job's CPU time so far
     end = ctx.job.finish_by  # on the clock; the soft deadline (ctx.job.deadline) bounds meshing, not this
     deliver = ctx.deliver or (lambda dim, tag, corners: None)
+    say = ctx.progress or (lambda line: None)
     todo = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok]
     for passes, rounds in ((PASSES, 1), (0, STAGE_ROUNDS - 1)):
         worst = {s: _face_min_angle(s) for s in todo}
@@ -327,6 +328,7 @@ def after_generate(ctx) -> None:
             area = float(areas[f - 1]) if 1 <= f <= len(areas) else 0.0
             # a face whose mesh and B-rep areas disagree (not converging) keeps its deficit within a slack
             slack = STUCK_SLACK * target if target is not None and f in stuck else 0.0
+            say(f"optimise {f}")
             if smooth_face(s, brep_area=area, target=target, slack=slack, own_slack=STUCK_OWN if slack else 0.0,
                            passes=passes, rounds=rounds,
                            deadline=end, cpu_deadline=cpu + share * (cpu_end - cpu)):

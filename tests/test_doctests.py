@@ -1,0 +1,16 @@
+"""The examples in docstrings run as written."""
+
+import doctest
+import importlib
+
+import pytest
+
+MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status"]
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_docstring_examples_run(name):
+    module = importlib.import_module(name)
+    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0, f"{name} has no examples"
+    assert result.failed == 0
