@@ -13,7 +13,13 @@ cq = pytest.importorskip("cadquery")
 
 from cadedge.cli import main  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
-from cadedge.mesh.fidelity import _sagittas, brep_face_areas, fit_boundaries, surface_types  # noqa: E402
+from cadedge.mesh.fidelity import (  # noqa: E402
+    _sagittas,
+    brep_face_areas,
+    fit_boundaries,
+    not_converging,
+    surface_types,
+)
 from cadedge.mesh.quality import triangle_angles  # noqa: E402
 from cadedge.mesh.report import build_report, tolerance_bands  # noqa: E402
 
@@ -145,6 +151,14 @@ def test_a_gapped_box_meshes_to_its_closed_face_areas_and_names_its_tolerances(g
                        surface_ald=1e-9)
     assert not any("tolerances allow" in f.note for f in rep.over_target)
     assert {f.reason for f in rep.over_target} == {"planar"}  # a box: every face a plane
+
+
+def test_a_face_meshed_finer_into_its_target_is_never_taken_for_not_converging():
+    # boxed_sphere's hemispheres at 1e-3: 1.06e-3 -> 8.7e-4 once finer kept its finer mesh
+    assert not not_converging(8.7e-4, 1.06e-3, 1e-3)
+    assert not_converging(1.0e-3 * 1.5, 1.6e-3, 1e-3)  # still over, and finer bought little
+    assert not not_converging(1.2e-3, 2.0e-3, 1e-3)  # still over, but going down: another pass
+    assert not_converging(-0.028, None, 1e-3) and not not_converging(0.009, None, 1e-3)  # met once: 10x off
 
 
 def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():
