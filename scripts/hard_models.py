@@ -11,8 +11,9 @@ with one part instanced three times, a faceted solid (an STL mesh sewn into 228 
 tube swept along a polyline with round bends. A third set: a non-manifold general fuse (inner faces
 shared by two solids), a STEP sewn across real gaps between its faces, disjoint bodies with a free
 polyline and tolerances wider than a slot (OCCT BREP: STEP keeps no per-entity tolerances) and an IGES
-file of unsewn trimmed surfaces. A fourth: a thickened wavy plate (offset surfaces) and a twisted blade
-with a sharp trailing edge (curvature radii from 27 mm to 0.1 mm on one face).
+file of unsewn trimmed surfaces. A fourth: a thickened wavy plate (offset surfaces), a twisted blade
+with a sharp trailing edge (curvature radii from 27 mm to 0.1 mm on one face) and a propeller (three
+lofted blades with sharp edges on a hub).
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -126,6 +127,18 @@ def sharp_blade() -> object:
         rot = [cq.Vector(x * math.cos(a) - y * math.sin(a), x * math.sin(a) + y * math.cos(a), z) for x, y in base]
         wires.append(cq.Wire.assembleEdges([cq.Edge.makeSpline(rot, periodic=True)]))
     return cq.Solid.makeLoft(wires, ruled=False).wrapped
+
+
+def propeller() -> object:
+    """A hub with three blades lofted from a 5 x 0.8 ellipse to a 2.4 x 0.3 one turned by 50 degrees: the
+    blades' edges are sharp (radius 0.02 mm at the tip) along 14 mm seams, and each blade face hangs gmsh
+    at its curvature sizes (gmsh alone did not finish within 300 s at 12 triangles per circle)."""
+    hub = cq.Workplane("XY").circle(4).extrude(6)
+    blade = (cq.Workplane("YZ").workplane(offset=3).ellipse(2.5, 0.4)
+             .workplane(offset=14).transformed(rotate=(0, 0, 50)).ellipse(1.2, 0.15).loft())
+    for k in range(3):
+        hub = hub.union(blade.translate((0, 0, 3)).rotate((0, 0, 0), (0, 0, 1), 120 * k))
+    return hub.val().wrapped
 
 
 def loose_tolerance() -> object:
@@ -402,7 +415,7 @@ MODELS: dict[str, Callable[[], object]] = {
     "swept_nonplanar": swept_nonplanar, "tangent_union": tangent_union, "knurled": knurled,
     "sliver_hole": sliver_hole, "faceted": faceted, "pipe_bends": pipe_bends,
     "nonmanifold": nonmanifold, "gapped_sewn": gapped_sewn, "thick_wavy_plate": thick_wavy_plate,
-    "sharp_blade": sharp_blade,
+    "sharp_blade": sharp_blade, "propeller": propeller,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
