@@ -109,22 +109,12 @@ def _cpu_seconds(pid: int) -> float | None:
         return None
 
 
-def _last_line(path: str) -> str:
-    try:
-        with open(path, "rb") as f:
-            f.seek(0, os.SEEK_END)
-            f.seek(max(0, f.tell() - 2048))
-            lines = f.read().decode(errors="replace").splitlines()
-        return lines[-1] if lines else ""
-    except OSError:
-        return ""
-
-
 class _Tail:
-    """The complete lines appended to a progress file since the last call of :meth:`new`."""
+    """A child's progress file as it grows: :meth:`new` gives the complete lines appended since its last
+    call, and ``last`` is the last complete line so far (the step under way, for the watchdog)."""
 
     def __init__(self, path: str):
-        self.path, self.offset = path, 0
+        self.path, self.offset, self.last = path, 0, ""
 
     def new(self) -> list[str]:
         try:
@@ -135,7 +125,10 @@ class _Tail:
             return []
         end = data.rfind(b"\n") + 1
         self.offset += end
-        return data[:end].decode(errors="replace").splitlines()
+        lines = data[:end].decode(errors="replace").splitlines()
+        if lines:
+            self.last = lines[-1]
+        return lines
 
 
 def _progress(path: str) -> list[str]:
@@ -183,10 +176,11 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                 except subprocess.TimeoutExpired:
                     pass
                 finally:
-                    for line in tail.new() if progress is not None else ():
-                        progress(line)
+                    for line in tail.new():
+                        if progress is not None:
+                            progress(line)
                 now = time.monotonic()
-                line = _last_line(progress_path)
+                line = tail.last
                 cpu = _cpu_seconds(proc.pid)
                 if line != last:
                     last, since, cpu_since = line, now, cpu or 0.0
@@ -201,7 +195,8 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
-        last = _last_line(progress_path)
+        tail.new()
+        last = tail.last
         err.seek(0)
         stderr = err.read()
     if code == 0 and os.path.exists(result_path):
@@ -215,9 +210,10 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     """Run ``job`` in a child process (see the module doc); the mesh goes to ``output`` if anything meshed.
 
     ``face_timeout`` defaults to :data:`FACE_SHARE` of ``timeout``. ``progress(line)``, if given, gets every
-    progress line of the children as it comes (see :mod:`cadedge.mesh.worker`), and ``restart REASON``
-    before a new child carries on (:class:`cadedge.mesh.status.MeshStatus` puts them in words). ``output`` is written atomically and
-    only when the result has triangles; ``job.output`` is set here to a file in a private folder.
+    progress line of the children as it comes (see :mod:`cadedge.mesh.worker`), and ``restart EVENT``
+    before a new child carries on (:class:`cadedge.mesh.status.MeshStatus` puts them in words).
+    ``output`` is written atomically and only when the result has triangles; ``job.output`` is set here
+    to a file in a private folder.
     """
     face_timeout = face_timeout or FACE_SHARE * timeout
     t0 = time.monotonic()
