@@ -71,7 +71,7 @@ class MeshStatus:
             self.show(f"meshing face{'s' if len(args) > 1 else ''} {_named(args)} again")
         elif head == "optimise" and args:
             self.show(f"improving the triangles: face {args[0]}")
-        elif head == "restart":
+        elif head == "restart" and args:
             self.show(line.split(None, 1)[1])  # what the watchdog saw and did, in its own words
 
     def _faces(self) -> None:
