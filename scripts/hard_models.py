@@ -13,7 +13,10 @@ shared by two solids), a STEP sewn across real gaps between its faces, disjoint 
 polyline and tolerances wider than a slot (OCCT BREP: STEP keeps no per-entity tolerances) and an IGES
 file of unsewn trimmed surfaces. A fourth: a thickened wavy plate (offset surfaces), a twisted blade
 with a sharp trailing edge (curvature radii from 27 mm to 0.1 mm on one face) and a propeller (three
-lofted blades with sharp edges on a hub).
+lofted blades with sharp edges on a hub). A fifth, parts drawn every day and scale: a gear, cadquery's
+bottle, a cut torus, an ellipsoid, a filleted cone on a cylinder, a mug, a filleted pocket box, a
+0.2 mm-walled shell, a thin washer, a sphere with a 0.3 mm hole, and the bracket fixture scaled by
+1e-3 and 1e3 and moved far from the origin.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -139,6 +142,98 @@ def propeller() -> object:
     for k in range(3):
         hub = hub.union(blade.translate((0, 0, 3)).rotate((0, 0, 0), (0, 0, 1), 120 * k))
     return hub.val().wrapped
+
+
+def gear() -> object:
+    """A toothed wheel: an 18-tooth star extruded 8 mm, its 36 vertical edges filleted 0.8 mm, an 8 mm
+    bore."""
+    pts = [((20 if i % 2 == 0 else 17) * math.cos(math.pi * i / 18), (20 if i % 2 == 0 else 17)
+            * math.sin(math.pi * i / 18)) for i in range(36)]
+    return (cq.Workplane().polyline(pts).close().extrude(8).edges("|Z").fillet(0.8)
+            .faces(">Z").workplane().hole(8).val().wrapped)
+
+
+def bottle() -> object:
+    """cadquery's classic bottle: arcs and lines extruded, a neck, shelled to 0.3 mm."""
+    length, width, thick = 20.0, 6.0, 3.0
+    body = (cq.Workplane("XY").center(-length / 2.0, 0).vLine(width / 2.0)
+            .threePointArc((length / 2.0, width / 2.0 + thick), (length, width / 2.0)).vLine(-width / 2.0)
+            .mirrorX().extrude(30.0, True))
+    body = body.faces(">Z").workplane(centerOption="CenterOfMass").circle(3.0).extrude(2.0, True)
+    return body.faces(">Z").shell(0.3).val().wrapped
+
+
+def cut_torus() -> object:
+    """A torus (radii 10 and 3) with a quarter cut away by a box."""
+    return cq.Workplane().add(cq.Solid.makeTorus(10, 3)).cut(
+        cq.Workplane().box(30, 30, 30).translate((15, 15, 0))).val().wrapped
+
+
+def ellipsoid() -> object:
+    """A sphere of radius 5 scaled 3 x 1.5 x 1 (OCCT turns it into B-spline faces)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_GTransform
+    from OCP.gp import gp_GTrsf
+
+    scale = gp_GTrsf()
+    for i, f in enumerate((3.0, 1.5, 1.0), 1):
+        scale.SetValue(i, i, f)
+    return BRepBuilderAPI_GTransform(cq.Solid.makeSphere(5).wrapped, scale, True).Shape()
+
+
+def cone_apex() -> object:
+    """A cone to a point on a cylinder, their circular edges filleted 1 mm."""
+    return (cq.Workplane().add(cq.Solid.makeCone(6, 0, 12)).union(cq.Workplane().circle(6).extrude(-5))
+            .edges("%CIRCLE").fillet(1.0).val().wrapped)
+
+
+def mug() -> object:
+    """A revolved cup with an elliptical handle swept along a spline."""
+    body = (cq.Workplane("XZ").polyline([(0, 0), (4, 0), (4.5, 9), (4.2, 9), (3.7, 0.4), (0, 0.4)]).close()
+            .revolve(360, (0, 0, 0), (0, 1, 0)))
+    path = cq.Workplane("XZ").spline([(4.2, 7.5), (7, 6), (7, 3), (4.1, 1.5)], includeCurrent=False)
+    handle = cq.Workplane("YZ").workplane(offset=4.2).center(0, 7.5).ellipse(0.6, 0.35).sweep(path)
+    return body.union(handle).val().wrapped
+
+
+def pocket_box() -> object:
+    """A box with filleted vertical edges and top, chamfered bottom and a filleted rectangular pocket."""
+    return (cq.Workplane().box(20, 14, 8).edges("|Z").fillet(3).faces(">Z").edges().fillet(1.5)
+            .faces("<Z").chamfer(1.0).faces(">Z").workplane().rect(10, 6).cutBlind(-4)
+            .faces(">Z[-2]").edges().fillet(0.5).val().wrapped)
+
+
+def thin_shell() -> object:
+    """A 100 x 60 x 30 box with 5 mm fillets, shelled inwards to a 0.2 mm wall."""
+    return cq.Workplane().box(100, 60, 30).edges().fillet(5).shell(-0.2).val().wrapped
+
+
+def washer_thin() -> object:
+    """A ring 100 mm across, 0.5 mm wide and 0.5 mm thick."""
+    return cq.Workplane().circle(50).circle(49.5).extrude(0.5).val().wrapped
+
+
+def sphere_pinhole() -> object:
+    """A sphere of radius 20 drilled through by a 0.3 mm hole."""
+    return cq.Workplane().sphere(20).cut(cq.Workplane("YZ").circle(0.15).extrude(30, both=True)).val().wrapped
+
+
+def _bracket() -> cq.Shape:
+    return cq.importers.importStep(str(Path(__file__).resolve().parents[1] / "fixtures" / "bracket.step")).val()
+
+
+def bracket_micro() -> object:
+    """The bracket fixture scaled by 1e-3 (a part drawn in metres)."""
+    return _bracket().scale(1e-3).wrapped
+
+
+def bracket_huge() -> object:
+    """The bracket fixture scaled by 1e3."""
+    return _bracket().scale(1e3).wrapped
+
+
+def bracket_far() -> object:
+    """The bracket fixture moved 2.3e5 from the origin."""
+    return _bracket().translate(cq.Vector(1e5, -2e5, 3e4)).wrapped
 
 
 def loose_tolerance() -> object:
@@ -416,6 +511,10 @@ MODELS: dict[str, Callable[[], object]] = {
     "sliver_hole": sliver_hole, "faceted": faceted, "pipe_bends": pipe_bends,
     "nonmanifold": nonmanifold, "gapped_sewn": gapped_sewn, "thick_wavy_plate": thick_wavy_plate,
     "sharp_blade": sharp_blade, "propeller": propeller,
+    "gear": gear, "bottle": bottle, "cut_torus": cut_torus, "ellipsoid": ellipsoid, "cone_apex": cone_apex,
+    "mug": mug, "pocket_box": pocket_box, "thin_shell": thin_shell, "washer_thin": washer_thin,
+    "sphere_pinhole": sphere_pinhole, "bracket_micro": bracket_micro, "bracket_huge": bracket_huge,
+    "bracket_far": bracket_far,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
