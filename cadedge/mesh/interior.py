@@ -109,8 +109,7 @@ class InteriorSizes:
         good = np.isfinite(k) & np.isfinite(da) & np.all(np.isfinite(x), axis=1)
         if good.sum() < NEAREST or not np.sum(da[good] * k[good]) > 0:
             return False
-        low, high = np.percentile(k[good], [2.0, 98.0])
-        if not high <= SPREAD * low:
+        if ridged(k[good]):
             return False
         self.faces[surface] = _Face(cKDTree(x[good]), k[good], da[good])
         return True
@@ -165,11 +164,16 @@ def size_floors(surfaces: dict[int, float], min_size: float) -> dict[int, float]
             continue
         samples = surface_samples(s)
         k = samples[1][np.isfinite(samples[1])] if samples is not None else np.zeros(0)
-        if len(k) >= NEAREST:
-            low, high = np.percentile(k, [2.0, 98.0])
-            if high > SPREAD * low:
-                floors[s] = floor
+        if len(k) >= NEAREST and ridged(k):
+            floors[s] = floor
     return floors
+
+
+def ridged(k: np.ndarray) -> bool:
+    """Whether curvature samples ``k`` (finite) have a sharp ridge: they span more than :data:`SPREAD`
+    between their 2nd and 98th percentiles."""
+    low, high = np.percentile(k, [2.0, 98.0])
+    return bool(high > SPREAD * low)
 
 
 def surface_samples(surface: int, n: int = SAMPLES) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
