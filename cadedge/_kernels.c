@@ -760,6 +760,8 @@ static PyMethodDef methods[] = {
     {"refine_edges", ck_refine_edges, METH_VARARGS, "Target-mode grids of many edges in one call."},
     {"parse_curves", ck_parse_curves, METH_VARARGS, "Curves written by OCCT's BinTools_CurveSet as geometry table rows."},
     {"parse_shapes", ck_parse_shapes, METH_VARARGS, "A shape written by OCCT's BinTools_ShapeSet: topology and edges."},
+    {"min_angles", ck_min_angles, METH_VARARGS, "The smallest angle of each triangle, in degrees."},
+    {"incident_min", ck_incident_min, METH_VARARGS, "Each node's smallest triangle angle with it moved."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -89,5 +89,7 @@ PyObject *ck_refine_edges(PyObject *self, PyObject *args);
 PyObject *ck_parse_curves(PyObject *self, PyObject *args);
 PyObject *ck_parse_shapes(PyObject *self, PyObject *args);
 PyObject *ck_edge_lengths(PyObject *self, PyObject *args);
+PyObject *ck_min_angles(PyObject *self, PyObject *args);
+PyObject *ck_incident_min(PyObject *self, PyObject *args);
 
 #endif

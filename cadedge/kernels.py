@@ -1,5 +1,5 @@
 """numpy-facing wrappers of the compiled inner loops (``cadedge/_kernels.c``, ``_batch.c``, ``_bintools.c``,
-``_shapedump.c``, ``_lengths.c``).
+``_shapedump.c``, ``_lengths.c``, ``_angles.c``).
 
 A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
 dominated; :func:`refine_edges` runs the whole target mode of many edges in one call. They are plain C
@@ -137,3 +137,22 @@ def parse_shapes(data: bytes, root: int, orientation: int) -> tuple:
     arrays of ``cadedge/_shapedump.c``'s ``parse_shapes`` (read by :mod:`cadedge.occt.shapedump`);
     ValueError where the stream is not one it takes."""
     return _kernels.parse_shapes(data, root, orientation)
+
+
+def min_angles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The smallest interior angle (degrees) of each triangle (rows of node indices into ``nodes`` (n, 3))."""
+    tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    out = np.empty(len(tri))
+    _kernels.min_angles(_f64(nodes).reshape(-1, 3), tri, out)
+    return out
+
+
+def incident_min(x: np.ndarray, tri: np.ndarray, node: np.ndarray, slot: np.ndarray, t: np.ndarray,
+                 pos: np.ndarray) -> np.ndarray:
+    """For incidences (``node`` at corner ``slot`` of triangle ``t``), the smallest angle of each node's
+    triangles with that node moved to ``pos[node]`` (``inf`` for a node without incidences)."""
+    out = np.empty(len(x))
+    i64 = np.int64
+    _kernels.incident_min(_f64(x), np.ascontiguousarray(tri, dtype=i64), np.ascontiguousarray(node, dtype=i64),
+                          np.ascontiguousarray(slot, dtype=i64), np.ascontiguousarray(t, dtype=i64), _f64(pos), out)
+    return out

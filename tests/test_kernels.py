@@ -1,4 +1,4 @@
-"""The compiled kernels (cadedge/_kernels.c) against the numpy/scipy definitions they replace (exact or to rounding)."""
+"""The compiled kernels (cadedge/_kernels.c, _angles.c) against the numpy/scipy definitions they replace (exact or to rounding)."""
 
 import numpy as np
 import pytest
@@ -76,3 +76,45 @@ def test_de_boor_matches_scipy():
         u = np.r_[0.0, np.sort(rng.uniform(0, 1, 40)), inner[2], 1.0]
         ref = scipy_interpolate.BSpline(knots, coef, degree, extrapolate=True)(u)
         assert np.allclose(de_boor(knots, coef, degree, u), ref, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_min_angles_is_the_smallest_of_numpys_triangle_angles(seed):
+    """The face optimiser's compiled smallest angle (one atan2, at the corner opposite the shortest edge)
+    against numpy's three angles, on random, near-equilateral and degenerate triangles."""
+    from cadedge.kernels import min_angles
+    from cadedge.mesh.quality import triangle_angles
+
+    rng = np.random.default_rng(seed)
+    x = np.vstack([rng.uniform(-1, 1, (60, 3)), [[0, 0, 0], [1, 0, 0], [0.5, 3**0.5 / 2 + 1e-12, 0], [2, 0, 0]]])
+    tri = np.vstack([rng.integers(0, 60, (200, 3)), [[60, 61, 62], [60, 61, 63], [60, 60, 61]]])
+    got = min_angles(x, tri)
+    assert np.allclose(got, triangle_angles(x, tri).min(axis=1), rtol=0, atol=1e-12)
+    assert got[-3] == pytest.approx(60.0) and got[-2] == 0.0 and got[-1] == 0.0  # equilateral, flat, two nodes
+    with pytest.raises(IndexError):
+        min_angles(x, [[0, 1, len(x)]])
+
+
+def test_incident_min_is_each_nodes_worst_triangle_with_it_moved():
+    """For each node with incidences, the smallest angle of its triangles with it moved to its trial
+    position and every other node left in place; inf for the others (the local search's trial)."""
+    from cadedge.kernels import incident_min
+    from cadedge.mesh.quality import triangle_angles
+
+    rng = np.random.default_rng(7)
+    x = rng.uniform(-1, 1, (40, 3))
+    tri = np.array([rng.choice(40, 3, replace=False) for _ in range(90)])
+    pos = x + rng.normal(0, 0.05, x.shape)
+    node, slot, t = tri.ravel(), np.tile(np.arange(3), len(tri)), np.repeat(np.arange(len(tri)), 3)
+    keep = node % 3 != 0  # only some nodes try a move
+    node, slot, t = node[keep], slot[keep], t[keep]
+    want = np.full(len(x), np.inf)
+    for nd, sl, tt in zip(node, slot, t):
+        p = x[tri[tt]].copy()
+        p[sl] = pos[nd]
+        want[nd] = min(want[nd], triangle_angles(p, [[0, 1, 2]]).min())
+    got = incident_min(x, tri, node, slot, t, pos)
+    assert np.all(np.isinf(got) == np.isinf(want)) and np.isinf(got[::3]).all()
+    assert np.allclose(got[np.isfinite(want)], want[np.isfinite(want)], rtol=0, atol=1e-12)
+    with pytest.raises(IndexError):
+        incident_min(x, tri, node, slot + 1, t, pos)

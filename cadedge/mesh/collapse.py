@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .quality import cross, triangle_angles
+from .quality import cross, min_angles
 
 #: Edges of triangles whose smallest angle is under this many degrees are tried (42 lifted two_solids'
 #: and red_cube_blue_cylinder's cylinder faces 1-1.5 degrees over 38; 45 collapsed too much).
@@ -44,7 +44,7 @@ def _trial_min(x: np.ndarray, new: np.ndarray, a: int, pos: np.ndarray) -> float
     """Smallest angle of the triangles ``new`` (node indices) with node ``a`` at ``pos``."""
     p = x[new]
     p[new == a] = pos
-    return float(triangle_angles(p.reshape(-1, 3), np.arange(3 * len(new)).reshape(-1, 3)).min())
+    return float(min_angles(p.reshape(-1, 3), np.arange(3 * len(new)).reshape(-1, 3)).min())
 
 
 def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
@@ -64,7 +64,7 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
     removed = np.zeros(n, dtype=bool)
     if not len(tri) or not np.any(movable):
         return x, tri, removed, np.zeros((n, 0))
-    ang = triangle_angles(x, tri).min(axis=1)
+    ang = min_angles(x, tri)
     bad = np.flatnonzero(ang < below)
     if not len(bad):
         return x, tri, removed, np.zeros((n, 0))
@@ -132,7 +132,7 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
         alive[list(gone)] = False
         removed[b] = True
         touched[tri[ring[keep]].ravel()] = True
-        ang[ring[keep]] = triangle_angles(x, new).min(axis=1)
+        ang[ring[keep]] = min_angles(x, new)
         merged = (tris_of(a) | tris_of(b)) - gone
         for v in {int(v) for g in gone for v in tri[g]} - {a, b}:
             tris_of(v).difference_update(gone)

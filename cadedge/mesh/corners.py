@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .collapse import _normal
-from .quality import triangle_angles
+from .quality import min_angles
 
 #: All-boundary triangles under this many degrees are tried.
 SPLIT_BELOW = 42.0
@@ -51,7 +51,7 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
     none = (x, tri, movable, np.zeros((0, 0)))
     if not len(tri):
         return none
-    ang = triangle_angles(x, tri).min(axis=1)
+    ang = min_angles(x, tri)
     bad = np.flatnonzero((ang < below) & ~movable[tri].any(axis=1))
     if not len(bad):
         return none
@@ -98,7 +98,7 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
                 p = np.where((quads == -1)[..., None], pos, x[np.maximum(quads, 0)])
                 if np.any(np.einsum("ij,ij->i", _normal(p), normals0) <= 0):
                     continue
-                q = float(triangle_angles(p.reshape(-1, 3), np.arange(12).reshape(-1, 3)).min())
+                q = float(min_angles(p.reshape(-1, 3), np.arange(12).reshape(-1, 3)).min())
                 if q > old + MIN_GAIN and (best is None or q > best[0]):
                     best = (q, t, u, pos, puv, halves)
         if best is None:

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
-from .quality import cross, triangle_angles
+from .. import kernels
+from .quality import cross, min_angles
 
 #: Smoothing iterations per pass.
 ITERATIONS = 4
@@ -76,14 +77,14 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
     deg = np.asarray(adj.sum(axis=1)).ravel()
     params = None
     for _ in range(iterations):
-        ang0 = triangle_angles(x, tri).min(axis=1)
+        ang0 = min_angles(x, tri)
         nrm0 = _normals(x, tri)
         node0 = _node_min(ang0, tri, n)
         target = (adj @ x)[mov] / deg[mov, None]
         moved, uv = project(target, mov)
         cand = x.copy()
         cand[mov] = moved
-        ang1 = triangle_angles(cand, tri).min(axis=1)
+        ang1 = min_angles(cand, tri)
         flipped = np.einsum("ij,ij->i", _normals(cand, tri), nrm0) <= 0
         bad_node = _node_min(np.where(flipped, -1.0, ang1), tri, n)
         accept = np.zeros(n, dtype=bool)
@@ -91,7 +92,7 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         floor = node0[tri].min(axis=1)  # a triangle may get worse, but not below its neighbourhood's worst
         for _round in range(_UNDO_ROUNDS):
             trial = np.where(accept[:, None], cand, x)
-            ang_t = triangle_angles(trial, tri).min(axis=1)
+            ang_t = min_angles(trial, tri)
             worse = (ang_t < floor) | (np.einsum("ij,ij->i", _normals(trial, tri), nrm0) <= 0)
             if not worse.any():
                 break
@@ -136,8 +137,8 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
         pa, pb, pc, pd = a[h1], b[h1], c[h1], c[h2]
         new1 = np.column_stack([pa, pd, pc])
         new2 = np.column_stack([pd, pb, pc])
-        before = np.minimum(triangle_angles(x, tri[t1]).min(axis=1), triangle_angles(x, tri[t2]).min(axis=1))
-        after = np.minimum(triangle_angles(x, new1).min(axis=1), triangle_angles(x, new2).min(axis=1))
+        before = np.minimum(min_angles(x, tri[t1]), min_angles(x, tri[t2]))
+        after = np.minimum(min_angles(x, new1), min_angles(x, new2))
         ref = _normals(x, tri[t1]) + _normals(x, tri[t2])
         ok = (np.einsum("ij,ij->i", _normals(x, new1), ref) > 0) & (np.einsum("ij,ij->i", _normals(x, new2), ref) > 0)
         new_key = np.minimum(pc, pd) * (len(x) + 1) + np.maximum(pc, pd)
@@ -161,15 +162,6 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
         tri[t1[pick]] = new1[pick]
         tri[t2[pick]] = new2[pick]
     return tri
-
-
-def _incident_min(x: np.ndarray, tri: np.ndarray, node: np.ndarray, slot: np.ndarray, t: np.ndarray,
-                  pos: np.ndarray, n: int) -> np.ndarray:
-    """For incidences (``node`` at corner ``slot`` of triangle ``t``), the smallest angle of each node's
-    triangles with that node moved to ``pos[node]`` (the others where they are)."""
-    p = x[tri[t]]
-    p[np.arange(len(t)), slot] = pos[node]
-    return _group_min(triangle_angles(p.reshape(-1, 3), np.arange(3 * len(t))).min(axis=1), node, n)
 
 
 def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
@@ -196,7 +188,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
     phi = np.arange(8) * np.pi / 4
     params = None
     for _ in range(iterations):
-        ang = triangle_angles(x, tri).min(axis=1)
+        ang = min_angles(x, tri)
         node0 = _node_min(ang, tri, n)
         want = movable & (node0 < below)
         if not want.any():
@@ -218,7 +210,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         for step in STEPS:
             for a in phi:
                 pos = x + step * h[:, None] * (np.cos(a) * u + np.sin(a) * v)
-                q = _incident_min(x, tri, nd, sl, tt, pos, n)
+                q = kernels.incident_min(x, tri, nd, sl, tt, pos)  # each node's worst with it at pos
                 better = go & (q > best + 1e-9)
                 best[better] = q[better]
                 best_pos[better] = pos[better]
@@ -234,7 +226,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         px, puv = project(best_pos[moved], moved)
         cand = x.copy()
         cand[moved] = px
-        after = triangle_angles(cand, tri).min(axis=1)
+        after = min_angles(cand, tri)
         flipped = np.einsum("ij,ij->i", _normals(cand, tri), _normals(x, tri)) <= 0
         got = _node_min(np.where(flipped, -1.0, after), tri, n)
         ok = moved[got[moved] > node0[moved]]
@@ -251,7 +243,7 @@ def _near_bad(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, below: float 
     """The movable nodes within two rings of a triangle under ``below`` degrees: the only ones worth
     moving (and projecting onto the surface, the costly part on B-spline faces)."""
     near = np.zeros(len(x), dtype=bool)
-    near[tri[triangle_angles(x, tri).min(axis=1) < below].ravel()] = True
+    near[tri[min_angles(x, tri) < below].ravel()] = True
     for _ in range(2):
         near[tri[near[tri].any(axis=1)].ravel()] = True
     return near & movable

@@ -41,7 +41,7 @@ from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
 from .moves import CLIMB_BELOW, _near_bad, _normals, climb_nodes, flip_edges, smooth_nodes
 from .project import Projector
-from .quality import triangle_angles
+from .quality import min_angles
 
 #: Passes (edge swaps, then smoothing) per face.
 PASSES = 3
@@ -104,11 +104,11 @@ class _Face:
     moved: np.ndarray
 
     def min_angle(self) -> float:
-        return float(triangle_angles(self.x, self.tri).min())
+        return float(min_angles(self.x, self.tri).min())
 
     def worst_angles(self) -> np.ndarray:
         """The :data:`WORST` smallest triangle angles, ascending."""
-        ang = triangle_angles(self.x, self.tri).min(axis=1)
+        ang = min_angles(self.x, self.tri)
         return np.sort(ang)[:WORST]
 
     def better_than(self, other: _Face) -> bool:
@@ -283,7 +283,7 @@ def _face_min_angle(surface: int) -> float:
     tri = np.asarray(tri, dtype=np.int64)
     if tri.max() >= len(lookup) or (lookup[tri] < 0).any():
         return 180.0
-    return float(triangle_angles(np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri].reshape(-1, 3)).min())
+    return float(min_angles(np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri].reshape(-1, 3)).min())
 
 
 def after_generate(ctx) -> None:
