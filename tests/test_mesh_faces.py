@@ -277,3 +277,36 @@ def test_a_face_retried_on_curves_gmsh_already_meshed_keeps_every_curve_mesh():
                          own_curves=own)
         assert all(o.ok for o in out.values())
         assert out[surfaces[0]].strategy == STRATEGIES[8].name
+
+
+def test_a_face_with_a_sharp_ridge_is_meshed_alone_after_the_batches():
+    """A face held at a size floor (its curvature has sharp ridges: it may take gmsh long) is not put in a
+    batch with other faces, so a hang on it costs no other face: a box beside a thin elliptic tube
+    (semi-axes 10 and 1) has the tube's side meshed on its own, after the box's faces were batched."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakePrism
+    from OCP.BRep import BRep_Builder
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Elips, gp_Pnt, gp_Vec
+    from OCP.TopoDS import TopoDS_Compound
+
+    ellipse = BRepBuilderAPI_MakeEdge(gp_Elips(gp_Ax2(gp_Pnt(30, 0, 0), gp_Dir(0, 0, 1)), 10.0, 1.0)).Edge()
+    cap = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(ellipse).Wire()).Face()
+    tube = BRepPrimAPI_MakePrism(cap, gp_Vec(0, 0, 5.0)).Shape()
+    box = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), 8.0, 6.0, 5.0).Shape()
+    both = TopoDS_Compound()
+    builder = BRep_Builder()
+    builder.MakeCompound(both)
+    builder.Add(both, box)
+    builder.Add(both, tube)
+    grid = cadedge.refine_shape(both, ald=ALD)
+    said: list[str] = []
+    result = mesh_shape(grid, progress=said.append)
+    _every_face(result)
+    side = 7  # the box's 6 faces come first, then the tube's side and caps
+    assert [r.surface for r in result.report.faces if r.face == side] == ["SurfaceOfExtrusion"]
+    from cadedge.mesh.report import AFTER_MESH_HOOK
+
+    assert side in result.extras[AFTER_MESH_HOOK]["floored"]  # held at a size floor: may take gmsh long
+    together = [line for line in said if "together" in line]
+    assert together and not any(f" {side}," in line or f" {side} " in line for line in together)
+    assert any(line.endswith(f"face {side}") for line in said)

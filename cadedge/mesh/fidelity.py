@@ -392,8 +392,10 @@ def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
 def before_generate(ctx) -> None:
     """Hook: face interiors sized by curvature for the surface target (see :func:`per_circle`; in nodes
     mode faces whose curvature varies as ``k**-1/2``, see :mod:`cadedge.mesh.interior`; faces with sharp
-    ridges no finer than :func:`~cadedge.mesh.interior.size_floors`); planar interiors grow from their
-    boundaries at :data:`INTERIOR_GROWTH` times the job's growth."""
+    ridges no finer than :func:`~cadedge.mesh.interior.size_floors`, and meshed one by one after the batches
+    of the others: the propeller of ``scripts/hard_models.py`` hung gmsh on such faces, and each hang cost
+    the hub's planes batched with them); planar interiors grow from their boundaries at
+    :data:`INTERIOR_GROWTH` times the job's growth."""
     from .interior import CONSTANT_CURVATURE, install, size_floors
     from .sizes import configure_curvature_sizes
 
@@ -409,6 +411,7 @@ def before_generate(ctx) -> None:
         install([s for f, s in sorted(ctx.emap.faces.items()) if ctx.job.mode == "nodes"
                  and f in curved and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE], floors)
         ctx.floored = floors  # gmsh surface -> its size floor
+        ctx.alone.update(ctx.emap.face_of_surface.get(s, s) for s in floors)  # may take gmsh long: alone, last
         planes = [s for f, s in ctx.emap.faces.items() if f not in curved]
         if planes:
             grow_planes(ctx.job.field, INTERIOR_GROWTH * ctx.job.field.growth, planes)

@@ -82,6 +82,8 @@ class JobContext:
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
     deliver: Any = None  # deliver(dim, id, corners): hand mesh to the parent as it is made (see run_job)
+    alone: set[int] = field(default_factory=set)  # faces meshed one by one after the batches (hooks name
+    # those that may take gmsh long: a hang then costs only that face, not the batch it would have joined)
     started: float = field(default_factory=time.time)  # time.time() when the child took the job
     cpu_started: float = field(default_factory=time.process_time)  # the child's CPU time then
 
@@ -336,7 +338,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
                                   batch_started=lambda faces: say("batch " + " ".join(map(str, faces))),
-                                  prepare=prepare, no_batch=job.no_batch,
+                                  prepare=prepare, no_batch=job.no_batch | ctx.alone,
                                   cleared=lambda faces: [deliver(2, f, None) for f in faces] if deliver else None)
         deliver_edges()
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
