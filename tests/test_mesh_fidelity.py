@@ -129,6 +129,14 @@ def test_faces_over_target_are_named_with_their_deficit():
     assert {f.face for f in rep.over_target} == {1, 2, 3}
     assert all(f.note for f in rep.over_target)
     assert sum("over the target" in line for line in rep.lines()) == 3
+    # a face that failed while held at a size floor is named with its sharp ridge, the likely cause
+    keep = result.triangle_faces != 1
+    rep = build_report(result.nodes, result.triangles[keep], result.triangle_faces[keep],
+                       brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
+                       surface_ald=1e-2, failed={1: "hung"}, floored={1: 0.03, 2: 0.5})
+    first, second = rep.faces[0], rep.faces[1]
+    assert first.status == "failed" and first.note.startswith("hung; its surface has a sharp ridge")
+    assert "0.03 or more" in first.note and "sharp ridge" not in second.note  # meshed: no failure to explain
 
 
 def test_a_gapped_box_meshes_to_its_closed_face_areas_and_names_its_tolerances(gapped_box_step):

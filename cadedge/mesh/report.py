@@ -17,6 +17,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from .fidelity import area_deficits, face_mesh_areas
+from .interior import SPREAD
 from .quality import GOOD_DEG, SLIVER_DEG, SmallAngle, small_angles, triangle_angles
 
 SCHEMA = "cadedge.meshreport/1"
@@ -167,6 +168,10 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                          below_20=float(np.mean(mine < GOOD_DEG)) if len(mine) else 0.0)
         if fid in failed or not len(mine):
             rec.status, rec.note = "failed", failed.get(fid, "no triangles")
+            if (floored or {}).get(fid) is not None:  # the likely cause, in the user's terms
+                rec.note += (f"; its surface has a sharp ridge (curvature over {SPREAD:g}x across it), where "
+                             f"gmsh's triangles of {floored[fid]:.2g} or more can take longer than the timeout "
+                             "(docs/mesh.md, Known limitations)")
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
             rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar,
