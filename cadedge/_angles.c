@@ -33,6 +33,17 @@ static double min_angle(const double *a, const double *b, const double *c)
     return atan2(sqrt(cx * cx + cy * cy + cz * cz), -(f[0] * g[0] + f[1] * g[1] + f[2] * g[2])) * DEGREES;
 }
 
+/* Whether every index of tri (count entries) is a node below n; if not, an IndexError is set. */
+static int nodes_in_range(const int64_t *tri, Py_ssize_t count, Py_ssize_t n, const char *name)
+{
+    for (Py_ssize_t i = 0; i < count; i++)
+        if (tri[i] < 0 || tri[i] >= n) {
+            PyErr_Format(PyExc_IndexError, "%s: node index out of range", name);
+            return 0;
+        }
+    return 1;
+}
+
 /* min_angles(x (n, 3) f64, tri (m, 3) i64, out (m,) f64): the smallest angle of each triangle. */
 PyObject *ck_min_angles(PyObject *self, PyObject *args)
 {
@@ -50,13 +61,10 @@ PyObject *ck_min_angles(PyObject *self, PyObject *args)
         PyErr_SetString(PyExc_ValueError, "min_angles: mismatched shapes");
         return NULL;
     }
-    Py_ssize_t n = nx / 3;
-    for (Py_ssize_t i = 0; i < nt; i++)
-        if (tri[i] < 0 || tri[i] >= n) {
-            ck_release(&b);
-            PyErr_SetString(PyExc_IndexError, "min_angles: node index out of range");
-            return NULL;
-        }
+    if (!nodes_in_range(tri, nt, nx / 3, "min_angles")) {
+        ck_release(&b);
+        return NULL;
+    }
     for (Py_ssize_t t = 0; t < nout; t++)
         out[t] = min_angle(x + 3 * tri[3 * t], x + 3 * tri[3 * t + 1], x + 3 * tri[3 * t + 2]);
     ck_release(&b);
@@ -87,12 +95,10 @@ PyObject *ck_incident_min(PyObject *self, PyObject *args)
         PyErr_SetString(PyExc_ValueError, "incident_min: mismatched shapes");
         return NULL;
     }
-    for (Py_ssize_t i = 0; i < nt; i++)
-        if (tri[i] < 0 || tri[i] >= n) {
-            ck_release(&b);
-            PyErr_SetString(PyExc_IndexError, "incident_min: node index out of range");
-            return NULL;
-        }
+    if (!nodes_in_range(tri, nt, n, "incident_min")) {
+        ck_release(&b);
+        return NULL;
+    }
     for (Py_ssize_t i = 0; i < nn; i++)
         if (node[i] < 0 || node[i] >= n || slot[i] < 0 || slot[i] > 2 || t[i] < 0 || t[i] >= m) {
             ck_release(&b);
