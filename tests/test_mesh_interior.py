@@ -91,7 +91,7 @@ def test_a_face_with_a_sharp_ridge_gets_a_size_floor_and_a_cylinder_does_not():
     be sized down to the smallest size along its ends; its floor fills it with about
     MAX_FACE_TRIANGLES triangles, and the callback holds its sizes at it. A cylinder's curvature is even:
     no floor."""
-    from cadedge.mesh.generate import MAX_FACE_TRIANGLES
+    from cadedge.mesh.budget import MAX_FACE_TRIANGLES
 
     with gmsh_session():
         tube = gmsh.model.occ.extrude([(1, gmsh.model.occ.addEllipse(0, 0, 0, 10.0, 0.05))], 0, 0, 5.0)

@@ -210,11 +210,13 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     from ..occt.topology import Topology
     from ..shapegrid import with_edges
     from ..splitting import fits_curve, split_segments
+    from .budget import filling_size
 
     topo = Topology(grid.shape)
     areas = brep_areas
     h_factor = np.array([2.0 * np.pi / per_circle(surface_ald, k) for k in kinds])  # size = h_factor / k
     share = np.array([AIM if k == "Plane" else 1.0 - INTERIOR_SHARE for k in kinds])
+    filled = filling_size(areas)
     budget = share * surface_ald * areas
     for f, c in credit.items():
         budget[f - 1] *= c
@@ -252,6 +254,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
             with np.errstate(divide="ignore", invalid="ignore"):
                 k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
                 k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
+                k_curv = np.minimum(k_curv, np.maximum(np.ceil(chord / filled[f - 1]), 1))
                 k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
             pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
                                                       nan=1).astype(int))
@@ -498,7 +501,7 @@ def after_generate(ctx) -> None:
     last: dict[int, float] = {}
     no_refine = ctx.job.no_refine
     say = ctx.progress or (lambda line: None)
-    floored = getattr(ctx, "floored", {})  # held at a size floor: finer sizes do not apply there
+    floored = getattr(ctx, "floored", {})  # held at a size floor: reported as such
     pending = [s for s, o in ctx.outcomes.items() if o.ok and face_of.get(s, s) in curved]
     say("measure")
     for k in range(PASSES + 1):
@@ -517,8 +520,10 @@ def after_generate(ctx) -> None:
             say("refine " + " ".join(str(face_of.get(s, s)) for s in group))
             ctx.outcomes.update(remesh_group(group, n, face_of))
             say("refined " + " ".join(str(face_of.get(s, s)) for s in group))
+        # faces held at a size floor too: finer sizes away from the ridge remove triangles spanning it (the
+        # propeller's blades at 1e-3: 7.5e-3 to 9.8e-3 -> within 1e-3)
         pending = [s for s, d in measured.items() if abs(d) > target and face_of.get(s, s) not in stuck
-                   and face_of.get(s, s) not in no_refine and s not in floored]
+                   and face_of.get(s, s) not in no_refine]
         if not pending or k == PASSES:
             break
         old = {s: per_face.get(face_of.get(s, s), opts["face_per_circle"].get(face_of.get(s, s), n0))

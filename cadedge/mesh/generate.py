@@ -23,6 +23,7 @@ from typing import Callable
 import gmsh
 import numpy as np
 
+from .budget import filling_size
 from .gmsh_model import surface_curve_uses
 
 
@@ -143,14 +144,12 @@ CURVATURE_SAMPLES = 24
 #: Percentile of the sampled curvatures taken as the face's curvature (spikes at poles and near-singular
 #: points of spline surfaces are left out).
 CURVATURE_PERCENTILE = 95.0
-#: A face meshed with one curvature size gets at most about this many triangles (the size grows to fit).
-MAX_FACE_TRIANGLES = 400_000
 
 
 def uniform_curvature_size(surface: int, per_circle: float) -> float | None:
     """One size for the whole face: ``2 pi / (per_circle * k)`` with ``k`` a high percentile of the largest
     principal curvature sampled on a grid of the surface's parameters, no smaller than the size giving
-    :data:`MAX_FACE_TRIANGLES` on the face's area. None when the face is flat or gmsh cannot sample it."""
+    :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES` on the face's area. None when the face is flat or gmsh cannot sample it."""
     from .interior import surface_samples
 
     samples = surface_samples(surface, CURVATURE_SAMPLES)
@@ -164,7 +163,7 @@ def uniform_curvature_size(surface: int, per_circle: float) -> float | None:
     if not len(k) or not np.percentile(k, CURVATURE_PERCENTILE) > 0 or per_circle <= 0:
         return None
     h = 2.0 * np.pi / (per_circle * float(np.percentile(k, CURVATURE_PERCENTILE)))
-    return max(h, float(np.sqrt(2.3 * abs(area) / MAX_FACE_TRIANGLES)))
+    return max(h, float(filling_size(area)))
 
 
 def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | None]:
@@ -302,7 +301,8 @@ def remesh_curves(curves: list[int]) -> list[int]:
 #: watchdog's time for one attempt.
 BATCH_FACES = 24
 #: gmsh options a ``prepare`` hook may set per face: faces share a gmsh call only when these agree.
-FACE_OPTIONS = ("Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeMin", "Mesh.MeshSizeMax", "Mesh.MeshSizeFactor")
+FACE_OPTIONS = ("Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeMin", "Mesh.MeshSizeMax", "Mesh.MeshSizeFactor",
+                "Mesh.AlgorithmSwitchOnFailure")
 
 
 def _chunks(surfaces: list[int]) -> list[list[int]]:

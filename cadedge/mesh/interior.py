@@ -151,15 +151,15 @@ def size_floors(surfaces: dict[int, float], min_size: float) -> dict[int, float]
     """The smallest size of the gmsh surfaces of ``surfaces`` (surface -> area) whose curvature has sharp
     ridges (it spans more than :data:`SPREAD` between its 2nd and 98th percentiles on a grid of the
     surface's parameters), where sizes at ``min_size`` would fill the face with more than
-    :data:`~cadedge.mesh.generate.MAX_FACE_TRIANGLES` triangles: the size that fills it with about that
+    :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES` triangles: the size that fills it with about that
     many. gmsh's curvature sizes follow a ridge down to ``min_size``, a share of the finest edge spacing;
     on a blade with a sharp trailing edge (a radius of 0.007 mm along a 390 mm2 face, 0.006 mm sizes)
     gmsh ran out of time on the face with every strategy."""
-    from .generate import MAX_FACE_TRIANGLES
+    from .budget import filling_size
 
     floors = {}
     for s, area in surfaces.items():
-        floor = float(np.sqrt(2.3 * abs(area) / MAX_FACE_TRIANGLES))
+        floor = float(filling_size(area))
         if floor <= min_size:
             continue
         samples = surface_samples(s)
@@ -216,8 +216,18 @@ def install(surfaces: list[int], floors: dict[int, float] | None = None) -> list
 def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) -> None:
     """Size gmsh surface ``surface`` at ``per_circle`` triangles per ``2 pi``: by :data:`SIZES` where it was
     sampled (gmsh's curvature sizes off), else by gmsh's ``Mesh.MeshSizeFromCurvature``. ``uniform``
-    (the one-size strategy, which reads the gmsh option) always takes the latter."""
+    (the one-size strategy, which reads the gmsh option) always takes the latter.
+
+    A face held at a size floor keeps what gmsh's Frontal-Delaunay makes of it
+    (``Mesh.AlgorithmSwitchOnFailure`` off there): across a ridge much sharper than its triangles some
+    triangles always turn against the surface's normal, which gmsh takes for a failure, and its fallback
+    (MeshAdapt, then every boundary curve split, again and again) never finished: the thin elliptic tube of
+    the tests (semi-axes 10 and 0.05) and the propeller's blades hung in every strategy. Kept, the tube
+    meshes in 4 s within the target; what such triangles cost a face is measured and reported like any
+    deficit."""
     import gmsh
+
+    gmsh.option.setNumber("Mesh.AlgorithmSwitchOnFailure", 0 if surface in SIZES.floors else 1)
 
     if not uniform and SIZES.set(surface, per_circle):
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)

@@ -20,16 +20,16 @@ SHARE = 1.05
 
 
 def groups(per_circle: dict[int, float], share: float = SHARE, *,
-           apart: frozenset[int] | set[int] = frozenset()) -> list[tuple[float, list[int]]]:
+           sizing: dict[int, str] | None = None) -> list[tuple[float, list[int]]]:
     """The gmsh surfaces of ``per_circle`` (surface -> count it needs) in groups whose counts are within
     ``share`` of each other (1: equal counts only), each at most :data:`BATCH_FACES` long, with the count
-    to mesh the group with (its largest): ``[(count, surfaces), ...]``, smallest counts first. Surfaces in
-    ``apart`` (sized by :data:`cadedge.mesh.interior.SIZES`, with gmsh's curvature sizes off) never share
-    a group with the others (sized by gmsh's curvature sizes)."""
+    to mesh the group with (its largest): ``[(count, surfaces), ...]``, smallest counts first. Surfaces
+    sized differently (``sizing``: surface -> how; missing: by gmsh's curvature sizes) never share a group."""
+    sizing = sizing or {}
     out: list[tuple[float, list[int]]] = []
-    for part in ([s for s in per_circle if s not in apart], [s for s in per_circle if s in apart]):
+    for how in sorted({sizing.get(s, "") for s in per_circle}):
         group: list[int] = []
-        for s in sorted(part, key=lambda s: (per_circle[s], s)):
+        for s in sorted((s for s in per_circle if sizing.get(s, "") == how), key=lambda s: (per_circle[s], s)):
             if group and (per_circle[s] > share * per_circle[group[0]] or len(group) == BATCH_FACES):
                 out.append((per_circle[group[-1]], group))
                 group = []
@@ -41,11 +41,13 @@ def groups(per_circle: dict[int, float], share: float = SHARE, *,
 
 def job_groups(per_circle: dict[int, float], share: float = SHARE) -> list[tuple[float, list[int]]]:
     """:func:`groups` for this job's surfaces: those the ``k**-1/2`` callback sizes
-    (:data:`cadedge.mesh.interior.SIZES`) apart from those on gmsh's curvature sizes, since one gmsh call
-    has one ``Mesh.MeshSizeFromCurvature`` setting."""
+    (:data:`cadedge.mesh.interior.SIZES`), those held at a size floor and those on gmsh's curvature sizes
+    apart, since one gmsh call has one ``Mesh.MeshSizeFromCurvature`` and one
+    ``Mesh.AlgorithmSwitchOnFailure`` setting (see :func:`cadedge.mesh.interior.use_per_circle`)."""
     from .interior import SIZES
 
-    return groups(per_circle, share, apart=set(SIZES.faces))
+    sizing = {s: "floored" for s in SIZES.floors} | {s: "sampled" for s in SIZES.faces}
+    return groups(per_circle, share, sizing=sizing)
 
 
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
@@ -59,7 +61,7 @@ def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]
     from .generate import STRATEGIES, FaceOutcome, _attempt_many, clear
     from .interior import use_per_circle
 
-    for s in surfaces:  # one group is all sampled or all not (see job_groups), so the gmsh option agrees
+    for s in surfaces:  # one group is sized one way (see job_groups), so the gmsh options agree
         use_per_circle(s, per_circle)
     clear([(2, s) for s in surfaces])
     gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)

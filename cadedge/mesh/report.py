@@ -197,8 +197,8 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
                               f"{tolerance[1]:.2g} (loose tolerances; the mesh follows the shared edges)")
     if floor is not None:
         return "size floor", (f"its surface has a sharp ridge: its triangles were held at {floor:.2g} or more "
-                              "(the face's triangle budget), where curvature sizes would go down to a share of "
-                              "the finest edge spacing and gmsh runs out of time")
+                              "(the face's triangle budget; curvature sizes would go down to a share of the "
+                              "finest edge spacing and gmsh run out of time), and some span the ridge")
     if stuck:
         return "not converging", ("not meshed finer, or finer meshes did not reduce it: the meshed face and its "
                                   "B-rep area disagree by more than meshing explains (loose tolerances, or a "

@@ -90,7 +90,7 @@ def face_curvature_sizes(shape: object, surface_ald: float) -> dict[int, float]:
 
     from ..occt.topology import Topology
     from .fidelity import brep_face_areas, per_circle, surface_type_name
-    from .generate import MAX_FACE_TRIANGLES
+    from .budget import filling_size
 
     faces = Topology(shape).faces
     areas = brep_face_areas(shape)
@@ -115,7 +115,7 @@ def face_curvature_sizes(shape: object, surface_ald: float) -> dict[int, float]:
         if not k95 > 0 or not math.isfinite(k95):
             continue
         h = 2.0 * math.pi / (min(per_circle(surface_ald, kind), GEO_PER_CIRCLE) * k95)
-        out[fid] = max(h, math.sqrt(2.3 * areas[fid - 1] / MAX_FACE_TRIANGLES))
+        out[fid] = max(h, float(filling_size(areas[fid - 1])))
     return out
 
 
