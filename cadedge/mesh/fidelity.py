@@ -193,7 +193,10 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     copies a size (see :func:`cadedge.splitting.split_by_arc`):
 
     - its face is curved across it: longer than ``ratio`` times the face's curvature size there (see
-      :func:`per_circle`; :data:`STRAIGHT_RATIO` times on a straight edge, see :data:`STRAIGHT_TOL`);
+      :func:`per_circle`; :data:`STRAIGHT_RATIO` times on a straight edge, see :data:`STRAIGHT_TOL`),
+      into pieces no shorter than the size that fills the face with its triangle budget
+      (:func:`cadedge.mesh.budget.filling_size`: a 14 mm seam along a blade's sharp edge had been split
+      into 1 838 pieces of 0.008 mm, finer than the face's interior could follow);
     - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
       ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
       loses nothing to the cylinder, all to a planar cap), summed over the face's boundary, must stay
