@@ -61,3 +61,25 @@ def test_a_straight_bspline_edge_is_split_like_a_line():
         seams.append(pair[0][1])
     assert seams[0].curve == "Line" and seams[1].curve == "BSplineCurve"
     assert seams[0].segments > 5 and abs(seams[1].segments - seams[0].segments) <= 0.2 * seams[0].segments
+
+
+def test_boundary_splits_stop_at_the_size_that_fills_the_face():
+    """A straight seam along a sharp ridge (a thin elliptic tube, semi-axes 10 and 0.05, 5 mm tall:
+    curvature 4 000 there) would be split to the curvature size, about 57 000 pieces of 9e-5; it stops at
+    the size that fills the tube's side with its triangle budget."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Elips, gp_Pnt, gp_Vec
+
+    import cadedge
+    from cadedge.mesh.budget import filling_size
+    from cadedge.mesh.fidelity import brep_face_areas, fit_boundaries
+
+    ellipse = BRepBuilderAPI_MakeEdge(gp_Elips(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 0.05)).Edge()
+    cap = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(ellipse).Wire()).Face()
+    grid = cadedge.refine_shape(BRepPrimAPI_MakePrism(cap, gp_Vec(0, 0, 5.0)).Shape(), ald=1e-2)
+    fitted = fit_boundaries(grid, 1e-2)
+    (seam,) = [e for e in fitted.edges if e.curve == "Line"]
+    floor = filling_size(brep_face_areas(grid.shape)[seam.faces[0] - 1])
+    assert seam.segments == int(5.0 // floor)  # split, but only down to the floor
+    assert seam.segment_lengths.min() >= floor * (1 - 1e-9)

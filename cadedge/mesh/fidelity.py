@@ -257,7 +257,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
             with np.errstate(divide="ignore", invalid="ignore"):
                 k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
                 k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
-                k_curv = np.minimum(k_curv, np.maximum(np.ceil(chord / filled[f - 1]), 1))
+                k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
                 k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
             pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
                                                       nan=1).astype(int))
