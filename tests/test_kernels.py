@@ -1,4 +1,5 @@
-"""The compiled kernels (cadedge/_kernels.c, _angles.c) against the numpy/scipy definitions they replace (exact or to rounding)."""
+"""The compiled kernels (cadedge/_kernels.c, _angles.c) against the numpy/scipy definitions they replace
+(exact or to rounding)."""
 
 import numpy as np
 import pytest

@@ -149,7 +149,8 @@ CURVATURE_PERCENTILE = 95.0
 def uniform_curvature_size(surface: int, per_circle: float) -> float | None:
     """One size for the whole face: ``2 pi / (per_circle * k)`` with ``k`` a high percentile of the largest
     principal curvature sampled on a grid of the surface's parameters, no smaller than the size giving
-    :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES` on the face's area. None when the face is flat or gmsh cannot sample it."""
+    :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES` on the face's area. None when the face is flat or gmsh
+    cannot sample it."""
     from .interior import surface_samples
 
     samples = surface_samples(surface, CURVATURE_SAMPLES)

@@ -171,7 +171,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             if (floored or {}).get(fid) is not None:  # the likely cause, in the user's terms
                 rec.note += (f"; its surface has a sharp ridge (curvature over {SPREAD:g}x across it), where "
                              f"gmsh's triangles of {floored[fid]:.2g} or more can take longer than the timeout "
-                             "(docs/mesh.md, Known limitations)")
+                             "(docs/mesh.md, Triangles across a ridge)")
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
             rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar,
