@@ -82,8 +82,9 @@ class JobContext:
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
     deliver: Any = None  # deliver(dim, id, corners): hand mesh to the parent as it is made (see run_job)
-    alone: set[int] = field(default_factory=set)  # faces meshed one by one after the batches (hooks name
-    # those that may take gmsh long: a hang then costs only that face, not the batch it would have joined)
+    # faces meshed one by one after the batches: hooks name those that may take gmsh long, so that a hang
+    # costs only that face, not the batch it would have joined
+    alone: set[int] = field(default_factory=set)
     started: float = field(default_factory=time.time)  # time.time() when the child took the job
     cpu_started: float = field(default_factory=time.process_time)  # the child's CPU time then
 
