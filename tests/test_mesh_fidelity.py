@@ -278,3 +278,55 @@ def test_loose_bspline_model_meshes_on_its_own_grids_with_good_angles():
     assert len(result.faces) == 8 and all(f.strategy == "Frontal-Delaunay" for f in result.faces)
     assert not result.own_mesh_edges
     assert result.report.worst_deficit <= 1e-2 and result.report.min_angle > 10.0
+
+
+def _face_mesh(surface: int) -> tuple:
+    """Node tags, coordinates and triangles of one gmsh surface, to compare meshes exactly."""
+    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
+    return list(tags), list(coords), list(tri)
+
+
+def test_a_floored_face_keeps_the_better_of_frontal_delaunay_and_delaunay():
+    """A face held at a size floor and over its target is meshed again by gmsh's Delaunay: kept when its
+    deficit is smaller (the outcome names Delaunay), else the first mesh comes back node for node."""
+    from cadedge.mesh.fidelity import try_delaunay
+    from cadedge.mesh.generate import mesh_faces
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    with gmsh_session():
+        gmsh.model.occ.addCone(0, 0, 0, 0, 0, 10, 1.0, 4.0)
+        gmsh.model.occ.synchronize()
+        (side,) = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) != "Plane"]
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 1.0)
+        gmsh.model.mesh.generate(1)
+        outcomes = mesh_faces([side], {side: 1})
+        first = _face_mesh(side)
+        assert outcomes[side].strategy == "Frontal-Delaunay"
+        # Delaunay's mesh judged worse (deficit 0.5 against the first's 0.1): the first is put back
+        assert try_delaunay(side, 20.0, 0.1, outcomes, lambda area: 0.5) == 0.1
+        assert _face_mesh(side) == first and outcomes[side].strategy == "Frontal-Delaunay"
+        # judged better: Delaunay's mesh stays
+        assert try_delaunay(side, 20.0, 0.1, outcomes, lambda area: 0.01) == 0.01
+        assert outcomes[side].strategy == "Delaunay" and _face_mesh(side) != first
+        assert outcomes[side].triangles == len(gmsh.model.mesh.getElementsByType(2, side)[0]) > 0
+
+
+def test_a_blade_with_a_sharp_edge_is_meshed_within_the_target(tmp_path):
+    """A blade lofted from a 5 x 0.8 ellipse to a 2.4 x 0.3 one turned by 50 degrees (one blade of the
+    propeller of ``scripts/hard_models.py``): its edges are sharp (radius 0.02 at the tip), its faces
+    held at a size floor. Frontal-Delaunay joined the two sides of the blade through the solid there (a
+    face 2.4e-2 short at 1e-2); that face is now meshed by Delaunay, and every face is within 1e-2."""
+    blade = (cq.Workplane("YZ").ellipse(2.5, 0.4).workplane(offset=14).transformed(rotate=(0, 0, 50))
+             .ellipse(1.2, 0.15).loft())
+    path = tmp_path / "blade.step"  # as read back from STEP: meshed from the shape itself, gmsh's
+    cq.exporters.export(blade, str(path))  # Frontal-Delaunay happened to stay clear of the ridge
+    result = mesh_shape(path, ald=1e-2)
+    assert result.ok, result.problems()
+    deficits = _independent_deficits(result)
+    assert np.all(np.abs(deficits) <= 1e-2), deficits
+    from cadedge.mesh.report import AFTER_MESH_HOOK
+
+    floored = result.extras[AFTER_MESH_HOOK]["floored"]
+    assert floored and any(o.strategy == "Delaunay" for o in result.faces if o.face in floored)
+    assert result.report.min_angle >= 20.0

@@ -185,34 +185,13 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
 
     import gmsh
 
-    from .generate import node_lookup
-    from .gmsh_model import surface_curve_uses
+    from .facemesh import read_face, write_interior
 
-    el_tags, tri_tags = gmsh.model.mesh.getElementsByType(2, surface)
-    if not len(tri_tags):
+    mesh = read_face(surface)
+    if mesh is None:
         return False
-    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
-    tags = np.asarray(tags, dtype=np.int64)
-    lookup = node_lookup(tags)
-    tri_tags = np.asarray(tri_tags, dtype=np.int64)
-    if tri_tags.max() >= len(lookup) or (lookup[tri_tags] < 0).any():
-        return False
-    tri0 = lookup[tri_tags].reshape(-1, 3)
-    x0 = np.asarray(coords, dtype=float).reshape(-1, 3)
-    fixed: set[tuple[int, int]] = set()
-    for curve in surface_curve_uses(surface):
-        seg = np.asarray(gmsh.model.mesh.getElementsByType(1, curve)[1], dtype=np.int64).reshape(-1, 2)
-        seg = seg[(seg < len(lookup)).all(axis=1)]
-        seg = lookup[seg]
-        fixed.update((int(min(p, q)), int(max(p, q))) for p, q in seg if p >= 0 and q >= 0)
-    inner_tags, _, inner_uv = gmsh.model.mesh.getNodes(2, surface, includeBoundary=False, returnParametricCoord=True)
-    inner = np.asarray(inner_tags, dtype=np.int64)
-    movable = np.zeros(len(tags), dtype=bool)
-    movable[lookup[inner]] = True
-    uv = np.full((len(tags), 2), np.nan)  # parametric coordinates of the interior nodes, by node row
-    if len(inner) and len(inner_uv) == 2 * len(inner):
-        uv[lookup[inner]] = np.asarray(inner_uv, dtype=float).reshape(-1, 2)
-    start = _Face(x0, tri0, movable, uv, np.zeros(len(tags), dtype=bool))
+    x0, tri0, tags, fixed = mesh.x, mesh.tri, mesh.tags, mesh.fixed
+    start = _Face(x0, tri0, mesh.movable, mesh.uv, np.zeros(len(tags), dtype=bool))
     project = Projector(surface)
 
     def late() -> bool:
@@ -246,17 +225,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
         return False
     x, tri, movable, uv, moved = best.x, best.tri, best.movable, best.uv, best.moved
     if len(tri) != len(tri0) or len(x) != len(tags):  # nodes removed or added: the interior written anew
-        el = np.asarray(el_tags, dtype=np.int64)
-        if len(x) > len(tags):  # new nodes (edge splits) get new tags, their triangles too
-            tags = np.concatenate([tags, gmsh.model.mesh.getMaxNodeTag() + 1 + np.arange(len(x) - len(tags))])
-        if len(tri) > len(el):
-            el = np.concatenate([el, gmsh.model.mesh.getMaxElementTag() + 1 + np.arange(len(tri) - len(el))])
-        keep = movable & np.bincount(tri.ravel(), minlength=len(tags)).astype(bool)
-        rows = np.flatnonzero(keep)
-        gmsh.model.mesh.clear([(2, surface)])
-        params = [] if np.isnan(uv[rows]).any() else uv[rows].ravel().tolist()
-        gmsh.model.mesh.addNodes(2, surface, tags[rows].tolist(), x[rows].ravel().tolist(), params)
-        gmsh.model.mesh.addElementsByType(surface, 2, el[:len(tri)].tolist(), tags[tri].ravel().tolist())
+        write_interior(surface, mesh, x, tri, movable, uv)
         return True
     changed = False
     for i in np.flatnonzero(moved & movable).tolist():
@@ -264,7 +233,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
         changed = True
     if not np.array_equal(tri, tri0):
         gmsh.model.mesh.removeElements(2, surface)
-        gmsh.model.mesh.addElementsByType(surface, 2, np.asarray(el_tags).tolist(), tags[tri].ravel().tolist())
+        gmsh.model.mesh.addElementsByType(surface, 2, mesh.el_tags.tolist(), tags[tri].ravel().tolist())
         changed = True
     return changed
 

@@ -50,6 +50,25 @@ def job_groups(per_circle: dict[int, float], share: float = SHARE) -> list[tuple
     return groups(per_circle, share, sizing=sizing)
 
 
+def attempt_again(surfaces: list[int], strategy) -> dict[int, str | None]:
+    """Clear gmsh ``surfaces`` and mesh them again in one call with ``strategy``
+    (a :class:`~cadedge.mesh.generate.Strategy`) at the gmsh options set now, the rest of the model
+    hidden; per surface None if it passed, else gmsh's reason."""
+    import gmsh
+
+    from .generate import _attempt_many, clear
+
+    clear([(2, s) for s in surfaces])
+    gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
+    gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
+    gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
+    try:
+        return _attempt_many(surfaces, strategy)
+    finally:
+        gmsh.model.setVisibility(gmsh.model.getEntities(), 1)
+        gmsh.option.setNumber("Mesh.MeshOnlyVisible", 0)
+
+
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
     """Mesh gmsh ``surfaces`` (one group of :func:`job_groups`) again from scratch in one call at
     ``per_circle`` triangles per ``2 pi`` (see :func:`cadedge.mesh.interior.use_per_circle`); a face that
@@ -58,20 +77,12 @@ def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]
     import gmsh
 
     from .fidelity import remesh_face
-    from .generate import STRATEGIES, FaceOutcome, _attempt_many, clear
+    from .generate import STRATEGIES, FaceOutcome
     from .interior import use_per_circle
 
     for s in surfaces:  # one group is sized one way (see job_groups), so the gmsh options agree
         use_per_circle(s, per_circle)
-    clear([(2, s) for s in surfaces])
-    gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
-    gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
-    gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
-    try:
-        reasons = _attempt_many(surfaces, STRATEGIES[0])
-    finally:
-        gmsh.model.setVisibility(gmsh.model.getEntities(), 1)
-        gmsh.option.setNumber("Mesh.MeshOnlyVisible", 0)
+    reasons = attempt_again(surfaces, STRATEGIES[0])
     out = {}
     for s in surfaces:
         if reasons[s] is None:

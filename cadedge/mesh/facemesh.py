@@ -1,0 +1,81 @@
+"""One meshed gmsh surface as plain arrays, read from and written back to the gmsh model.
+
+The face optimiser (:mod:`cadedge.mesh.optimize`) works on a face's triangles as numpy arrays and hands
+the result back to gmsh; the surface target (:mod:`cadedge.mesh.fidelity`) keeps a face's mesh aside
+while it tries another and puts it back if that one is worse. Only the face's interior nodes and its
+triangles are ever rewritten, its curves' nodes stay, so neighbours stay conforming.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class FaceMesh:
+    """A face's mesh as gmsh holds it: node tags and coordinates (boundary nodes included), triangles as
+    rows of them, which nodes are interior (may move), the interior nodes' parameters (NaN rows for the
+    others), the triangles' element tags and the curve segments as sorted pairs of node rows."""
+
+    tags: np.ndarray
+    x: np.ndarray
+    tri: np.ndarray
+    movable: np.ndarray
+    uv: np.ndarray
+    el_tags: np.ndarray
+    fixed: set[tuple[int, int]]
+
+
+def read_face(surface: int) -> FaceMesh | None:
+    """The mesh of gmsh surface ``surface``; None if it has no triangles or they name nodes it does not
+    hold."""
+    import gmsh
+
+    from .generate import node_lookup
+    from .gmsh_model import surface_curve_uses
+
+    el_tags, tri_tags = gmsh.model.mesh.getElementsByType(2, surface)
+    if not len(tri_tags):
+        return None
+    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+    tags = np.asarray(tags, dtype=np.int64)
+    lookup = node_lookup(tags)
+    tri_tags = np.asarray(tri_tags, dtype=np.int64)
+    if tri_tags.max() >= len(lookup) or (lookup[tri_tags] < 0).any():
+        return None
+    fixed: set[tuple[int, int]] = set()
+    for curve in surface_curve_uses(surface):
+        seg = np.asarray(gmsh.model.mesh.getElementsByType(1, curve)[1], dtype=np.int64).reshape(-1, 2)
+        seg = lookup[seg[(seg < len(lookup)).all(axis=1)]]
+        fixed.update((int(min(p, q)), int(max(p, q))) for p, q in seg if p >= 0 and q >= 0)
+    inner_tags, _, inner_uv = gmsh.model.mesh.getNodes(2, surface, includeBoundary=False,
+                                                       returnParametricCoord=True)
+    inner = np.asarray(inner_tags, dtype=np.int64)
+    movable = np.zeros(len(tags), dtype=bool)
+    movable[lookup[inner]] = True
+    uv = np.full((len(tags), 2), np.nan)
+    if len(inner) and len(inner_uv) == 2 * len(inner):
+        uv[lookup[inner]] = np.asarray(inner_uv, dtype=float).reshape(-1, 2)
+    return FaceMesh(tags, np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri_tags].reshape(-1, 3),
+                    movable, uv, np.asarray(el_tags, dtype=np.int64), fixed)
+
+
+def write_interior(surface: int, face: FaceMesh, x: np.ndarray, tri: np.ndarray, movable: np.ndarray,
+                   uv: np.ndarray) -> None:
+    """Replace the interior of gmsh surface ``surface`` (read as ``face``) by nodes ``x`` (``face``'s rows
+    first, new rows appended: they get new tags), the triangles ``tri`` and the parameters ``uv`` of the
+    nodes still ``movable`` and used; the curves' nodes stay as they are."""
+    import gmsh
+
+    tags, el = face.tags, face.el_tags
+    if len(x) > len(tags):  # new nodes get new tags, and new triangles new element tags
+        tags = np.concatenate([tags, gmsh.model.mesh.getMaxNodeTag() + 1 + np.arange(len(x) - len(tags))])
+    if len(tri) > len(el):
+        el = np.concatenate([el, gmsh.model.mesh.getMaxElementTag() + 1 + np.arange(len(tri) - len(el))])
+    rows = np.flatnonzero(movable & np.bincount(tri.ravel(), minlength=len(tags)).astype(bool))
+    gmsh.model.mesh.clear([(2, surface)])
+    params = [] if np.isnan(uv[rows]).any() else uv[rows].ravel().tolist()
+    gmsh.model.mesh.addNodes(2, surface, tags[rows].tolist(), x[rows].ravel().tolist(), params)
+    gmsh.model.mesh.addElementsByType(surface, 2, el[:len(tri)].tolist(), tags[tri].ravel().tolist())
