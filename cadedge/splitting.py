@@ -7,8 +7,7 @@ falls). The pieces:
 - :func:`insert_points` merges new samples into a grid (sorted by parameter; a repeated parameter
   keeps the old point);
 - :func:`points_at_distances` places points on the curve at given distances from a segment end
-  (vectorised bisection), :func:`point_at_arc` at a given arc distance along a segment (a small dense
-  sampling);
+  (vectorised bisection);
 - :func:`split_evenly` cuts segments into equal parameter steps, :func:`split_by_arc` into pieces of
   equal arc length;
 - :func:`limit_growth` (paper section 7) splits until neighbouring segments differ by at most a ratio:
@@ -131,19 +130,6 @@ def split_segments(params: np.ndarray, points: np.ndarray, pieces: np.ndarray, e
     else:
         raise ValueError(f"spacing must be one of {SPACINGS}, got {spacing!r}")
     return insert_points(params, points, new_u, new_p)
-
-
-def point_at_arc(evaluate: Evaluate, u0: float, u1: float, start: np.ndarray, dist: float, *,
-                 from_start: bool = True, dense: int = 17) -> tuple[float, np.ndarray, int]:
-    """(parameter, point, evaluations) at arc distance ``dist`` from one end of the segment [u0, u1]
-    (from ``u0`` if ``from_start``, else from ``u1``), measured along ``dense`` samples; ``start`` is
-    the grid's point at that end (it may lie a tolerance off the curve, at a B-rep vertex)."""
-    us = np.linspace(u0, u1, dense) if from_start else np.linspace(u1, u0, dense)
-    samples = evaluate(us)
-    samples[0] = start
-    cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(samples, axis=0), axis=1))])
-    u = float(np.interp(dist, cum, us))
-    return u, evaluate(np.array([u]))[0], dense + 1
 
 
 def points_at_distances(ev: Evaluate, ua: np.ndarray, ub: np.ndarray, ref: np.ndarray, dist: np.ndarray, *,

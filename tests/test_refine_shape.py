@@ -115,6 +115,25 @@ def test_max_growth_across_vertices(g):
     assert not any("max_growth" in w for w in sg.warnings)
 
 
+def test_max_growth_grades_out_from_a_tiny_edge_in_few_segments():
+    """A helical flight fused to a shaft leaves a 1.1e-5 mm arc beside a 36 mm edge: graded out from it
+    at 2.0 the neighbour gets about log2(36 / 1.1e-5) = 22 pieces more, not a march of 1.1e-5 mm pieces
+    (pieces placed a hair over their allowed length were halved instead of grown from: 5 000 more a
+    round, without end). Every ratio and vertex cap holds."""
+    cq = pytest.importorskip("cadquery")
+    helix = cq.Wire.makeHelix(20.0, 60.0, 6.0)
+    flight = cq.Workplane("XZ").center(10.5, 0).rect(9.0, 2.0).sweep(cq.Workplane().add(helix), isFrenet=True)
+    part = cq.Workplane("XY").circle(6.5).extrude(60.0).translate((0, 0, -1)).union(flight)
+    sg = refine_shape(part.val().wrapped, ald=1e-2, max_growth=2.0)
+    assert min(e.length for e in sg.edges if not e.degenerate) < 2e-5
+    plain = refine_shape(part.val().wrapped, ald=1e-2)
+    assert sg.segments < plain.segments + 40 * len(sg.edges)
+    for e in sg.edges:
+        seg = e.segment_lengths
+        assert np.maximum(seg[1:] / seg[:-1], seg[:-1] / seg[1:]).max(initial=1.0) <= 2.0 * (1 + 1e-6)
+    assert not [w for w in sg.warnings if "max_growth" in w]
+
+
 def test_max_growth_below_sqrt2_terminates_and_names_unmet_edges():
     sg = refine_shape(FIXTURES / "bracket.step", ald=1e-3, max_growth=1.2)
     check_grid(sg, Topology(sg.shape), 1e-3)

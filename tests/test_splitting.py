@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from cadedge.splitting import (fits_curve, insert_points, limit_growth, point_at_arc, points_at_distances,
+from cadedge.splitting import (fits_curve, insert_points, limit_growth, points_at_distances,
                                split_by_arc, split_evenly, split_segments, worst_growth)
 
 
@@ -53,13 +53,6 @@ def test_a_grid_fits_its_curve_only_where_its_end_parameters_give_its_end_points
     shifted = _circle(u + 1e-4)  # a grid of the same curve in another parametrisation
     assert not fits_curve(u, shifted, _circle, 1e-7)
     assert fits_curve(u, shifted, _circle, 1e-5)  # within 10 x the edge's tolerance
-
-
-def test_point_at_arc_measures_from_either_end():
-    u, p, n = point_at_arc(_circle, 0.0, 1.0, _circle([0.0])[0], 0.25, dense=129)
-    assert abs(u - 0.25) < 1e-4 and n == 130 and np.allclose(p, _circle([u])[0])
-    u, _, _ = point_at_arc(_circle, 0.0, 1.0, _circle([1.0])[0], 0.25, from_start=False, dense=129)
-    assert abs(u - 0.75) < 1e-4
 
 
 def test_points_at_distances_bisects_chord_distance():

@@ -35,17 +35,26 @@ import numpy as np
 from ..explore import Exploration
 from ..grid import polyline_length, row_norms
 from ..shapegrid import ShapeEdgeGrid
-from ..splitting import insert_points, point_at_arc, regrade, worst_growth
+from ..splitting import insert_points, regrade, worst_growth
 from ..target import MARGIN
 from .edgecurve import EdgeCurve
 
-#: Samples along a segment to place a new point by arc length.
-DENSE = 17
-#: Relative slack on the ratio checks (chords are placed by arc length, not exactly).
+#: Relative slack on the ratio checks.
 SLACK = 1e-6
+#: A new piece is a chord just under its allowed length from the segment's end, found by :data:`PLACE_ROUNDS`
+#: rounds of :data:`PLACE_SAMPLES` curve samples each (one batched evaluation a round). Placed by arc
+#: length along a few samples, pieces came out a hair over their allowed length and were halved instead
+#: of grown from, so graded pieces marched on at one size (a 1.1e-5 mm arc left by a union beside a
+#: helical sweep: its 36 mm neighbour was cut into 1.1e-5 mm pieces, 5 000 a round, without end).
+PLACE_SAMPLES = 7
+PLACE_ROUNDS = 12
 #: Upper bound on splits per edge and on global rounds (safety bounds; not reached in practice).
 MAX_SPLITS = 5000
 MAX_ROUNDS = 50
+#: A split whose piece on the tight side keeps more than this share of the segment did not shorten it:
+#: the segment's end lies off the curve by about its length (a vertex a tolerance away from the curve's
+#: end, under a cap smaller than that). The edge keeps what it has; splitting on would repeat forever.
+STUCK = 0.75
 #: Below this growth (the golden ratio) splitting alone cannot stop: a segment cut in two leaves a far
 #: piece of at most ``g / (1 + g)`` of it, which its equal neighbour exceeds ``g``-fold, so every
 #: segment to the edge's far end would be cut, and through the vertex caps every edge beyond. There
@@ -63,6 +72,26 @@ def _allowed(seg: np.ndarray, g: float, caps: tuple[float | None, float | None])
     before = g * np.concatenate([inf if caps[0] is None else [caps[0] / g], seg[:-1]])
     after = g * np.concatenate([seg[1:], inf if caps[1] is None else [caps[1] / g]])
     return np.minimum(before, after), before <= after
+
+
+def _chord_under(evaluate, u0: float, u1: float, near: np.ndarray, dist: float, *,
+                 from_start: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The parameter (1,) and point (1, 3) of the segment [u0, u1] whose chord from ``near`` (the point at
+    ``u0`` if ``from_start``, else at ``u1``) is the last sampled under ``dist`` before the first at or
+    over it: never over, and within a 8**-12 share of the segment's parameters of it."""
+    lo, hi = (u0, u1) if from_start else (u1, u0)
+    p_lo = near[None, :]
+    frac = np.arange(1, PLACE_SAMPLES + 1) / (PLACE_SAMPLES + 1)
+    for _ in range(PLACE_ROUNDS):
+        t = lo + (hi - lo) * frac
+        pts = evaluate(t)
+        over = np.flatnonzero(row_norms(pts - near) >= dist)
+        k = int(over[0]) if len(over) else PLACE_SAMPLES
+        if k > 0:
+            lo, p_lo = float(t[k - 1]), pts[k - 1:k]
+        if k < PLACE_SAMPLES:
+            hi = float(t[k])
+    return np.array([lo]), p_lo
 
 
 def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | None, float | None],
@@ -84,10 +113,12 @@ def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | 
         j = int(np.argmax(bad))
         dist = 0.5 * seg[j] if halves[j] else allowed[j]
         fwd = bool(short_at_start[j])
-        u, p, n = point_at_arc(curve.evaluate, params[j], params[j + 1], points[j] if fwd else points[j + 1], dist,
-                               from_start=fwd, dense=DENSE)
-        evaluations += n
-        longer = insert_points(params, points, np.array([u]), p[None, :])
+        near = points[j] if fwd else points[j + 1]
+        u_new, p_new = _chord_under(curve.evaluate, params[j], params[j + 1], near, dist, from_start=fwd)
+        evaluations += PLACE_SAMPLES * PLACE_ROUNDS
+        if np.linalg.norm(p_new[0] - near) > STUCK * seg[j]:
+            break  # the segment's end lies off its curve by about its length: no split shortens it
+        longer = insert_points(params, points, u_new, p_new)
         if len(longer[0]) == len(params):
             break  # the point fell on a node: this segment cannot be split further
         params, points = longer
