@@ -65,17 +65,21 @@ def read_face(surface: int) -> FaceMesh | None:
 def write_interior(surface: int, face: FaceMesh, x: np.ndarray, tri: np.ndarray, movable: np.ndarray,
                    uv: np.ndarray) -> None:
     """Replace the interior of gmsh surface ``surface`` (read as ``face``) by nodes ``x`` (``face``'s rows
-    first, new rows appended: they get new tags), the triangles ``tri`` and the parameters ``uv`` of the
-    nodes still ``movable`` and used; the curves' nodes stay as they are."""
+    first, new rows appended), the triangles ``tri`` and the parameters ``uv`` of the nodes still
+    ``movable`` and used; the curves' nodes stay as they are.
+
+    The interior nodes and the triangles get tags gmsh assigns, never ones chosen here: gmsh's own
+    numbering does not count tags given to it, so a node added under its old tag (a face's mesh put back)
+    or under ``getMaxNodeTag() + 1`` could later share its tag with a node gmsh made for another face, and
+    triangles written by tag then held that face's node: once it was meshed again, a dangling one
+    (sharp_blade, where a blade face's Delaunay mesh came back broken and was meshed anew)."""
     import gmsh
 
-    tags, el = face.tags, face.el_tags
-    if len(x) > len(tags):  # new nodes get new tags, and new triangles new element tags
-        tags = np.concatenate([tags, gmsh.model.mesh.getMaxNodeTag() + 1 + np.arange(len(x) - len(tags))])
-    if len(tri) > len(el):
-        el = np.concatenate([el, gmsh.model.mesh.getMaxElementTag() + 1 + np.arange(len(tri) - len(el))])
-    rows = np.flatnonzero(movable & np.bincount(tri.ravel(), minlength=len(tags)).astype(bool))
+    rows = np.flatnonzero(movable & np.bincount(tri.ravel(), minlength=len(x)).astype(bool))
     gmsh.model.mesh.clear([(2, surface)])
     params = [] if np.isnan(uv[rows]).any() else uv[rows].ravel().tolist()
-    gmsh.model.mesh.addNodes(2, surface, tags[rows].tolist(), x[rows].ravel().tolist(), params)
-    gmsh.model.mesh.addElementsByType(surface, 2, el[:len(tri)].tolist(), tags[tri].ravel().tolist())
+    gmsh.model.mesh.addNodes(2, surface, [], x[rows].ravel().tolist(), params)
+    added, _, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=False)
+    tags = np.concatenate([face.tags, np.zeros(len(x) - len(face.tags), dtype=np.int64)])
+    tags[rows] = np.asarray(added, dtype=np.int64)  # in the order they were added
+    gmsh.model.mesh.addElementsByType(surface, 2, [], tags[tri].ravel().tolist())
