@@ -292,7 +292,7 @@ def test_a_floored_face_keeps_the_better_of_frontal_delaunay_and_delaunay():
     """A face held at a size floor and over its target is meshed again by gmsh's Delaunay: kept when its
     deficit is smaller (the outcome names Delaunay), else the first mesh comes back node for node, every
     triangle on nodes of the face or its curves."""
-    from cadedge.mesh.fidelity import try_delaunay
+    from cadedge.mesh.floored import try_delaunay
     from cadedge.mesh.generate import mesh_faces
     from cadedge.mesh.gmsh_model import gmsh_session
 

@@ -6,7 +6,7 @@ nothing. The level they may coarsen to is the worst face, or a share of the targ
 is far under it (``COARSEN_FLOOR`` in :mod:`cadedge.mesh.fidelity`). Each such face is meshed again with ``Mesh.MeshSizeFromCurvature`` lowered by the measured
 margin (deficit ~ N**-2; faces of like counts together, see :mod:`cadedge.mesh.remesh`) and kept only
 when it has fewer triangles and stays within the level; otherwise its mesh as it was is put back (meshed
-again instead, a face whose kept mesh was Delaunay's, see :func:`cadedge.mesh.fidelity.try_delaunay`,
+again instead, a face whose kept mesh was Delaunay's, see :func:`cadedge.mesh.floored.try_delaunay`,
 came back as Frontal-Delaunay's: sharp_blade's face 3 at 2.6e-2 where it had been at 4.4e-3). Only the
 face's interior changes: its boundary nodes stay, so neighbours stay conforming.
 """

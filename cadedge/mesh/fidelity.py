@@ -9,8 +9,6 @@ the edges' arc-length deficit. It is signed: flat triangles inscribed in a conve
 
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 
 
@@ -397,40 +395,6 @@ def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
     return mesh_faces([s], face_of)[s]
 
 
-def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
-                 deficit: Callable[[float], float]) -> float:
-    """Mesh gmsh surface ``s`` (a face held at a size floor, over its target at ``measured``) again by
-    gmsh's Delaunay at ``per_circle`` (the sizes it was meshed with); keep whichever mesh has the smaller
-    area deficit (``deficit(mesh area)``) and return it (``outcomes[s]`` names the strategy kept).
-
-    Across a ridge much sharper than the floor, Frontal-Delaunay left triangles that join the two sides of
-    the propeller's blades (``scripts/hard_models.py``) straight through the solid, edges of 0.3-0.8 mm
-    across a 0.02 mm leading edge: a blade face 1.9e-2 short at ``--ald 1e-2`` and a single such blade
-    2.4e-2, finer or not; Delaunay follows the ridge there (8.6e-3 to 1e-2). Neither is better everywhere,
-    so both are measured: at ``--ald 1e-3`` Frontal-Delaunay's first mesh of a blade face was 1.05e-2
-    short and Delaunay's 4.1e-3, and meshed finer 2.2e-3 against 1.2e-3."""
-    import gmsh
-
-    from .facemesh import read_face, write_interior
-    from .generate import STRATEGIES, FaceOutcome
-    from .interior import use_per_circle
-    from .remesh import attempt_again
-
-    delaunay = next(st for st in STRATEGIES if st.algorithm == 5 and st.sizes == STRATEGIES[0].sizes)
-    kept = read_face(s)
-    if kept is None:
-        return measured
-    use_per_circle(s, per_circle)
-    failed = attempt_again([s], delaunay)[s]
-    other = None if failed else deficit(gmsh_surface_areas([s]).get(s, 0.0))
-    if other is not None and abs(other) < abs(measured):
-        outcomes[s] = FaceOutcome(face=outcomes[s].face, surface=s, strategy=delaunay.name,
-                                  triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
-        return other
-    write_interior(s, kept, kept.x, kept.tri, kept.movable, kept.uv)
-    return measured
-
-
 def before_generate(ctx) -> None:
     """Hook: face interiors sized by curvature for the surface target (see :func:`per_circle`; in nodes
     mode faces whose curvature varies as ``k**-1/2``, see :mod:`cadedge.mesh.interior`; faces with sharp
@@ -520,6 +484,7 @@ def after_generate(ctx) -> None:
 
     from .coarsen import coarsen
     from .facemesh import read_face, write_interior
+    from .floored import try_delaunay
     from .generate import mesh_faces
     from .interior import use_per_circle
     from .remesh import job_groups, remesh_group
