@@ -5,10 +5,9 @@ faces well under it (a fillet at 3e-3 beside a planar face at 5.6e-3), and their
 nothing. The level they may coarsen to is the worst face, or a share of the target where the worst face
 is far under it (``COARSEN_FLOOR`` in :mod:`cadedge.mesh.fidelity`). Each such face is meshed again with ``Mesh.MeshSizeFromCurvature`` lowered by the measured
 margin (deficit ~ N**-2; faces of like counts together, see :mod:`cadedge.mesh.remesh`) and kept only
-when it has fewer triangles and stays within the level; otherwise its mesh as it was is put back (meshed
-again instead, a face whose kept mesh was Delaunay's, see :func:`cadedge.mesh.floored.try_delaunay`,
-came back as Frontal-Delaunay's: sharp_blade's face 3 at 2.6e-2 where it had been at 4.4e-3). Only the
-face's interior changes: its boundary nodes stay, so neighbours stay conforming.
+when it has fewer triangles and stays within the level; otherwise it is meshed again as it was (gmsh is
+deterministic). Only the face's interior changes: its boundary
+nodes stay, so neighbours stay conforming.
 """
 
 from __future__ import annotations
@@ -33,7 +32,6 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
     kept a coarser mesh."""
     import gmsh
 
-    from .facemesh import read_face, write_interior
     from .fidelity import gmsh_surface_areas
     from .remesh import job_groups, remesh_group
 
@@ -46,17 +44,19 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
         if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
             break
         faces = " ".join(str(face_of.get(s, s)) for s in group)
-        before = {s: read_face(s) for s in group}
+        before = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in group}
         say(f"refine {faces}")  # same watchdog line as a refinement: a hang here keeps them as first meshed
         redo = remesh_group(group, n, face_of)
         areas = gmsh_surface_areas([s for s in group if redo[s].ok])
+        back = {}
         for s in group:
-            old = before[s]
-            if redo[s].ok and (old is None or len(gmsh.model.mesh.getElementsByType(2, s)[0]) < len(old.tri)) \
-                    and abs(deficit(s, areas[s])) <= level:
+            if redo[s].ok and len(gmsh.model.mesh.getElementsByType(2, s)[0]) < before[s] and abs(
+                    deficit(s, areas[s])) <= level:
                 kept[face_of.get(s, s)] = n
-                ctx.outcomes[s] = redo[s]
-            elif old is not None:  # its mesh as it was, put back
-                write_interior(s, old, old.x, old.tri, old.movable, old.uv)
+            else:  # mesh it again as it was
+                back[s] = per_circle[s]
+        for n_back, again in job_groups(back, share=1.0):
+            redo.update(remesh_group(again, n_back, face_of))
+        ctx.outcomes.update(redo)
         say(f"refined {faces}")
     return kept
