@@ -11,6 +11,11 @@ Only the faces' interiors change: their boundary curves keep their nodes, so nei
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .generate import Strategy
+
 #: Faces meshed again in one gmsh call, at most (the watchdog bounds a call like one face attempt).
 BATCH_FACES = 24
 #: Faces whose per-circle counts are within this factor share a call, all at the largest of them (a
@@ -50,10 +55,9 @@ def job_groups(per_circle: dict[int, float], share: float = SHARE) -> list[tuple
     return groups(per_circle, share, sizing=sizing)
 
 
-def attempt_again(surfaces: list[int], strategy) -> dict[int, str | None]:
-    """Clear gmsh ``surfaces`` and mesh them again in one call with ``strategy``
-    (a :class:`~cadedge.mesh.generate.Strategy`) at the gmsh options set now, the rest of the model
-    hidden; per surface None if it passed, else gmsh's reason."""
+def attempt_again(surfaces: list[int], strategy: Strategy) -> dict[int, str | None]:
+    """Clear gmsh ``surfaces`` and mesh them again in one call with ``strategy`` at the gmsh options set
+    now, the rest of the model hidden; per surface None if it passed, else gmsh's reason."""
     import gmsh
 
     from .generate import _attempt_many, clear

@@ -78,7 +78,11 @@ def _chord_under(evaluate, u0: float, u1: float, near: np.ndarray, dist: float, 
                  from_start: bool) -> tuple[np.ndarray, np.ndarray]:
     """The parameter (1,) and point (1, 3) of the segment [u0, u1] whose chord from ``near`` (the point at
     ``u0`` if ``from_start``, else at ``u1``) is the last sampled under ``dist`` before the first at or
-    over it: never over, and within a 8**-12 share of the segment's parameters of it."""
+    over it: never over, and within a 8**-12 share of the segment's parameters of it.
+
+    Not :func:`cadedge.splitting.points_at_distances`: its bisection returns the last midpoint, which may
+    lie over ``dist``, and takes one curve evaluation per halving; 48 of them per split made grading
+    boxed_sphere 2.3x slower (3.7 s against 1.4 s here)."""
     lo, hi = (u0, u1) if from_start else (u1, u0)
     p_lo = near[None, :]
     frac = np.arange(1, PLACE_SAMPLES + 1) / (PLACE_SAMPLES + 1)
