@@ -10,6 +10,9 @@ from __future__ import annotations
 
 from typing import Callable
 
+#: The strategy name a face kept as gmsh's Delaunay meshed it is recorded with (``FaceOutcome.strategy``).
+DELAUNAY = "Delaunay"
+
 
 def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
                  deficit: Callable[[float], float]) -> float:
@@ -31,7 +34,7 @@ def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
     from .interior import use_per_circle
     from .remesh import attempt_again
 
-    delaunay = next(st for st in STRATEGIES if st.algorithm == 5 and st.sizes == STRATEGIES[0].sizes)
+    delaunay = next(st for st in STRATEGIES if st.name == DELAUNAY)
     kept = read_face(s)
     if kept is None:
         return measured
