@@ -179,6 +179,18 @@ def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():
     assert any("corner" in line and "forced" in line for line in result.report.lines())
 
 
+def test_strip_width_is_the_distance_to_the_second_nearest_boundary_edge():
+    from cadedge.mesh.quality import strip_width
+
+    side = np.array([[0.0, 0, 0], [10.0, 0, 0]])
+    other = side + [0.0, 1e-6, 0]
+    far = side + [0.0, 5.0, 0]
+    sliver = np.array([[1.0, 0, 0], [3.0, 1e-6, 0], [2.0, 0.5e-6, 0]])
+    assert strip_width(sliver, [side, other, far]) == pytest.approx(1e-6, rel=1e-6)
+    assert strip_width(sliver, [side, far]) == pytest.approx(5.0, rel=1e-6)
+    assert strip_width(sliver, [side]) == np.inf
+
+
 def test_cli_surface_ald_and_report(tmp_path, capsys):
     out, rep = tmp_path / "cyl.msh", tmp_path / "cyl.json"
     code = main(["mesh", str(FIXTURES / "cylinder.step"), "--ald", "1e-2", "--surface-ald", "2e-3",

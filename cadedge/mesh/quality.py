@@ -8,6 +8,7 @@ that reason instead of counted against the mesher.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,8 +61,24 @@ class SmallAngle:
     reason: str
 
 
+def strip_width(points: np.ndarray, polylines: Sequence[np.ndarray]) -> float:
+    """How wide a face is where ``points`` lie, judged from its boundary: the smallest ``w`` such that
+    every point is within ``w`` of two different ones of the face's boundary ``polylines`` (its edges'
+    grids); ``inf`` with fewer than two."""
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    far = []
+    for line in polylines:
+        a, b = line[:-1], line[1:]
+        ab = b - a
+        t = np.einsum("kij,ij->ki", p[:, None, :] - a[None], ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        foot = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
+        far.append(float(np.linalg.norm(foot - p[:, None, :], axis=2).min(axis=1).max()))
+    return float(np.sort(far)[1]) if len(far) >= 2 else np.inf
+
+
 def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray,
-                 vertex_points: np.ndarray, angles: np.ndarray | None = None) -> list[SmallAngle]:
+                 vertex_points: np.ndarray, angles: np.ndarray | None = None, *,
+                 face_edges: Mapping[int, Sequence[np.ndarray]] | None = None) -> list[SmallAngle]:
     """Every triangle under :data:`SLIVER_DEG`, worst first.
 
     Forced: its face narrows to a corner sharper than :data:`SLIVER_DEG` at a B-rep vertex (a node at one
@@ -71,6 +88,11 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     that wedge where the face is so narrow that no triangle on that segment gets much over
     :data:`WEDGE_BOUND` degrees (``atan(2 width / length)``, the width over the segment's middle; the
     segments are the edge grids', which stay).
+
+    Also forced: the triangle lies in a strip of its face between two of its boundary edges (``face_edges``:
+    face id -> its edges' grid polylines) so narrow (:func:`strip_width`) that no triangle as long as it
+    gets much over :data:`WEDGE_BOUND` degrees there. Two edges that coincide in space make a strip of no
+    width: a shaft's seam line with the end of a helical flight fused onto it.
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     ang = triangle_angles(nodes, tris) if angles is None else angles
@@ -117,5 +139,15 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                     reason = (f"the face narrows to a {sharpest:.2g}-degree corner at a B-rep vertex and the "
                               f"triangle stands on a {length:.2g} boundary segment in its wedge, about "
                               f"{width:.2g} wide there (no triangle on it gets much over {bound:.2g} degrees)")
+        if not forced and face_edges and f in face_edges:
+            p = nodes[tris[t]]
+            length = float(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1).max())
+            width = strip_width(p, face_edges[f])
+            bound = float(np.degrees(np.arctan(2.0 * width / length))) if length > 0 else 0.0
+            if bound < WEDGE_BOUND:
+                forced = True
+                reason = (f"the face is about {width:.2g} wide there, between two of its boundary edges, and "
+                          f"the triangle is {length:.2g} long (no triangle that long gets much over "
+                          f"{bound:.2g} degrees there)")
         out.append(SmallAngle(face=f, angle=float(ang[t].min()), forced=forced, reason=reason))
     return out
