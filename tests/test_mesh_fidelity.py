@@ -191,6 +191,20 @@ def test_strip_width_is_the_distance_to_the_second_nearest_boundary_edge():
     assert strip_width(sliver, [side]) == np.inf
 
 
+def test_a_zero_width_strip_is_named_as_forcing_small_angles():
+    """A helical flight fused to a longer shaft: the flight's end line lies on the shaft cylinder's seam, so
+    the shaft face has a strip of no width between the two, and whatever fills it is a sliver."""
+    pitch, height, r = 20.0, 60.0, 6.0
+    section = cq.Workplane("XZ").center(r + 4.5, 0).rect(9.0, 2.0)
+    flight = section.sweep(cq.Workplane().add(cq.Wire.makeHelix(pitch, height, r)), isFrenet=True)
+    shaft = cq.Workplane("XY").circle(r + 0.5).extrude(height + 20).translate((0, 0, -10))
+    result = mesh_shape(shaft.union(flight).val(), ald=1e-2)
+    assert result.ok, result.problems()
+    small = result.report.small_angles
+    strip = [s for s in small if s.forced and "wide there, between two of its boundary edges" in s.reason]
+    assert small and len(strip) >= 0.8 * len(small)  # before: none recognised (the strip has no corner)
+
+
 def test_cli_surface_ald_and_report(tmp_path, capsys):
     out, rep = tmp_path / "cyl.msh", tmp_path / "cyl.json"
     code = main(["mesh", str(FIXTURES / "cylinder.step"), "--ald", "1e-2", "--surface-ald", "2e-3",

@@ -263,3 +263,42 @@ def test_a_face_far_off_its_brep_area_may_move_by_a_share_of_its_own_deficit(gms
     brep_area = 1.3 * mesh_area  # the mesh 23% under its face: the moves shrink it a little further
     assert not smooth_face(side, brep_area=brep_area, target=1e-6, slack=1e-7)
     assert smooth_face(side, brep_area=brep_area, target=1e-6, slack=1e-7, own_slack=0.01)
+
+
+def test_a_folded_node_is_counted_and_the_optimiser_unfolds_it(gmsh_cylinder):
+    """A node moved beyond the ring of its neighbours (mirrored through one of them, on the surface):
+    some of its triangles face against the cylinder and overlap their neighbours. The report counts
+    them, and the optimiser moves the node back into its ring."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh.facemesh import read_face
+    from cadedge.mesh.folds import count_folded
+    from cadedge.mesh.optimize import smooth_face
+
+    assert count_folded(side) == 0
+    face = read_face(side)
+    lo, hi = gmsh.model.getParametrizationBounds(2, side)
+    inner = np.flatnonzero(face.movable & (face.uv[:, 0] > lo[0] + 0.3 * (hi[0] - lo[0]))
+                           & (face.uv[:, 0] < hi[0] - 0.3 * (hi[0] - lo[0])))
+    p = int(inner[len(inner) // 2])
+    q = next(int(v) for t in face.tri[(face.tri == p).any(axis=1)] for v in t if v != p and face.movable[v])
+    uv = 2 * face.uv[q] - face.uv[p]  # mirrored through its neighbour q: beyond q's ring side
+    xyz = gmsh.model.getValue(2, side, uv.tolist())
+    gmsh.model.mesh.setNode(int(face.tags[p]), list(xyz), uv.tolist())
+    assert count_folded(side) > 0
+    assert smooth_face(side)
+    assert count_folded(side) == 0
+
+
+def test_untangle_moves_a_node_back_into_its_ring():
+    from cadedge.mesh.folds import folded
+    from cadedge.mesh.moves import untangle_nodes
+
+    x, tri, inner = _grid(5)
+    ref = np.tile([0.0, 0.0, 1.0], (len(tri), 1))
+    ref *= np.sign(np.einsum("ij,ij->i", np.cross(x[tri[:, 1]] - x[tri[:, 0]], x[tri[:, 2]] - x[tri[:, 0]]), ref))[:, None]
+    centre = 12  # the middle of 5 x 5
+    x[centre, :2] = [0.9, 0.62]  # beyond its neighbours, inside the square
+    assert folded(x, tri, ref).any()
+    out, params = untangle_nodes(x, tri, inner, _plane, ref)
+    assert not folded(out, tri, ref).any()
+    assert np.array_equal(out[~inner], x[~inner]) and params is not None

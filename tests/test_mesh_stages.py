@@ -20,7 +20,8 @@ def _face(angles_deg: list[float]) -> _Face:
         pts += [[3 * k, 0, 0], [3 * k + 1, 0, 0], [3 * k + 0.5, h, 0]]
         tri.append([3 * k, 3 * k + 1, 3 * k + 2])
     x = np.array(pts, dtype=float)
-    return _Face(x, np.array(tri), np.zeros(len(x), dtype=bool), np.zeros((len(x), 2)), np.zeros(len(x), dtype=bool))
+    none = np.zeros(len(x), dtype=bool)
+    return _Face(x, np.array(tri), none, np.zeros((len(x), 2)), none, np.full((len(x), 3), np.nan))
 
 
 def test_a_stage_is_judged_on_the_worst_angles_in_order():

@@ -13,8 +13,8 @@ follows settles the ring; the caller keeps the result only if the face's smalles
 :func:`cadedge.mesh.optimize.smooth_face`), checked exactly on a few candidate positions for the
 merged node: the midpoint, either end, and the centroid of the merged node's neighbours, each projected
 onto the surface first. A collapse must
-keep the mesh a manifold (the two ends share exactly the two nodes across the edge) and turn no triangle
-over. Worst triangles go first; each node takes part in at most one collapse per call, so every decision
+keep the mesh a manifold (the two ends share exactly the two nodes across the edge), turn no triangle
+over and fold none against the surface (:mod:`cadedge.mesh.folds`). Worst triangles go first; each node takes part in at most one collapse per call, so every decision
 is judged on the triangles it changes.
 """
 
@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .folds import reference_normals
 from .quality import cross, min_angles
 
 #: Edges of triangles whose smallest angle is under this many degrees are tried (42 lifted two_solids'
@@ -48,9 +49,11 @@ def _trial_min(x: np.ndarray, new: np.ndarray, a: int, pos: np.ndarray) -> float
 
 
 def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
-                   below: float = COLLAPSE_BELOW) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                   below: float = COLLAPSE_BELOW,
+                   up: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Collapse interior edges of triangles under ``below`` degrees where that raises the smallest angle
-    around them (see the module doc).
+    around them (see the module doc); ``up``: the nodes' :func:`~cadedge.mesh.folds.oriented` surface
+    normals, against which no new triangle may fold.
 
     ``project(points (k, 3), rows (k,))`` returns the points (near nodes ``rows``) moved onto the surface
     and their parametric coordinates (k, d). Returns ``(x, tri, removed, params)``: the coordinates (rows of removed nodes unchanged, no
@@ -120,6 +123,8 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
                 p[new == a] = pos
                 if np.any(np.einsum("ij,ij->i", _normal(p), normals0) <= 0):
                     continue
+                if up is not None and np.any(np.einsum("ij,ij->i", _normal(p), reference_normals(up, new)) < 0):
+                    continue  # folded against the surface
                 q = _trial_min(x, new, a, pos)
                 if q > old_min + MIN_GAIN and (best is None or q > best[0]):
                     best = (q, a, b, pos, puv, ring, keep, new, gone)

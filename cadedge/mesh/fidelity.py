@@ -596,5 +596,12 @@ def after_generate(ctx) -> None:
 
 
 def after_mesh(ctx) -> dict:
-    """Hook: what :func:`after_generate` did, for the report (plain data)."""
-    return dict(getattr(ctx, "fidelity", {}) or {})
+    """Hook: what :func:`after_generate` did, and the faces with folded triangles (face -> how many,
+    :func:`cadedge.mesh.folds.count_folded`), for the report (plain data)."""
+    from .folds import count_folded
+
+    out = dict(getattr(ctx, "fidelity", {}) or {})
+    face_of = ctx.emap.face_of_surface
+    counts = {face_of.get(s, s): count_folded(s) for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok}
+    out["folded"] = {f: k for f, k in counts.items() if k}
+    return out

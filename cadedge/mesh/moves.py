@@ -1,5 +1,6 @@
 """The face optimiser's moves on one face's triangles (see :mod:`cadedge.mesh.optimize`): edge swaps
-(:func:`flip_edges`), a "smart" Laplacian (:func:`smooth_nodes`) and a local search (:func:`climb_nodes`).
+(:func:`flip_edges`), a "smart" Laplacian (:func:`smooth_nodes`), a local search (:func:`climb_nodes`)
+and the unfolding of triangles folded against the surface (:func:`untangle_nodes`).
 
 Each works on plain arrays (coordinates, triangles as node indices, which nodes may move) and a
 projection back onto the B-rep surface; nodes on curves and points never move.
@@ -23,6 +24,15 @@ CLIMB_BELOW = 45.0
 STEPS = (0.03, 0.1, 0.25)
 #: Edge-swap rounds per face and pass.
 FLIP_ROUNDS = 10
+#: An edge swap must keep each new triangle's normal within this many degrees of both old triangles'
+#: normals. Where two triangles bend sharply across their shared edge (a thin blade's rounded edge, the
+#: surface turning nearly 180 degrees within a triangle or two) the diagonal carries the shape: swapping
+#: it folded triangles against the surface (sharp_blade at 1e-2: up to 10 on a face, 3 left in the final
+#: mesh), which the test before (against the sum of the old normals) could not tell. A mesh at ALD 1e-2
+#: bends about 28 degrees between neighbours on a curved face.
+FLIP_TURN = 45.0
+#: Rounds of :func:`untangle_nodes`; each moves at most one node per neighbourhood.
+UNTANGLE_ROUNDS = 8
 #: Rounds of undoing moves that made a triangle worse than before the pass (its nodes' neighbours moved
 #: too), after which the pass is undone as a whole.
 _UNDO_ROUNDS = 8
@@ -56,15 +66,26 @@ def _node_min(values: np.ndarray, tri: np.ndarray, n: int) -> np.ndarray:
     return _group_min(np.repeat(values, 3), tri.ravel(), n)
 
 
+def _folds(new: np.ndarray, old: np.ndarray, tri: np.ndarray, ref: np.ndarray | None) -> np.ndarray:
+    """Triangles that face against their reference direction ``ref`` (the surface's normal, see
+    :func:`cadedge.mesh.folds.reference_normals`) with nodes at ``new`` but not at ``old``. A move is
+    checked against its triangles' normals before it, but many small turns, each under 90 degrees, add
+    up: on a thin blade's rounded edge the local search folded triangles against the surface."""
+    if ref is None:
+        return np.zeros(len(tri), dtype=bool)
+    return (np.einsum("ij,ij->i", _normals(new, tri), ref) < 0) & (np.einsum("ij,ij->i", _normals(old, tri), ref) >= 0)
+
+
 def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
-                 iterations: int = ITERATIONS) -> tuple[np.ndarray, np.ndarray | None]:
+                 iterations: int = ITERATIONS, ref: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """Smart-Laplacian smoothing of the ``movable`` nodes of the triangles ``tri`` (indices into ``x``).
 
     ``project(points (k, 3), rows (k,))`` returns the points (those of nodes ``rows``) moved onto the
     surface and their parametric coordinates (k, d). Returns the new coordinates and the parametric coordinates of the movable nodes (NaN rows for
-    nodes that stayed; ``None`` if nothing moved). A move stays only if no triangle of the node flips and
-    the smallest angle of its triangles does not fall; moves that, with their neighbours', flip a triangle
-    or bring it below the worst angle around it before the pass are undone.
+    nodes that stayed; ``None`` if nothing moved). A move stays only if no triangle of the node flips (nor
+    folds against ``ref``, see :func:`_folds`) and the smallest angle of its triangles does not fall; moves
+    that, with their neighbours', flip a triangle or bring it below the worst angle around it before the
+    pass are undone.
     """
     x = np.array(x, dtype=float)
     n = len(x)
@@ -85,7 +106,7 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         cand = x.copy()
         cand[mov] = moved
         ang1 = min_angles(cand, tri)
-        flipped = np.einsum("ij,ij->i", _normals(cand, tri), nrm0) <= 0
+        flipped = (np.einsum("ij,ij->i", _normals(cand, tri), nrm0) <= 0) | _folds(cand, x, tri, ref)
         bad_node = _node_min(np.where(flipped, -1.0, ang1), tri, n)
         accept = np.zeros(n, dtype=bool)
         accept[mov] = (bad_node[mov] >= node0[mov]) & np.any(cand[mov] != x[mov], axis=1)
@@ -93,7 +114,8 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         for _round in range(_UNDO_ROUNDS):
             trial = np.where(accept[:, None], cand, x)
             ang_t = min_angles(trial, tri)
-            worse = (ang_t < floor) | (np.einsum("ij,ij->i", _normals(trial, tri), nrm0) <= 0)
+            worse = ((ang_t < floor) | (np.einsum("ij,ij->i", _normals(trial, tri), nrm0) <= 0)
+                     | _folds(trial, x, tri, ref))
             if not worse.any():
                 break
             accept[tri[worse].ravel()] = False
@@ -109,11 +131,27 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
     return x, params
 
 
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
+
+
+def _within_turn(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray]) -> np.ndarray:
+    """Whether every ``new`` triangle's normal is within :data:`FLIP_TURN` degrees of every ``old`` one's."""
+    cos = np.cos(np.radians(FLIP_TURN))
+    ok = np.ones(len(old[0]), dtype=bool)
+    for a in old:
+        na = _unit(_normals(x, a))
+        for b in new:
+            ok &= np.einsum("ij,ij->i", na, _unit(_normals(x, b))) > cos
+    return ok
+
+
 def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
                rounds: int = FLIP_ROUNDS) -> np.ndarray:
     """Swap the diagonal of pairs of triangles wherever that raises the smaller of their two smallest
     angles; edges in ``fixed`` (sorted node-index pairs: the curve segments) are never swapped, nor an edge
-    whose new triangles would turn against the old ones or whose new diagonal is already an edge. Each round swaps, for every triangle, at most its
+    whose new triangles would turn more than :data:`FLIP_TURN` degrees from the old ones or whose new
+    diagonal is already an edge. Each round swaps, for every triangle, at most its
     best edge. Returns the new triangles (same count and orientation)."""
     tri = np.array(tri, dtype=np.int64)
     fixed_keys = np.array(sorted(a * (len(x) + 1) + b for a, b in fixed), dtype=np.int64)
@@ -139,8 +177,7 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
         new2 = np.column_stack([pd, pb, pc])
         before = np.minimum(min_angles(x, tri[t1]), min_angles(x, tri[t2]))
         after = np.minimum(min_angles(x, new1), min_angles(x, new2))
-        ref = _normals(x, tri[t1]) + _normals(x, tri[t2])
-        ok = (np.einsum("ij,ij->i", _normals(x, new1), ref) > 0) & (np.einsum("ij,ij->i", _normals(x, new2), ref) > 0)
+        ok = _within_turn(x, [tri[t1], tri[t2]], [new1, new2])
         new_key = np.minimum(pc, pd) * (len(x) + 1) + np.maximum(pc, pd)
         ok &= ~np.isin(new_key, ks)  # the new diagonal already joins c and d (a fan at an apex): a flip would
         # stack a second pair of triangles on the existing ones
@@ -165,13 +202,14 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
 
 
 def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
-                iterations: int = ITERATIONS, below: float = CLIMB_BELOW) -> tuple[np.ndarray, np.ndarray | None]:
+                iterations: int = ITERATIONS, below: float = CLIMB_BELOW,
+                ref: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """Move movable nodes whose triangles have an angle under ``below`` degrees to the best of a few trial
     positions around them (8 directions in their tangent plane, :data:`STEPS` away), the one that raises
     the smallest angle of their triangles most. Of neighbours that can both improve, only the worse off
     moves in one iteration, so each move is judged exactly (up to the projection back onto the surface,
-    checked after it). Returns the coordinates and the parametric coordinates of the movable nodes as
-    :func:`smooth_nodes` does."""
+    checked after it, with no triangle flipped or folded against ``ref``). Returns the coordinates and the
+    parametric coordinates of the movable nodes as :func:`smooth_nodes` does."""
     x = np.array(x, dtype=float)
     n = len(x)
     mov_idx = np.flatnonzero(movable)
@@ -199,8 +237,8 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         seg = np.repeat(np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1), 2)
         h = np.bincount(e.ravel(), weights=seg, minlength=n) / np.maximum(np.bincount(e.ravel(), minlength=n), 1)
         nn = nrm / np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
-        ref = np.where(np.abs(nn[:, :1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
-        u = cross(nn, ref)
+        axis = np.where(np.abs(nn[:, :1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+        u = cross(nn, axis)
         u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
         v = cross(nn, u)
         best = node0.copy()
@@ -227,7 +265,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         cand = x.copy()
         cand[moved] = px
         after = min_angles(cand, tri)
-        flipped = np.einsum("ij,ij->i", _normals(cand, tri), _normals(x, tri)) <= 0
+        flipped = (np.einsum("ij,ij->i", _normals(cand, tri), _normals(x, tri)) <= 0) | _folds(cand, x, tri, ref)
         got = _node_min(np.where(flipped, -1.0, after), tri, n)
         ok = moved[got[moved] > node0[moved]]
         if not len(ok):
@@ -247,3 +285,55 @@ def _near_bad(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, below: float 
     for _ in range(2):
         near[tri[near[tri].any(axis=1)].ravel()] = True
     return near & movable
+
+
+def untangle_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, ref: np.ndarray, *,
+                   rounds: int = UNTANGLE_ROUNDS) -> tuple[np.ndarray, np.ndarray | None]:
+    """Move movable nodes of folded triangles (facing against ``ref``, see :mod:`cadedge.mesh.folds`) to
+    the mean of their neighbours, projected onto the surface, where that leaves fewer folded triangles
+    around them: gmsh folded one of twisted_blade's blade-face triangles at 1e-2, a node beyond the ring
+    of its neighbours. Nodes moved in one round share no triangle (the node with most folded triangles
+    first), so each move is judged exactly; a node refused is tried again once a neighbour moved.
+    Returns the coordinates and the parametric coordinates of the movable nodes as :func:`smooth_nodes`
+    does."""
+    from .folds import folded
+
+    x = np.array(x, dtype=float)
+    n = len(x)
+    mov_idx = np.flatnonzero(movable)
+    if not len(mov_idx) or not len(tri):
+        return x, None
+    where = np.full(n, -1)
+    where[mov_idx] = np.arange(len(mov_idx))
+    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    adj = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    adj = ((adj + adj.T) > 0).astype(float)
+    deg = np.maximum(np.asarray(adj.sum(axis=1)).ravel(), 1.0)
+    params = None
+    refused = np.zeros(n, dtype=bool)
+    for _ in range(rounds):
+        count = np.bincount(tri[folded(x, tri, ref)].ravel(), minlength=n)
+        want = movable & (count > 0) & ~refused
+        if not want.any():
+            break
+        rank = count + np.arange(n) / (n + 1.0)  # most folded triangles first, ties by index
+        both = want[e[:, 0]] & want[e[:, 1]]
+        i, j = e[both, 0], e[both, 1]
+        go = want.copy()
+        go[np.where(rank[i] < rank[j], i, j)] = False
+        nodes = np.flatnonzero(go)
+        px, puv = project((adj @ x)[nodes] / deg[nodes, None], nodes)
+        trial = x.copy()
+        trial[nodes] = px
+        after = np.bincount(tri[folded(trial, tri, ref)].ravel(), minlength=n)
+        ok = after[nodes] < count[nodes]
+        refused[nodes[~ok]] = True
+        moved = nodes[ok]
+        if not len(moved):
+            continue
+        x[moved] = px[ok]
+        refused[tri[np.isin(tri, moved).any(axis=1)].ravel()] = False
+        if params is None:
+            params = np.full((len(mov_idx), puv.shape[1]), np.nan)
+        params[where[moved]] = puv[ok]
+    return x, params

@@ -23,6 +23,8 @@ only if the face's worst angles rose (compared in order, the smallest first). Th
 repeated in rounds, a face's first in a sweep over all faces and the rest in a second sweep, so that one
 large face does not take the others' time.
 
+Before all this, triangles gmsh folded against the surface are unfolded (:func:`untangle_nodes`), and
+no move may fold one (:mod:`cadedge.mesh.folds`; the nodes' surface normals follow them as they move).
 The moves themselves are in :mod:`cadedge.mesh.moves`. Working in 3-D rather than in the surface's
 parameters treats nodes beside a seam like any other (gmsh's own ``Laplace2D`` and ``Relocate2D`` left
 the worst triangles of a cylinder, beside its seam, in place). Nodes on curves and points (every edge
@@ -39,7 +41,8 @@ import numpy as np
 
 from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
-from .moves import CLIMB_BELOW, _near_bad, _normals, climb_nodes, flip_edges, smooth_nodes
+from .folds import folded, orientation, reference_normals, surface_normals
+from .moves import CLIMB_BELOW, _near_bad, _normals, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
 from .project import Projector
 from .quality import min_angles
 
@@ -95,13 +98,16 @@ def _area(x: np.ndarray, tri: np.ndarray) -> float:
 @dataclass
 class _Face:
     """One face's mesh while it is improved: coordinates, triangles (indices into them), which nodes may
-    move, the parametric coordinates of the interior nodes and which of them moved."""
+    move, the parametric coordinates of the interior nodes, which of them moved, and the unit surface
+    normals at the nodes (zero rows where unknown: a pole) that tell a folded triangle
+    (:mod:`cadedge.mesh.folds`)."""
 
     x: np.ndarray
     tri: np.ndarray
     movable: np.ndarray
     uv: np.ndarray
     moved: np.ndarray
+    up: np.ndarray
 
     def min_angle(self) -> float:
         return float(min_angles(self.x, self.tri).min())
@@ -127,9 +133,13 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
     :class:`_Face` (``face`` is left as it is); only nodes near triangles under ``below`` degrees move;
     stops when ``late()``."""
     x, tri, movable = face.x, face.tri, face.movable.copy()
-    uv, moved = face.uv.copy(), face.moved.copy()
+    uv, moved, up = face.uv.copy(), face.moved.copy(), face.up.copy()
+    sign = orientation(up, tri, x)
     if isinstance(project, Projector):
         project.uv = uv  # the nodes' current parameters start their projections
+
+    def normals_at(params: np.ndarray) -> np.ndarray:
+        return project.normals(params) if isinstance(project, Projector) else np.zeros((len(params), 3))
 
     def took(params: np.ndarray | None, rows: np.ndarray) -> None:
         if params is None or not params.shape[1]:
@@ -137,13 +147,14 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         got = ~np.isnan(params[:, 0])
         uv[rows[got]] = params[got]
         moved[rows[got]] = True
+        up[rows[got]] = normals_at(params[got])  # a node moved across a ridge turns its normal
 
     for k in range(passes):
         if late():
             break
         tri = flip_edges(x, tri, fixed)
         if collapse and (k < passes - 1 or passes == 1):  # the last pass settles the last changes
-            x, tri, gone, params = collapse_edges(x, tri, movable, project)
+            x, tri, gone, params = collapse_edges(x, tri, movable, project, up=sign * up)
             took(params, np.arange(len(x)))
             if gone.any():
                 movable &= ~gone
@@ -152,6 +163,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
             if len(new_uv):  # new interior nodes: rows appended
                 uv = np.vstack([uv, new_uv])
                 moved = np.concatenate([moved, np.ones(len(new_uv), dtype=bool)])
+                up = np.vstack([up, normals_at(new_uv)])
                 if isinstance(project, Projector):
                     project.uv = uv
                 tri = flip_edges(x, tri, fixed)
@@ -159,12 +171,33 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         if not active.any():
             break
         rows = np.flatnonzero(active)
+        ref = reference_normals(up, tri, sign)
         for mover in (smooth_nodes, climb_nodes):
             if late():
                 break
-            x, params = mover(x, tri, active, project)
+            x, params = mover(x, tri, active, project, ref=ref)
             took(params, rows)
-    return _Face(x, tri, movable, uv, moved)
+    return _Face(x, tri, movable, uv, moved, up)
+
+
+def _unfold(face: _Face, project: Projector) -> _Face:
+    """``face`` with its folded triangles (:mod:`cadedge.mesh.folds`) unfolded where moving its interior
+    nodes can (:func:`~cadedge.mesh.moves.untangle_nodes`), or ``face`` itself if none is folded or none
+    could be."""
+    ref = reference_normals(face.up, face.tri, orientation(face.up, face.tri, face.x))
+    if not folded(face.x, face.tri, ref).any():
+        return face
+    project.uv = face.uv.copy()
+    x, params = untangle_nodes(face.x, face.tri, face.movable, project, ref)
+    if params is None:
+        return face
+    rows = np.flatnonzero(face.movable)
+    got = ~np.isnan(params[:, 0])
+    moved, uv, up = face.moved.copy(), face.uv.copy(), face.up.copy()
+    uv[rows[got]] = params[got]
+    moved[rows[got]] = True
+    up[rows[got]] = project.normals(params[got])
+    return _Face(x, face.tri, face.movable, uv, moved, up)
 
 
 def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = None, slack: float = 0.0,
@@ -191,7 +224,8 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     if mesh is None:
         return False
     x0, tri0, tags, fixed = mesh.x, mesh.tri, mesh.tags, mesh.fixed
-    start = _Face(x0, tri0, mesh.movable, mesh.uv, np.zeros(len(tags), dtype=bool))
+    start = _Face(x0, tri0, mesh.movable, mesh.uv, np.zeros(len(tags), dtype=bool),
+                  surface_normals(surface, x0, mesh.uv))
     project = Projector(surface)
 
     def late() -> bool:
@@ -199,17 +233,19 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
                 or (cpu_deadline is not None and time.process_time() > cpu_deadline))
 
     def fits(face: _Face) -> bool:
-        """Its smallest angle is not below gmsh's and its area deficit within the target (or no worse)."""
-        if face.min_angle() < start.min_angle():
+        """Its smallest angle is not below gmsh's (once unfolded) and its area deficit within the target
+        (or no worse)."""
+        if face.min_angle() < base.min_angle():
             return False
         if target is not None and brep_area > 0:
             d0, d1 = abs(1.0 - _area(x0, tri0) / brep_area), abs(1.0 - _area(face.x, face.tri) / brep_area)
             return d1 <= max(target, d0) + max(slack, own_slack * d0)
         return True
 
-    best = _improve(start, fixed, project, passes, late) if passes else start
+    base = _unfold(start, project)
+    best = _improve(base, fixed, project, passes, late) if passes else base
     if not fits(best):
-        best = start
+        best = base
     for round_ in range(rounds):
         before = best
         for n, collapse in LATER_STAGES:

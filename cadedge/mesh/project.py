@@ -80,6 +80,17 @@ class Projector:
             uv[k[~out]] = new[~out]
         return foot, uv, done
 
+    def normals(self, params: np.ndarray) -> np.ndarray:
+        """Unit surface normals (k, 3) at parameters ``params`` (k, 2); zero rows where there is none."""
+        import gmsh
+
+        from .folds import unit_normals
+
+        params = np.asarray(params, dtype=float).reshape(-1, 2)
+        if not len(params):
+            return np.zeros((0, 3))
+        return unit_normals(gmsh.model.getNormal(self.surface, params.ravel().tolist()))
+
     def __call__(self, points: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The points (k, 3) moved onto the surface and their parameters (k, 2); ``rows``: the node row
         each point belongs to (its parameters start the search)."""

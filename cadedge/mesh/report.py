@@ -38,7 +38,8 @@ OVER_REASONS = ("tolerances", "size floor", "not converging", "planar", "still o
 class FaceReport:
     """One B-rep face. ``status``: ``ok``, ``over target`` (meshed, area deficit above the target) or
     ``failed`` (not meshed); ``note`` says why when it is not ok, and for a face over target ``reason``
-    says it as one of :data:`OVER_REASONS` (else empty)."""
+    says it as one of :data:`OVER_REASONS` (else empty). ``folded``: its triangles that face against
+    its surface (:mod:`cadedge.mesh.folds`; they overlap their neighbours)."""
 
     face: int
     surface: str
@@ -48,6 +49,7 @@ class FaceReport:
     area_deficit: float | None
     min_angle: float | None
     below_20: float
+    folded: int = 0
     status: str = "ok"
     note: str = ""
     reason: str = ""
@@ -69,6 +71,11 @@ class MeshReport:
     @property
     def over_target(self) -> list[FaceReport]:
         return [f for f in self.faces if f.status == "over target"]
+
+    @property
+    def folded(self) -> int:
+        """Triangles that face against their surface, over all faces."""
+        return sum(f.folded for f in self.faces)
 
     @property
     def unforced_slivers(self) -> int:
@@ -96,6 +103,10 @@ class MeshReport:
                        f"{sorted({s.face for s in self.small_angles})[:10]}")
         for s in {s.face: s for s in reversed(forced)}.values():
             out.append(f"  face {s.face}: {s.angle:.2g} deg forced: {s.reason}")
+        if self.folded:
+            out.append(f"  {self.folded} triangles folded against their surface (they overlap their neighbours, "
+                       "and their faces' area deficits read smaller by the overlap) on faces "
+                       f"{[f.face for f in self.faces if f.folded][:10]}")
         return out
 
     def to_dict(self) -> dict:
@@ -135,7 +146,9 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  failed: dict[int, str] | None = None, vertex_points: np.ndarray | None = None,
                  stuck: list[int] | tuple[int, ...] = (),
                  tolerances: dict[int, tuple[float, float]] | None = None,
-                 planar: set[int] | None = None, floored: dict[int, float] | None = None) -> MeshReport:
+                 planar: set[int] | None = None, floored: dict[int, float] | None = None,
+                 face_edges: dict[int, list[np.ndarray]] | None = None,
+                 folded: dict[int, int] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
 
     ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
@@ -144,7 +157,10 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     a face to its edges' largest tolerance and the share of its area they leave open
     (:func:`tolerance_bands`): a face over target within that share is reported as such; ``planar`` the
     faces meshed as planes (default: those of type ``Plane``); ``floored`` the faces whose sizes were held
-    at or above a floor (face -> size, :func:`cadedge.mesh.interior.size_floors`).
+    at or above a floor (face -> size, :func:`cadedge.mesh.interior.size_floors`); ``face_edges`` the grid
+    polylines of each face's edges (:func:`face_edge_grids`: to tell small angles forced by a face
+    narrower than its boundary segments); ``folded`` the faces with triangles that face against their
+    surface (face -> how many).
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -165,7 +181,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                          brep_area=float(brep_areas[i]), mesh_area=float(mesh_areas[i]),
                          area_deficit=float(deficits[i]) if len(mine) and np.isfinite(deficits[i]) else None,
                          min_angle=float(mine.min()) if len(mine) else None,
-                         below_20=float(np.mean(mine < GOOD_DEG)) if len(mine) else 0.0)
+                         below_20=float(np.mean(mine < GOOD_DEG)) if len(mine) else 0.0,
+                         folded=int((folded or {}).get(fid, 0)))
         if fid in failed or not len(mine):
             rec.status, rec.note = "failed", failed.get(fid, "no triangles")
             if (floored or {}).get(fid) is not None:  # the likely cause, in the user's terms
@@ -181,7 +198,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         faces.append(rec)
     measured = [abs(f.area_deficit) for f in faces if f.area_deficit is not None]
     smalls = small_angles(nodes, tris, tri_faces, np.zeros((0, 3)) if vertex_points is None else vertex_points,
-                          angles=angles) if len(tris) else []
+                          angles=angles, face_edges=face_edges) if len(tris) else []
     return MeshReport(surface_ald=surface_ald, faces=faces, triangles=len(tris),
                       min_angle=float(tri_min.min()) if len(tri_min) else None,
                       below_20=float(np.mean(tri_min < GOOD_DEG)) if len(tri_min) else 0.0,
@@ -238,4 +255,14 @@ def report_of(result, opts: dict) -> MeshReport | None:
                         vertex_points=vertex_points, stuck=extras.get("stuck", ()),
                         tolerances=tolerance_bands(result.grid, opts["brep_areas"]),
                         planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]),
-                        floored=extras.get("floored"))
+                        floored=extras.get("floored"), face_edges=face_edge_grids(result.grid),
+                        folded=extras.get("folded"))
+
+
+def face_edge_grids(grid) -> dict[int, list[np.ndarray]]:
+    """Face id -> the grid polylines of its edges (for :func:`~cadedge.mesh.quality.small_angles`)."""
+    out: dict[int, list[np.ndarray]] = {}
+    for e in grid.edges:
+        for f in set(e.faces):
+            out.setdefault(f, []).append(np.asarray(e.points, dtype=float))
+    return out
