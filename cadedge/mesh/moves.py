@@ -12,6 +12,7 @@ import numpy as np
 from scipy import sparse
 
 from .. import kernels
+from .folds import folded
 from .quality import cross, min_angles
 
 #: Smoothing iterations per pass.
@@ -66,6 +67,23 @@ def _node_min(values: np.ndarray, tri: np.ndarray, n: int) -> np.ndarray:
     return _group_min(np.repeat(values, 3), tri.ravel(), n)
 
 
+def _adjacency(tri: np.ndarray, n: int) -> tuple[sparse.csr_matrix, np.ndarray]:
+    """The node adjacency of triangles ``tri`` over ``n`` nodes (0/1, symmetric) and each node's degree."""
+    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    adj = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    adj = ((adj + adj.T) > 0).astype(float)
+    return adj, np.asarray(adj.sum(axis=1)).ravel()
+
+
+def _rows(movable: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The movable nodes' indices, and for every node its row among them (-1 if it does not move): the
+    rows of the parametric coordinates the moves return."""
+    mov_idx = np.flatnonzero(movable)
+    where = np.full(len(movable), -1)
+    where[mov_idx] = np.arange(len(mov_idx))
+    return mov_idx, where
+
+
 def _folds(new: np.ndarray, old: np.ndarray, tri: np.ndarray, ref: np.ndarray | None) -> np.ndarray:
     """Triangles that face against their reference direction ``ref`` (the surface's normal, see
     :func:`cadedge.mesh.folds.reference_normals`) with nodes at ``new`` but not at ``old``. A move is
@@ -73,7 +91,7 @@ def _folds(new: np.ndarray, old: np.ndarray, tri: np.ndarray, ref: np.ndarray | 
     up: on a thin blade's rounded edge the local search folded triangles against the surface."""
     if ref is None:
         return np.zeros(len(tri), dtype=bool)
-    return (np.einsum("ij,ij->i", _normals(new, tri), ref) < 0) & (np.einsum("ij,ij->i", _normals(old, tri), ref) >= 0)
+    return folded(new, tri, ref) & ~folded(old, tri, ref)
 
 
 def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
@@ -92,10 +110,7 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
     mov = np.flatnonzero(movable)
     if not len(mov) or not len(tri):
         return x, None
-    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    adj = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
-    adj = ((adj + adj.T) > 0).astype(float)
-    deg = np.asarray(adj.sum(axis=1)).ravel()
+    adj, deg = _adjacency(tri, n)
     params = None
     for _ in range(iterations):
         ang0 = min_angles(x, tri)
@@ -212,11 +227,9 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
     parametric coordinates of the movable nodes as :func:`smooth_nodes` does."""
     x = np.array(x, dtype=float)
     n = len(x)
-    mov_idx = np.flatnonzero(movable)
+    mov_idx, where = _rows(movable)
     if not len(mov_idx) or not len(tri):
         return x, None
-    where = np.full(n, -1)
-    where[mov_idx] = np.arange(len(mov_idx))
     node = tri.ravel()
     slot = np.tile(np.arange(3), len(tri))
     t = np.repeat(np.arange(len(tri)), 3)
@@ -296,19 +309,14 @@ def untangle_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
     first), so each move is judged exactly; a node refused is tried again once a neighbour moved.
     Returns the coordinates and the parametric coordinates of the movable nodes as :func:`smooth_nodes`
     does."""
-    from .folds import folded
-
     x = np.array(x, dtype=float)
     n = len(x)
-    mov_idx = np.flatnonzero(movable)
+    mov_idx, where = _rows(movable)
     if not len(mov_idx) or not len(tri):
         return x, None
-    where = np.full(n, -1)
-    where[mov_idx] = np.arange(len(mov_idx))
     e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    adj = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
-    adj = ((adj + adj.T) > 0).astype(float)
-    deg = np.maximum(np.asarray(adj.sum(axis=1)).ravel(), 1.0)
+    adj, deg = _adjacency(tri, n)
+    deg = np.maximum(deg, 1.0)
     params = None
     refused = np.zeros(n, dtype=bool)
     for _ in range(rounds):
