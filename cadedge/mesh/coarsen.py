@@ -32,7 +32,7 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
     kept a coarser mesh."""
     import gmsh
 
-    from .fidelity import gmsh_surface_areas
+    from .fidelity import unfolded_areas
     from .remesh import job_groups, remesh_group
 
     face_of = ctx.emap.face_of_surface
@@ -47,7 +47,7 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
         before = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in group}
         say(f"refine {faces}")  # same watchdog line as a refinement: a hang here keeps them as first meshed
         redo = remesh_group(group, n, face_of)
-        areas = gmsh_surface_areas([s for s in group if redo[s].ok])
+        areas = unfolded_areas([s for s in group if redo[s].ok])
         back = {}
         for s in group:
             if redo[s].ok and len(gmsh.model.mesh.getElementsByType(2, s)[0]) < before[s] and abs(

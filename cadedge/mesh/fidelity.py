@@ -356,6 +356,18 @@ def settings(surface_ald: float, brep_areas: np.ndarray, kinds: list[str]) -> di
             "curved_faces": [i + 1 for i, k in enumerate(kinds) if k != "Plane"]}
 
 
+def unfolded_areas(surfaces: list[int]) -> dict[int, float]:
+    """:func:`gmsh_surface_areas` once each surface's folded triangles are unfolded
+    (:func:`cadedge.mesh.optimize.unfold_face`): a folded triangle's area counts twice, and gmsh's
+    Delaunay mesh of twisted_blade's blade face at 1e-2 read 8.4e-3, within the target, where unfolded it
+    is 1.03e-2. Every mesh the surface target judges is measured so."""
+    from .optimize import unfold_face
+
+    for s in surfaces:
+        unfold_face(s)
+    return gmsh_surface_areas(surfaces)
+
+
 def gmsh_surface_areas(surfaces: list[int]) -> dict[int, float]:
     """Summed triangle area of each gmsh surface of the current model."""
     import gmsh
@@ -528,7 +540,7 @@ def after_generate(ctx) -> None:
 
     for k in range(PASSES + 1):
         late = ctx.job.deadline is not None and time.time() > ctx.job.deadline
-        measured = {s: deficit(s, a) for s, a in gmsh_surface_areas(pending).items()}
+        measured = {s: deficit(s, a) for s, a in unfolded_areas(pending).items()}
         for s in [s for s in measured if s in floored and abs(measured[s]) > target and not late]:
             f = face_of.get(s, s)
             say(f"refine {f}")  # the watchdog bounds it; a hang or crash here keeps the face as first meshed
@@ -581,7 +593,7 @@ def after_generate(ctx) -> None:
                 last[s] = measured[s]
             say(f"refined {faces}")
     ok = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) not in stuck]
-    final = {s: deficit(s, a) for s, a in gmsh_surface_areas(ok).items()}
+    final = {s: deficit(s, a) for s, a in unfolded_areas(ok).items()}
     level = min(max(max(map(abs, final.values()), default=0.0), COARSEN_FLOOR * target), target)
     # a face kept as Delaunay meshed it is not coarsened: coarsening meshes a face it did not coarsen again
     # as it was, by Frontal-Delaunay (sharp_blade's face 3: 4.4e-3 as Delaunay meshed it, back at 2.6e-2);

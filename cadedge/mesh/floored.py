@@ -29,7 +29,7 @@ def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
     import gmsh
 
     from .facemesh import read_face, write_interior
-    from .fidelity import gmsh_surface_areas
+    from .fidelity import unfolded_areas
     from .generate import STRATEGIES, FaceOutcome
     from .interior import use_per_circle
     from .remesh import attempt_again
@@ -40,7 +40,7 @@ def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
         return measured
     use_per_circle(s, per_circle)
     failed = attempt_again([s], delaunay)[s]
-    other = None if failed else deficit(gmsh_surface_areas([s]).get(s, 0.0))
+    other = None if failed else deficit(unfolded_areas([s]).get(s, 0.0))
     if other is not None and abs(other) < abs(measured):
         outcomes[s] = FaceOutcome(face=outcomes[s].face, surface=s, strategy=delaunay.name,
                                   triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))

@@ -4,8 +4,9 @@ A folded triangle overlaps its neighbours: the mesh is no longer a surface a sol
 area counts twice, so a face's area deficit looks smaller than it is. The face optimiser's moves checked
 each step only against the triangles' normals just before it, and small turns added up: on the thin
 blades' rounded edges (twisted_blade and sharp_blade at 1e-2) edge swaps and the local search folded
-1 to 3 triangles per model, and twisted_blade's blade face read 8.4e-3 where, unfolded, it is 1.01e-2.
-The moves now refuse a fold (:mod:`cadedge.mesh.moves`), and the mesh's faces are checked for folds
+1 to 3 triangles per model, and twisted_blade's blade face read 8.4e-3 where, unfolded, it is 1.03e-2.
+The moves now refuse a fold (:mod:`cadedge.mesh.moves`), the surface target measures faces once
+unfolded (:func:`cadedge.mesh.fidelity.unfolded_areas`), and the mesh's faces are checked for folds
 after meshing (:func:`count_folded`, in the report).
 
 A triangle is folded when its normal points against the sum of the surface's unit normals at its three

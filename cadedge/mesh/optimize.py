@@ -180,6 +180,13 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
     return _Face(x, tri, movable, uv, moved, up)
 
 
+def _start(surface: int, mesh) -> _Face:
+    """The :class:`_Face` of gmsh surface ``surface`` as gmsh holds it (``mesh``, its
+    :class:`~cadedge.mesh.facemesh.FaceMesh`), no node moved yet."""
+    return _Face(mesh.x, mesh.tri, mesh.movable, mesh.uv, np.zeros(len(mesh.tags), dtype=bool),
+                 surface_normals(surface, mesh.x, mesh.uv))
+
+
 def _unfold(face: _Face, project: Projector) -> _Face:
     """``face`` with its folded triangles (:mod:`cadedge.mesh.folds`) unfolded where moving its interior
     nodes can (:func:`~cadedge.mesh.moves.untangle_nodes`), or ``face`` itself if none is folded or none
@@ -216,16 +223,13 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     (``time.process_time()``). Returns whether the face's mesh changed."""
     import time
 
-    import gmsh
-
-    from .facemesh import read_face, write_interior
+    from .facemesh import read_face
 
     mesh = read_face(surface)
     if mesh is None:
         return False
-    x0, tri0, tags, fixed = mesh.x, mesh.tri, mesh.tags, mesh.fixed
-    start = _Face(x0, tri0, mesh.movable, mesh.uv, np.zeros(len(tags), dtype=bool),
-                  surface_normals(surface, x0, mesh.uv))
+    x0, tri0, fixed = mesh.x, mesh.tri, mesh.fixed
+    start = _start(surface, mesh)
     project = Projector(surface)
 
     def late() -> bool:
@@ -257,21 +261,44 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
                 best = more
         if best is before:
             break
-    if best is start:
-        return False
-    x, tri, movable, uv, moved = best.x, best.tri, best.movable, best.uv, best.moved
-    if len(tri) != len(tri0) or len(x) != len(tags):  # nodes removed or added: the interior written anew
+    return best is not start and _write(surface, mesh, best)
+
+
+def _write(surface: int, mesh, face: _Face) -> bool:
+    """Hand ``face`` (improved from ``mesh``, the surface's :class:`~cadedge.mesh.facemesh.FaceMesh`) back
+    to gmsh: the moved nodes, or the whole interior if nodes were removed or added. Returns whether
+    anything changed."""
+    import gmsh
+
+    from .facemesh import write_interior
+
+    x, tri, movable, uv, moved = face.x, face.tri, face.movable, face.uv, face.moved
+    tags = mesh.tags
+    if len(tri) != len(mesh.tri) or len(x) != len(tags):  # nodes removed or added: the interior written anew
         write_interior(surface, mesh, x, tri, movable, uv)
         return True
     changed = False
     for i in np.flatnonzero(moved & movable).tolist():
         gmsh.model.mesh.setNode(int(tags[i]), x[i].tolist(), uv[i].tolist())
         changed = True
-    if not np.array_equal(tri, tri0):
+    if not np.array_equal(tri, mesh.tri):
         gmsh.model.mesh.removeElements(2, surface)
         gmsh.model.mesh.addElementsByType(surface, 2, mesh.el_tags.tolist(), tags[tri].ravel().tolist())
         changed = True
     return changed
+
+
+def unfold_face(surface: int) -> bool:
+    """Unfold the folded triangles of one meshed gmsh surface (:func:`_unfold`), before its area is
+    measured (:func:`cadedge.mesh.fidelity.unfolded_areas`). Returns whether a node moved."""
+    from .facemesh import read_face
+
+    mesh = read_face(surface)
+    if mesh is None:
+        return False
+    start = _start(surface, mesh)
+    base = _unfold(start, Projector(surface))
+    return base is not start and _write(surface, mesh, base)
 
 
 def _face_min_angle(surface: int) -> float:
