@@ -391,3 +391,28 @@ def test_a_blade_face_meshed_by_delaunay_keeps_its_mesh_through_the_optimiser(tm
     assert face3.strategy == "Delaunay"
     deficits = _independent_deficits(result)
     assert abs(deficits[2]) <= 1e-2 and np.all(np.abs(deficits) <= 2e-2), deficits
+    assert result.report.folded == 0  # 3 folded triangles before the moves refused to fold one
+
+
+def test_a_twisted_blade_is_left_with_no_folded_triangle_and_its_honest_deficit(tmp_path):
+    """twisted_blade of ``scripts/hard_models.py`` at 1e-2: gmsh's Delaunay mesh of its blade face folds a
+    triangle, whose area counted twice: the face read 8.4e-3, within the target, and stayed so meshed.
+    Measured once unfolded it is over, meshed finer, and named with what it reaches."""
+    import sys
+
+    from conftest import ROOT
+
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        import hard_models
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    hard_models.write_model("twisted_blade", tmp_path)
+    result = mesh_shape(tmp_path / "twisted_blade.step", ald=1e-2)
+    assert result.ok, result.problems()
+    assert result.report.folded == 0
+    deficits = _independent_deficits(result)
+    for face in result.report.faces:
+        assert face.area_deficit == pytest.approx(deficits[face.face - 1], abs=1e-9)
+        assert abs(face.area_deficit) <= 1e-2 or face.reason == "size floor"
+    assert np.all(np.abs(deficits) <= 2e-2), deficits
