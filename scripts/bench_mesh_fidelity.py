@@ -270,8 +270,10 @@ def main() -> int:
                 continue
             if args.cadedge_only:
                 over = [f.face for f in result.report.over_target] if result.report else []
+                folded = result.report.folded if result.report else 0
                 print(f"| {path.name} | {eps:g} | {_cell(ours)} | forced < 5 deg: {ours['forced']}, faces over "
-                      f"target: {over or 'none'}, left out: {ours['stuck'] or 'none'} |", flush=True)
+                      f"target: {over or 'none'}, left out: {ours['stuck'] or 'none'}, folded: {folded} |",
+                      flush=True)
                 continue
             ours["left_out"] = len(ours["stuck"])
             keys = face_keys(shape, areas, ours["stuck"])
