@@ -12,7 +12,7 @@ import numpy as np
 from scipy import sparse
 
 from .. import kernels
-from .folds import folded
+from .folds import folded, reference_normals
 from .quality import cross, min_angles
 
 #: Smoothing iterations per pass.
@@ -25,15 +25,21 @@ CLIMB_BELOW = 45.0
 STEPS = (0.03, 0.1, 0.25)
 #: Edge-swap rounds per face and pass.
 FLIP_ROUNDS = 10
-#: An edge swap must keep each new triangle's normal within this many degrees of both old triangles'
-#: normals. Where two triangles bend sharply across their shared edge (a thin blade's rounded edge, the
-#: surface turning nearly 180 degrees within a triangle or two) the diagonal carries the shape: swapping
-#: it folded triangles against the surface (sharp_blade at 1e-2: up to 10 on a face, 3 left in the final
-#: mesh), which the test before (against the sum of the old normals) could not tell. A mesh at ALD 1e-2
-#: bends about 28 degrees between neighbours on a curved face.
+#: An edge swap must keep each new triangle's normal within this many degrees of its nodes' surface
+#: normals, or, across a ridge (where those disagree), of both old triangles' normals (see
+#: :func:`_swap_keeps_shape`). Where two triangles bend sharply across their shared edge (a thin blade's
+#: rounded edge, the surface turning nearly 180 degrees within a triangle or two) the diagonal carries
+#: the shape: swapping it folded triangles against the surface (sharp_blade at 1e-2: up to 10 on a face,
+#: 3 left in the final mesh), which the test against the sum of the old normals could not tell. A mesh
+#: at ALD 1e-2 bends about 28 degrees between neighbours on a curved face.
 FLIP_TURN = 45.0
 #: Rounds of :func:`untangle_nodes`; each moves at most one node per neighbourhood.
 UNTANGLE_ROUNDS = 8
+#: An unfolding move may leave the node's triangles no worse than their smallest angle before it or this
+#: many degrees, the smaller: near a boundary that lies off its surface (LLNL boxed_sphere's cylinders,
+#: edges up to 0.027 off) folds come from the boundary nodes, no interior move undoes them, and moves
+#: taken for fewer folds alone left 0.2-degree slivers (27.7 degrees before, at 1e-3).
+UNTANGLE_KEEP = 20.0
 #: Rounds of undoing moves that made a triangle worse than before the pass (its nodes' neighbours moved
 #: too), after which the pass is undone as a whole.
 _UNDO_ROUNDS = 8
@@ -150,23 +156,41 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=1), 1e-300)[:, None]
 
 
-def _within_turn(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray]) -> np.ndarray:
-    """Whether every ``new`` triangle's normal is within :data:`FLIP_TURN` degrees of every ``old`` one's."""
+def _swap_keeps_shape(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray],
+                      up: np.ndarray | None) -> np.ndarray:
+    """Whether swapping the diagonal of the triangle pairs ``old`` into ``new`` keeps the surface's shape.
+
+    With the nodes' oriented surface normals ``up`` (:mod:`cadedge.mesh.folds`): each new triangle's
+    normal within :data:`FLIP_TURN` degrees of its nodes' normals, where those agree; where they do not
+    (across a ridge), within :data:`FLIP_TURN` of both old triangles' normals. Without ``up``, the new
+    triangles turn less than 90 degrees from the sum of the old ones' normals (a sliver's normal can
+    point anywhere about its long edge, so only a face with trusted normals gets the stricter test)."""
+    normals_new = [_normals(x, b) for b in new]
+    if up is None:
+        ref = _normals(x, old[0]) + _normals(x, old[1])
+        return (np.einsum("ij,ij->i", normals_new[0], ref) > 0) & (np.einsum("ij,ij->i", normals_new[1], ref) > 0)
     cos = np.cos(np.radians(FLIP_TURN))
-    ok = np.ones(len(old[0]), dtype=bool)
+    bend = np.ones(len(old[0]), dtype=bool)
     for a in old:
         na = _unit(_normals(x, a))
-        for b in new:
-            ok &= np.einsum("ij,ij->i", na, _unit(_normals(x, b))) > cos
-    return ok
+        for nb in normals_new:
+            bend &= np.einsum("ij,ij->i", na, _unit(nb)) > cos
+    ok = np.ones(len(old[0]), dtype=bool)
+    ridge = np.zeros(len(old[0]), dtype=bool)
+    for b, nb in zip(new, normals_new):
+        ref = reference_normals(up, b)
+        known = np.any(ref != 0.0, axis=1)
+        ok &= ~known | (np.einsum("ij,ij->i", _unit(nb), _unit(ref)) > cos)
+        ridge |= ~known
+    return ok & (~ridge | bend)
 
 
 def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
-               rounds: int = FLIP_ROUNDS) -> np.ndarray:
+               rounds: int = FLIP_ROUNDS, up: np.ndarray | None = None) -> np.ndarray:
     """Swap the diagonal of pairs of triangles wherever that raises the smaller of their two smallest
     angles; edges in ``fixed`` (sorted node-index pairs: the curve segments) are never swapped, nor an edge
-    whose new triangles would turn more than :data:`FLIP_TURN` degrees from the old ones or whose new
-    diagonal is already an edge. Each round swaps, for every triangle, at most its
+    whose new triangles would not keep the surface's shape (:func:`_swap_keeps_shape`, with the nodes'
+    oriented surface normals ``up`` if given) or whose new diagonal is already an edge. Each round swaps, for every triangle, at most its
     best edge. Returns the new triangles (same count and orientation)."""
     tri = np.array(tri, dtype=np.int64)
     fixed_keys = np.array(sorted(a * (len(x) + 1) + b for a, b in fixed), dtype=np.int64)
@@ -192,7 +216,7 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
         new2 = np.column_stack([pd, pb, pc])
         before = np.minimum(min_angles(x, tri[t1]), min_angles(x, tri[t2]))
         after = np.minimum(min_angles(x, new1), min_angles(x, new2))
-        ok = _within_turn(x, [tri[t1], tri[t2]], [new1, new2])
+        ok = _swap_keeps_shape(x, [tri[t1], tri[t2]], [new1, new2], up)
         new_key = np.minimum(pc, pd) * (len(x) + 1) + np.maximum(pc, pd)
         ok &= ~np.isin(new_key, ks)  # the new diagonal already joins c and d (a fan at an apex): a flip would
         # stack a second pair of triangles on the existing ones
@@ -304,8 +328,8 @@ def untangle_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
                    rounds: int = UNTANGLE_ROUNDS) -> tuple[np.ndarray, np.ndarray | None]:
     """Move movable nodes of folded triangles (facing against ``ref``, see :mod:`cadedge.mesh.folds`) to
     the mean of their neighbours, projected onto the surface, where that leaves fewer folded triangles
-    around them: gmsh folded one of twisted_blade's blade-face triangles at 1e-2, a node beyond the ring
-    of its neighbours. Nodes moved in one round share no triangle (the node with most folded triangles
+    around them and keeps their angles (:data:`UNTANGLE_KEEP`): gmsh folded one of twisted_blade's
+    blade-face triangles at 1e-2, a node beyond the ring of its neighbours. Nodes moved in one round share no triangle (the node with most folded triangles
     first), so each move is judged exactly; a node refused is tried again once a neighbour moved.
     Returns the coordinates and the parametric coordinates of the movable nodes as :func:`smooth_nodes`
     does."""
@@ -334,7 +358,9 @@ def untangle_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
         trial = x.copy()
         trial[nodes] = px
         after = np.bincount(tri[folded(trial, tri, ref)].ravel(), minlength=n)
-        ok = after[nodes] < count[nodes]
+        worst = _node_min(min_angles(trial, tri), tri, n)
+        ok = (after[nodes] < count[nodes]) & (worst[nodes] >= np.minimum(_node_min(min_angles(x, tri), tri, n)[nodes],
+                                                                          UNTANGLE_KEEP))
         refused[nodes[~ok]] = True
         moved = nodes[ok]
         if not len(moved):
