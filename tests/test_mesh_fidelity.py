@@ -156,6 +156,12 @@ def test_a_gapped_box_meshes_to_its_closed_face_areas_and_names_its_tolerances(g
     assert {f.reason for f in rep.over_target} == {"tolerances"}
     rep = build_report(result.nodes, result.triangles, result.triangle_faces,
                        brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
+                       surface_ald=1e-9, tolerances=bands, folded={2: 3, 5: 1})
+    assert rep.folded == 4 and [f.folded for f in rep.faces] == [0, 3, 0, 0, 1, 0]
+    (line,) = [line for line in rep.lines() if "folded" in line]
+    assert line.startswith("  4 triangles folded") and "[2, 5]; 4 of them on faces named above" in line
+    rep = build_report(result.nodes, result.triangles, result.triangle_faces,
+                       brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
                        surface_ald=1e-9)
     assert not any("tolerances allow" in f.note for f in rep.over_target)
     assert {f.reason for f in rep.over_target} == {"planar"}  # a box: every face a plane

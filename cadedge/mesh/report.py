@@ -104,9 +104,12 @@ class MeshReport:
         for s in {s.face: s for s in reversed(forced)}.values():
             out.append(f"  face {s.face}: {s.angle:.2g} deg forced: {s.reason}")
         if self.folded:
+            loose = sum(f.folded for f in self.faces if f.reason in ("tolerances", "not converging"))
             out.append(f"  {self.folded} triangles folded against their surface (they overlap their neighbours, "
                        "and their faces' area deficits read smaller by the overlap) on faces "
-                       f"{[f.face for f in self.faces if f.folded][:10]}")
+                       f"{[f.face for f in self.faces if f.folded][:10]}"
+                       + (f"; {loose} of them on faces named above for their edges' tolerances or as not "
+                          "converging (their boundary or surface is not the B-rep's)" if loose else ""))
         return out
 
     def to_dict(self) -> dict:
