@@ -198,7 +198,7 @@ def _start(surface: int, mesh) -> _Face:
     """The :class:`_Face` of gmsh surface ``surface`` as gmsh holds it (``mesh``, its
     :class:`~cadedge.mesh.facemesh.FaceMesh`), no node moved yet; its nodes' surface normals left out
     (no fold guarded against or undone) where more than :data:`FOLD_TRUST` of its triangles are folded."""
-    up = surface_normals(surface, mesh.x, mesh.uv)
+    up = surface_normals(surface, mesh.x, mesh.uv, mesh.tags)
     if folded(mesh.x, mesh.tri, reference_normals(up, mesh.tri, orientation(up, mesh.tri, mesh.x))).mean() > FOLD_TRUST:
         up = None
     return _Face(mesh.x, mesh.tri, mesh.movable, mesh.uv, np.zeros(len(mesh.tags), dtype=bool), up)
