@@ -51,7 +51,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from cadedge.errors import CadedgeError  # noqa: E402
-from cadedge.mesh.fidelity import brep_face_areas, triangle_areas  # noqa: E402
+from cadedge.mesh.areas import triangle_areas  # noqa: E402
+from cadedge.mesh.fidelity import brep_face_areas  # noqa: E402
 from cadedge.mesh.quality import GOOD_DEG, triangle_angles  # noqa: E402
 from cadedge.mesh.report import AFTER_MESH_HOOK  # noqa: E402
 

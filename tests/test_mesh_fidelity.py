@@ -225,7 +225,7 @@ def test_cli_surface_ald_and_report(tmp_path, capsys):
 def test_planar_boundary_polygon_area_is_the_meshed_area():
     """A planar face's triangles cover exactly its boundary polygon (holes subtracted): the area known
     before meshing is the area measured after."""
-    from cadedge.mesh.fidelity import face_mesh_areas
+    from cadedge.mesh.areas import face_mesh_areas
     from cadedge.mesh.planar import planar_polygon_areas
 
     result = mesh_shape(FIXTURES / "bracket.step", ald=1e-2)

@@ -9,7 +9,7 @@ gmsh = pytest.importorskip("gmsh")
 cq = pytest.importorskip("cadquery")
 
 from cadedge.mesh import interior, mesh_shape  # noqa: E402
-from cadedge.mesh.fidelity import triangle_areas  # noqa: E402
+from cadedge.mesh.areas import triangle_areas  # noqa: E402
 from cadedge.mesh.gmsh_model import gmsh_session  # noqa: E402
 
 #: A truncated cone of radii 2 and 20 over a height of 30: its curvature cos(a) / r varies tenfold along

@@ -32,7 +32,7 @@ def coarsen(ctx, *, level: float, deficit, per_circle: dict[int, float],
     kept a coarser mesh."""
     import gmsh
 
-    from .fidelity import unfolded_areas
+    from .areas import unfolded_areas
     from .remesh import job_groups, remesh_group
 
     face_of = ctx.emap.face_of_surface

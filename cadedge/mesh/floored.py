@@ -29,7 +29,7 @@ def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
     import gmsh
 
     from .facemesh import read_face, write_interior
-    from .fidelity import unfolded_areas
+    from .areas import unfolded_areas
     from .generate import STRATEGIES, FaceOutcome
     from .interior import use_per_circle
     from .remesh import attempt_again

@@ -6,7 +6,7 @@ each step only against the triangles' normals just before it, and small turns ad
 blades' rounded edges (twisted_blade and sharp_blade at 1e-2) edge swaps and the local search folded
 1 to 3 triangles per model, and twisted_blade's blade face read 8.4e-3 where, unfolded, it is 1.03e-2.
 The moves now refuse a fold (:mod:`cadedge.mesh.moves`), the surface target measures faces once
-unfolded (:func:`cadedge.mesh.fidelity.unfolded_areas`), and the mesh's faces are checked for folds
+unfolded (:func:`cadedge.mesh.areas.unfolded_areas`), and the mesh's faces are checked for folds
 after meshing (:func:`count_folded`, in the report).
 
 A triangle is folded when its normal points against the sum of the surface's unit normals at its three

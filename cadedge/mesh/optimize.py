@@ -309,7 +309,7 @@ def _write(surface: int, mesh, face: _Face) -> bool:
 
 def unfold_face(surface: int) -> bool:
     """Unfold the folded triangles of one meshed gmsh surface (:func:`_unfold`), before its area is
-    measured (:func:`cadedge.mesh.fidelity.unfolded_areas`). Returns whether a node moved."""
+    measured (:func:`cadedge.mesh.areas.unfolded_areas`). Returns whether a node moved."""
     from .facemesh import read_face
 
     mesh = read_face(surface)

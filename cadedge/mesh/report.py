@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
-from .fidelity import area_deficits, face_mesh_areas
+from .areas import area_deficits, face_mesh_areas
 from .interior import SPREAD
 from .quality import GOOD_DEG, SLIVER_DEG, SmallAngle, small_angles, triangle_angles
 
