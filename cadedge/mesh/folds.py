@@ -5,8 +5,9 @@ area counts twice, so a face's area deficit looks smaller than it is. The face o
 each step only against the triangles' normals just before it, and small turns added up: on the thin
 blades' rounded edges (twisted_blade and sharp_blade at 1e-2) edge swaps and the local search folded
 1 to 3 triangles per model, and twisted_blade's blade face read 8.4e-3 where, unfolded, it is 1.03e-2.
-The moves now refuse a fold (:mod:`cadedge.mesh.moves`), the surface target measures faces once
-unfolded (:func:`cadedge.mesh.areas.unfolded_areas`), and the mesh's faces are checked for folds
+The moves now refuse a fold and the optimiser undoes gmsh's on faces where folds are few
+(:mod:`cadedge.mesh.moves`, :data:`cadedge.mesh.optimize.FOLD_TRUST`), the surface target measures
+faces once unfolded (:func:`cadedge.mesh.areas.unfolded_areas`), and every face's folds are counted
 after meshing (:func:`count_folded`, in the report).
 
 A triangle is folded when its normal points against the sum of the surface's unit normals at its three
