@@ -374,12 +374,8 @@ def test_a_blade_with_a_sharp_edge_is_meshed_within_the_target(tmp_path):
     assert result.report.min_angle >= 20.0
 
 
-def test_a_blade_face_meshed_by_delaunay_keeps_its_mesh_through_the_optimiser(tmp_path):
-    """sharp_blade of ``scripts/hard_models.py`` at 1e-2: its face 3, held at a size floor, is 2.6e-2
-    short as Frontal-Delaunay meshes it and 4.4e-3 as Delaunay does. Written back by the face optimiser
-    under tags of its own choosing, a face's nodes once shared tags with nodes gmsh later made for another
-    face; a triangle of face 3 then held a node of a face meshed again (a dangling one), the face was found
-    broken, meshed anew by Frontal-Delaunay and left at 2.6e-2."""
+def _hard_model(name: str, folder):
+    """``scripts/hard_models.py``'s model ``name`` written as STEP into ``folder``; its path."""
     import sys
 
     from conftest import ROOT
@@ -389,8 +385,17 @@ def test_a_blade_face_meshed_by_delaunay_keeps_its_mesh_through_the_optimiser(tm
         import hard_models
     finally:
         sys.path.remove(str(ROOT / "scripts"))
-    hard_models.write_model("sharp_blade", tmp_path)
-    result = mesh_shape(tmp_path / "sharp_blade.step", ald=1e-2)
+    hard_models.write_model(name, folder)
+    return folder / f"{name}.step"
+
+
+def test_a_blade_face_meshed_by_delaunay_keeps_its_mesh_through_the_optimiser(tmp_path):
+    """sharp_blade of ``scripts/hard_models.py`` at 1e-2: its face 3, held at a size floor, is 2.6e-2
+    short as Frontal-Delaunay meshes it and 4.4e-3 as Delaunay does. Written back by the face optimiser
+    under tags of its own choosing, a face's nodes once shared tags with nodes gmsh later made for another
+    face; a triangle of face 3 then held a node of a face meshed again (a dangling one), the face was found
+    broken, meshed anew by Frontal-Delaunay and left at 2.6e-2."""
+    result = mesh_shape(_hard_model("sharp_blade", tmp_path), ald=1e-2)
     assert result.ok, result.problems()
     assert not [n for n in result.notes if "meshed again" in n], result.notes
     face3 = next(o for o in result.faces if o.face == 3)
@@ -404,17 +409,7 @@ def test_a_twisted_blade_is_left_with_no_folded_triangle_and_its_honest_deficit(
     """twisted_blade of ``scripts/hard_models.py`` at 1e-2: gmsh's Delaunay mesh of its blade face folds a
     triangle, whose area counted twice: the face read 8.4e-3, within the target, and stayed so meshed.
     Measured once unfolded it is over, meshed finer, and named with what it reaches."""
-    import sys
-
-    from conftest import ROOT
-
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        import hard_models
-    finally:
-        sys.path.remove(str(ROOT / "scripts"))
-    hard_models.write_model("twisted_blade", tmp_path)
-    result = mesh_shape(tmp_path / "twisted_blade.step", ald=1e-2)
+    result = mesh_shape(_hard_model("twisted_blade", tmp_path), ald=1e-2)
     assert result.ok, result.problems()
     assert result.report.folded == 0
     deficits = _independent_deficits(result)
