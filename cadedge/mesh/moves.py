@@ -12,7 +12,7 @@ import numpy as np
 from scipy import sparse
 
 from .. import kernels
-from .folds import folded, reference_normals
+from .folds import _normals, folded, reference_normals
 from .quality import cross, min_angles
 
 #: Smoothing iterations per pass.
@@ -43,11 +43,6 @@ UNTANGLE_KEEP = 20.0
 #: Rounds of undoing moves that made a triangle worse than before the pass (its nodes' neighbours moved
 #: too), after which the pass is undone as a whole.
 _UNDO_ROUNDS = 8
-
-
-def _normals(x: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    p = x[tri]
-    return cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
 
 
 def _group_min(values: np.ndarray, keys: np.ndarray, n: int) -> np.ndarray:

@@ -41,8 +41,8 @@ import numpy as np
 
 from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
-from .folds import folded, orientation, reference_normals, surface_normals
-from .moves import CLIMB_BELOW, _near_bad, _normals, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
+from .folds import _normals, folded, orientation, reference_normals, surface_normals
+from .moves import CLIMB_BELOW, _near_bad, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
 from .project import Projector
 from .quality import min_angles
 
