@@ -82,7 +82,7 @@ Py_ssize_t ck_place(const double *params, const double *cum, const double *measu
 int ck_de_boor(const double *knots, Py_ssize_t nk, const double *coef, Py_ssize_t n, Py_ssize_t dim,
                const double *u, Py_ssize_t nu, double *out, long degree);
 
-/* cadedge/_batch.c's, cadedge/_lengths.c's and cadedge/_shapedump.c's functions, registered by cadedge/_kernels.c's
+/* cadedge/_batch.c's, cadedge/_lengths.c's, cadedge/_shapedump.c's, cadedge/_angles.c's and cadedge/_idw.c's functions, registered by cadedge/_kernels.c's
  * module. */
 PyObject *ck_evaluate_edges(PyObject *self, PyObject *args);
 PyObject *ck_refine_edges(PyObject *self, PyObject *args);
@@ -91,5 +91,7 @@ PyObject *ck_parse_shapes(PyObject *self, PyObject *args);
 PyObject *ck_edge_lengths(PyObject *self, PyObject *args);
 PyObject *ck_min_angles(PyObject *self, PyObject *args);
 PyObject *ck_incident_min(PyObject *self, PyObject *args);
+PyObject *ck_tri_normals(PyObject *self, PyObject *args);
+PyObject *ck_idw_size(PyObject *self, PyObject *args);
 
 #endif

@@ -1,5 +1,5 @@
 """numpy-facing wrappers of the compiled inner loops (``cadedge/_kernels.c``, ``_batch.c``, ``_bintools.c``,
-``_shapedump.c``, ``_lengths.c``, ``_angles.c``).
+``_shapedump.c``, ``_lengths.c``, ``_angles.c``, ``_idw.c``).
 
 A refine runs these loops a few times per edge on short arrays, where numpy's per-call overhead
 dominated; :func:`refine_edges` runs the whole target mode of many edges in one call. They are plain C
@@ -145,6 +145,22 @@ def min_angles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     out = np.empty(len(tri))
     _kernels.min_angles(_f64(nodes).reshape(-1, 3), tri, out)
     return out
+
+
+def tri_normals(x: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Each triangle's normal ``(b - a) x (c - a)`` (m, 3), twice its area in length (rows of node indices
+    ``tri`` into ``x`` (n, 3))."""
+    tri = np.ascontiguousarray(tri, dtype=np.int64).reshape(-1, 3)
+    out = np.empty((len(tri), 3))
+    _kernels.tri_normals(_f64(x).reshape(-1, 3), tri, out)
+    return out
+
+
+def idw_size(points: np.ndarray, sizes: np.ndarray, x: float, y: float, z: float, k: int) -> float:
+    """The sizes of the ``k`` points nearest to ``(x, y, z)`` averaged with weights ``1 / (distance +
+    1e-12)``; ``points`` (m, 3) and ``sizes`` (m,) C-contiguous float64 (gmsh's size callback calls this
+    once per point: no conversion here)."""
+    return _kernels.idw_size(points, sizes, x, y, z, k)
 
 
 def incident_min(x: np.ndarray, tri: np.ndarray, node: np.ndarray, slot: np.ndarray, t: np.ndarray,

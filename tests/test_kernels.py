@@ -1,4 +1,4 @@
-"""The compiled kernels (cadedge/_kernels.c, _angles.c) against the numpy/scipy definitions they replace
+"""The compiled kernels (cadedge/_kernels.c, _angles.c, _idw.c) against the numpy/scipy definitions they replace
 (exact or to rounding)."""
 
 import numpy as np
@@ -119,3 +119,40 @@ def test_incident_min_is_each_nodes_worst_triangle_with_it_moved():
     assert np.allclose(got[np.isfinite(want)], want[np.isfinite(want)], rtol=0, atol=1e-12)
     with pytest.raises(IndexError):
         incident_min(x, tri, node, slot + 1, t, pos)
+
+
+def test_tri_normals_is_numpys_cross_product_of_two_edges():
+    """The optimiser's compiled triangle normals: ``(b - a) x (c - a)`` as numpy computes it, twice the
+    triangle's area long, zero for a degenerate one; an index past the nodes is refused."""
+    from cadedge.kernels import tri_normals
+
+    rng = np.random.default_rng(3)
+    x = np.vstack([rng.uniform(-1, 1, (50, 3)), [[0, 0, 0], [2, 0, 0], [0, 3, 0]]])
+    tri = np.vstack([rng.integers(0, 50, (120, 3)), [[50, 51, 52], [50, 51, 51]]])
+    p = x[tri]
+    assert np.array_equal(tri_normals(x, tri), np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]))
+    assert tri_normals(x, tri)[-2].tolist() == [0.0, 0.0, 6.0] and not tri_normals(x, tri)[-1].any()
+    assert tri_normals(x, np.zeros((0, 3), dtype=np.int64)).shape == (0, 3)
+    with pytest.raises(IndexError):
+        tri_normals(x, [[0, 1, len(x)]])
+
+
+def test_idw_size_is_the_inverse_distance_mean_of_the_nearest_samples():
+    """gmsh's size callback's compiled lookup against scipy's k-d tree and numpy's weighted mean, to the
+    bit (the nearest summed first); at a sample the sample's own size; bad shapes refused."""
+    from scipy.spatial import cKDTree
+
+    from cadedge.kernels import idw_size
+
+    rng = np.random.default_rng(11)
+    pts, sizes = rng.random((300, 3)), rng.random(300)
+    tree = cKDTree(pts)
+    for q in rng.uniform(-0.2, 1.2, (200, 3)):
+        d, i = tree.query(q, k=4)
+        w = 1.0 / (d + 1e-12)
+        assert idw_size(pts, sizes, *q, 4) == float(np.dot(w, sizes[i]) / w.sum())
+    assert idw_size(pts, sizes, *pts[7], 4) == pytest.approx(sizes[7], rel=1e-9)
+    with pytest.raises(ValueError):
+        idw_size(pts, sizes[:-1], 0.0, 0.0, 0.0, 4)
+    with pytest.raises(ValueError):
+        idw_size(pts[:3], sizes[:3], 0.0, 0.0, 0.0, 4)

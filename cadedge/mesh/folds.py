@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .quality import cross
+from ..kernels import tri_normals
 
 #: A triangle's reference direction (the sum of its nodes' unit surface normals) is trusted only when it
 #: is at least this long, the nodes' normals agreeing to within about 80 degrees.
@@ -27,8 +27,7 @@ AGREE = 1.5
 
 
 def _normals(x: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    p = x[tri]
-    return cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    return tri_normals(x, tri)
 
 
 def orientation(up: np.ndarray, tri: np.ndarray, x: np.ndarray) -> float:

@@ -42,7 +42,7 @@ import numpy as np
 from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
 from .folds import _normals, folded, orientation, reference_normals, surface_normals
-from .moves import CLIMB_BELOW, _near_bad, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
+from .moves import CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
 from .project import Projector
 from .quality import min_angles
 
@@ -185,11 +185,18 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         if not active.any():
             break
         rows = np.flatnonzero(active)
-        ref = None if up is None else reference_normals(up, tri, sign)
+        nodes, part, which = around(tri, active)  # the moves run on the part of the face they can change
+        ref = None if up is None else reference_normals(up, tri[which], sign)
+
+        def project_part(points: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return project(points, nodes[at])
+
         for mover in (smooth_nodes, climb_nodes):
             if late():
                 break
-            x, params = mover(x, tri, active, project, ref=ref)
+            moved_x, params = mover(x[nodes], part, active[nodes], project_part, ref=ref)
+            x = x.copy()
+            x[nodes] = moved_x
             took(params, rows)
     return _Face(x, tri, movable, uv, moved, up)
 
