@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .folds import reference_normals
+from .folds import NodeNormals, reference_normals
 from .quality import cross, min_angles
 
 #: Edges of triangles whose smallest angle is under this many degrees are tried (42 lifted two_solids'
@@ -48,12 +48,23 @@ def _trial_min(x: np.ndarray, new: np.ndarray, a: int, pos: np.ndarray) -> float
     return float(min_angles(p.reshape(-1, 3), np.arange(3 * len(new)).reshape(-1, 3)).min())
 
 
+def _folds(normals: NodeNormals, new: np.ndarray, a: int, params: np.ndarray, new_normals: np.ndarray) -> bool:
+    """Whether a triangle of ``new`` (its normals ``new_normals``) folds against the surface with node
+    ``a`` at parameters ``params``."""
+    kept = normals.up[a].copy()
+    normals.up[a] = normals.at(params[None])[0]
+    try:
+        return bool(np.any(np.einsum("ij,ij->i", new_normals, reference_normals(normals.up, new)) < 0))
+    finally:
+        normals.up[a] = kept
+
+
 def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
                    below: float = COLLAPSE_BELOW,
-                   up: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                   normals: NodeNormals | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Collapse interior edges of triangles under ``below`` degrees where that raises the smallest angle
-    around them (see the module doc); ``up``: the nodes' :func:`~cadedge.mesh.folds.oriented` surface
-    normals, against which no new triangle may fold.
+    around them (see the module doc); ``normals``: the nodes' oriented surface normals, against which
+    no new triangle may fold (the merged node's taken at its new position; updated as nodes merge).
 
     ``project(points (k, 3), rows (k,))`` returns the points (near nodes ``rows``) moved onto the surface
     and their parametric coordinates (k, d). Returns ``(x, tri, removed, params)``: the coordinates (rows of removed nodes unchanged, no
@@ -123,8 +134,8 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
                 p[new == a] = pos
                 if np.any(np.einsum("ij,ij->i", _normal(p), normals0) <= 0):
                     continue
-                if up is not None and np.any(np.einsum("ij,ij->i", _normal(p), reference_normals(up, new)) < 0):
-                    continue  # folded against the surface
+                if normals is not None and _folds(normals, new, a, puv, _normal(p)):
+                    continue
                 q = _trial_min(x, new, a, pos)
                 if q > old_min + MIN_GAIN and (best is None or q > best[0]):
                     best = (q, a, b, pos, puv, ring, keep, new, gone)
@@ -133,6 +144,8 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
         _, a, b, pos, puv, ring, keep, new, gone = best
         ring = np.asarray(ring)
         x[a] = pos
+        if normals is not None:
+            normals.up[a] = normals.at(puv[None])[0]
         tri[ring[keep]] = new
         alive[list(gone)] = False
         removed[b] = True

@@ -17,6 +17,9 @@ nearly 180 degrees within it) its direction is not judged.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..kernels import tri_normals
@@ -47,6 +50,25 @@ def reference_normals(up: np.ndarray, tri: np.ndarray, sign: float = 1.0) -> np.
 def folded(x: np.ndarray, tri: np.ndarray, ref: np.ndarray) -> np.ndarray:
     """Which triangles face against their reference direction ``ref`` (:func:`reference_normals`)."""
     return np.einsum("ij,ij->i", _normals(x, tri), ref) < 0
+
+
+@dataclass
+class NodeNormals:
+    """The oriented unit surface normals ``up`` (n, 3; zero rows where unknown) at a face's nodes, and
+    ``at(params)``: those at surface parameters (k, 2), oriented alike. A move is judged against the
+    normals at its nodes' new positions: a node moved across a ridge turns its normal, and a triangle
+    across the ridge, not judged before the move (its nodes' normals disagreeing), may be judged and
+    folded after it (the propeller at 1e-3: one triangle of a blade face, left folded)."""
+
+    up: np.ndarray
+    at: Callable[[np.ndarray], np.ndarray]
+
+    def moved(self, rows: np.ndarray, params: np.ndarray) -> np.ndarray:
+        """``up`` with the nodes ``rows`` at parameters ``params`` (a new array)."""
+        out = self.up.copy()
+        if len(rows):
+            out[rows] = self.at(params)
+        return out
 
 
 def surface_normals(surface: int, x: np.ndarray, uv: np.ndarray, tags: np.ndarray | None = None) -> np.ndarray:

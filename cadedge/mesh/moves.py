@@ -12,7 +12,7 @@ import numpy as np
 from scipy import sparse
 
 from .. import kernels
-from .folds import _normals, folded, reference_normals
+from .folds import NodeNormals, _normals, folded, reference_normals
 from .quality import cross, min_angles
 
 #: Smoothing iterations per pass.
@@ -85,26 +85,28 @@ def _rows(movable: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mov_idx, where
 
 
-def _turned(new: np.ndarray, old: np.ndarray, ref: np.ndarray | None) -> np.ndarray:
+def _turned(new: np.ndarray, old: np.ndarray, ref_new: np.ndarray | None = None,
+            ref_old: np.ndarray | None = None) -> np.ndarray:
     """Triangles whose normals ``new`` (after a move) point against ``old`` (before it) or, given their
-    reference directions ``ref`` (the surface's normal, see
+    reference directions after and before it (``ref_new``, ``ref_old``: the surface's normal, see
     :func:`cadedge.mesh.folds.reference_normals`), face against them where they did not. A move is
     checked against its triangles' normals before it, but many small turns, each under 90 degrees, add
     up: on a thin blade's rounded edge the local search folded triangles against the surface."""
     out = np.einsum("ij,ij->i", new, old) <= 0
-    if ref is not None:
-        out |= (np.einsum("ij,ij->i", new, ref) < 0) & ~(np.einsum("ij,ij->i", old, ref) < 0)
+    if ref_new is not None and ref_old is not None:
+        out |= (np.einsum("ij,ij->i", new, ref_new) < 0) & ~(np.einsum("ij,ij->i", old, ref_old) < 0)
     return out
 
 
-def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
-                 iterations: int = ITERATIONS, ref: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *, iterations: int = ITERATIONS,
+                 normals: NodeNormals | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """Smart-Laplacian smoothing of the ``movable`` nodes of the triangles ``tri`` (indices into ``x``).
 
     ``project(points (k, 3), rows (k,))`` returns the points (those of nodes ``rows``) moved onto the
     surface and their parametric coordinates (k, d). Returns the new coordinates and the parametric coordinates of the movable nodes (NaN rows for
     nodes that stayed; ``None`` if nothing moved). A move stays only if no triangle of the node flips (nor
-    folds against ``ref``, see :func:`_turned`) and the smallest angle of its triangles does not fall; moves
+    folds against the surface, given the nodes' ``normals``: see :func:`_turned`; they follow the moves)
+    and the smallest angle of its triangles does not fall; moves
     that, with their neighbours', flip a triangle or bring it below the worst angle around it before the
     pass are undone.
     """
@@ -124,7 +126,11 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         cand = x.copy()
         cand[mov] = moved
         ang1 = min_angles(cand, tri)
-        flipped = _turned(_normals(cand, tri), nrm0, ref)
+        ref0 = ref1 = up1 = None
+        if normals is not None:
+            up1 = normals.moved(mov, uv)
+            ref0, ref1 = reference_normals(normals.up, tri), reference_normals(up1, tri)
+        flipped = _turned(_normals(cand, tri), nrm0, ref1, ref0)
         bad_node = _node_min(np.where(flipped, -1.0, ang1), tri, n)
         accept = np.zeros(n, dtype=bool)
         accept[mov] = (bad_node[mov] >= node0[mov]) & np.any(cand[mov] != x[mov], axis=1)
@@ -132,7 +138,8 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         for _round in range(_UNDO_ROUNDS):
             trial = np.where(accept[:, None], cand, x)
             ang_t = min_angles(trial, tri)
-            worse = (ang_t < floor) | _turned(_normals(trial, tri), nrm0, ref)
+            ref_t = None if up1 is None else reference_normals(np.where(accept[:, None], up1, normals.up), tri)
+            worse = (ang_t < floor) | _turned(_normals(trial, tri), nrm0, ref_t, ref0)
             if not worse.any():
                 break
             accept[tri[worse].ravel()] = False
@@ -141,6 +148,8 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         if not accept.any():
             break
         x[accept] = cand[accept]
+        if up1 is not None:
+            normals.up[accept] = up1[accept]
         if params is None:
             params = np.full((len(mov), uv.shape[1]), np.nan)
         take = accept[mov]
@@ -239,12 +248,13 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
 
 def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
                 iterations: int = ITERATIONS, below: float = CLIMB_BELOW,
-                ref: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+                normals: NodeNormals | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """Move movable nodes whose triangles have an angle under ``below`` degrees to the best of a few trial
     positions around them (8 directions in their tangent plane, :data:`STEPS` away), the one that raises
     the smallest angle of their triangles most. Of neighbours that can both improve, only the worse off
     moves in one iteration, so each move is judged exactly (up to the projection back onto the surface,
-    checked after it, with no triangle flipped or folded against ``ref``). Returns the coordinates and the
+    checked after it, with no triangle flipped or, given the nodes' ``normals``, folded against the
+    surface; see :func:`smooth_nodes`). Returns the coordinates and the
     parametric coordinates of the movable nodes as :func:`smooth_nodes` does."""
     x = np.array(x, dtype=float)
     n = len(x)
@@ -300,23 +310,28 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         cand = x.copy()
         cand[moved] = px
         after = min_angles(cand, tri)
-        flipped = _turned(_normals(cand, tri), nrm_x, ref)
+        ref0 = ref1 = up1 = None
+        if normals is not None:
+            up1 = normals.moved(moved, puv)
+            ref0, ref1 = reference_normals(normals.up, tri), reference_normals(up1, tri)
+        flipped = _turned(_normals(cand, tri), nrm_x, ref1, ref0)
         got = _node_min(np.where(flipped, -1.0, after), tri, n)
         ok = moved[got[moved] > node0[moved]]
         if not len(ok):
             break
         x[ok] = cand[ok]
+        if up1 is not None:
+            normals.up[ok] = up1[ok]
         if params is None:
             params = np.full((len(mov_idx), puv.shape[1]), np.nan)
         params[where[ok]] = puv[np.searchsorted(moved, ok)]
     return x, params
 
 
-def around(tri: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def around(tri: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The part of a face's mesh that moving the ``active`` nodes can change, with all that judges it:
-    the triangles with a node within one ring of an active node, as ``(nodes, triangles, which)`` (the
-    nodes' indices into the face's, ascending; the triangles renumbered into them; which of ``tri``
-    they are). Every move and check
+    the triangles with a node within one ring of an active node, as ``(nodes, triangles)`` (the nodes'
+    indices into the face's, ascending, and the triangles renumbered into them). Every move and check
     of :func:`smooth_nodes` and :func:`climb_nodes` reads only these (each active node's triangles,
     and every triangle of their nodes), so running them on this part gives the same result in a
     fraction of the time: the active nodes are those near bad triangles, a small share of a face."""
@@ -324,7 +339,7 @@ def around(tri: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     ring[tri[active[tri].any(axis=1)].ravel()] = True
     local = tri[ring[tri].any(axis=1)]
     nodes, inverse = np.unique(local, return_inverse=True)
-    return nodes, inverse.reshape(local.shape), ring[tri].any(axis=1)
+    return nodes, inverse.reshape(local.shape)
 
 
 def _near_bad(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, below: float = CLIMB_BELOW) -> np.ndarray:

@@ -41,7 +41,7 @@ import numpy as np
 
 from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
-from .folds import _normals, folded, orientation, reference_normals, surface_normals
+from .folds import NodeNormals, _normals, folded, orientation, reference_normals, surface_normals
 from .moves import CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
 from .project import Projector
 from .quality import min_angles
@@ -163,13 +163,19 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
     def oriented() -> np.ndarray | None:
         return None if up is None else sign * up
 
+    def node_normals(rows: np.ndarray | None = None) -> NodeNormals | None:
+        """The oriented normals of the nodes ``rows`` (all if None), for a move to judge folds by."""
+        if up is None:
+            return None
+        return NodeNormals(sign * (up if rows is None else up[rows]), lambda params: sign * normals_at(params))
+
     for k in range(passes):
         if late():
             break
         tri = flip_edges(x, tri, fixed, up=oriented())
         if collapse and (k < passes - 1 or passes == 1):  # the last pass settles the last changes
             x, tri, gone, params = collapse_edges(x, tri, movable, project, below=collapse_below,
-                                                  up=oriented())
+                                                  normals=node_normals())
             took(params, np.arange(len(x)))
             if gone.any():
                 movable &= ~gone
@@ -186,8 +192,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         if not active.any():
             break
         rows = np.flatnonzero(active)
-        nodes, part, which = around(tri, active)  # the moves run on the part of the face they can change
-        ref = None if up is None else reference_normals(up, tri[which], sign)
+        nodes, part = around(tri, active)  # the moves run on the part of the face they can change
 
         def project_part(points: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             return project(points, nodes[at])
@@ -195,7 +200,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         for mover in (smooth_nodes, climb_nodes):
             if late():
                 break
-            moved_x, params = mover(x[nodes], part, active[nodes], project_part, ref=ref)
+            moved_x, params = mover(x[nodes], part, active[nodes], project_part, normals=node_normals(nodes))
             x = x.copy()
             x[nodes] = moved_x
             took(params, rows)
