@@ -42,8 +42,11 @@ def orientation(up: np.ndarray, tri: np.ndarray, x: np.ndarray) -> float:
 def reference_normals(up: np.ndarray, tri: np.ndarray, sign: float = 1.0) -> np.ndarray:
     """Each triangle's reference direction (m, 3): ``sign`` times the sum of its nodes' unit surface
     normals ``up`` (zero rows where unknown), zero where they disagree (see :data:`AGREE`)."""
-    ref = sign * up[tri].sum(axis=1)
-    ref[np.linalg.norm(ref, axis=1) < AGREE] = 0.0
+    p = up[tri]
+    ref = p[:, 0] + p[:, 1] + p[:, 2]
+    if sign != 1.0:
+        ref *= sign
+    ref[np.einsum("ij,ij->i", ref, ref) < AGREE * AGREE] = 0.0
     return ref
 
 

@@ -98,6 +98,17 @@ def _turned(new: np.ndarray, old: np.ndarray, ref_new: np.ndarray | None = None,
     return out
 
 
+def _references(normals: NodeNormals | None, rows: np.ndarray, params: np.ndarray,
+                tri: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """The nodes' normals with nodes ``rows`` moved to ``params``, and the triangles' reference directions
+    before and after the move (:func:`cadedge.mesh.folds.reference_normals`); all None without
+    ``normals``."""
+    if normals is None:
+        return None, None, None
+    up1 = normals.moved(rows, params)
+    return up1, reference_normals(normals.up, tri), reference_normals(up1, tri)
+
+
 def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *, iterations: int = ITERATIONS,
                  normals: NodeNormals | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """Smart-Laplacian smoothing of the ``movable`` nodes of the triangles ``tri`` (indices into ``x``).
@@ -126,10 +137,7 @@ def smooth_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *
         cand = x.copy()
         cand[mov] = moved
         ang1 = min_angles(cand, tri)
-        ref0 = ref1 = up1 = None
-        if normals is not None:
-            up1 = normals.moved(mov, uv)
-            ref0, ref1 = reference_normals(normals.up, tri), reference_normals(up1, tri)
+        up1, ref0, ref1 = _references(normals, mov, uv, tri)
         flipped = _turned(_normals(cand, tri), nrm0, ref1, ref0)
         bad_node = _node_min(np.where(flipped, -1.0, ang1), tri, n)
         accept = np.zeros(n, dtype=bool)
@@ -310,10 +318,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         cand = x.copy()
         cand[moved] = px
         after = min_angles(cand, tri)
-        ref0 = ref1 = up1 = None
-        if normals is not None:
-            up1 = normals.moved(moved, puv)
-            ref0, ref1 = reference_normals(normals.up, tri), reference_normals(up1, tri)
+        up1, ref0, ref1 = _references(normals, moved, puv, tri)
         flipped = _turned(_normals(cand, tri), nrm_x, ref1, ref0)
         got = _node_min(np.where(flipped, -1.0, after), tri, n)
         ok = moved[got[moved] > node0[moved]]
