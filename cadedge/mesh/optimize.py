@@ -30,7 +30,9 @@ parameters treats nodes beside a seam like any other (gmsh's own ``Laplace2D`` a
 the worst triangles of a cylinder, beside its seam, in place). Nodes on curves and points (every edge
 grid node) never move, so neighbours stay conforming. A face keeps the result only when its smallest
 angle does not fall and its area deficit stays within its target (or does not grow; a face not
-converging may grow by :data:`STUCK_SLACK` of its target).
+converging may grow by :data:`STUCK_SLACK` of its target); a pass or stage whose result is not kept
+is run once more on the nodes near the face's worst triangles only (:data:`FOCUS`), which changes its
+area far less.
 """
 
 from __future__ import annotations
@@ -76,7 +78,8 @@ WORST = 20
 STUCK_SLACK = 0.1
 STUCK_OWN = 0.01
 #: After the first round only nodes near triangles within this many degrees of the face's smallest
-#: angle move (the same gains on the cylinder's caps in 60% of the time).
+#: angle move (the same gains on the cylinder's caps in 60% of the time); so do they, and only those
+#: triangles' edges collapse, when a pass over the whole face is not kept (``smooth_face``'s retry).
 FOCUS = 3.0
 #: The optimiser's time budget: this share of the CPU time the job took before it (reading the shape,
 #: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds (CPU time: a loaded machine slows the
