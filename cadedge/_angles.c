@@ -46,28 +46,42 @@ static int nodes_in_range(const int64_t *tri, Py_ssize_t count, Py_ssize_t n, co
     return 1;
 }
 
+/* The arguments (x (n, 3) f64, tri (m, 3) i64, out (m, per) f64, writable) of a per-triangle kernel, taken
+ * into b and checked: shapes and node indices. Returns m, or -1 with an exception set (b released). */
+static Py_ssize_t triangle_args(Buffers *b, PyObject *args, Py_ssize_t per, const char *name, const double **x,
+                                const int64_t **tri, double **out)
+{
+    Py_ssize_t nx, nt, nout;
+    *x = ck_arg(b, args, 0, F64, 0, &nx);
+    *tri = ck_arg(b, args, 1, I64, 0, &nt);
+    *out = ck_arg(b, args, 2, F64, 1, &nout);
+    if (!*out) {
+        ck_release(b);
+        return -1;
+    }
+    if (nx % 3 || nt % 3 || nout != nt / 3 * per) {
+        ck_release(b);
+        PyErr_Format(PyExc_ValueError, "%s: mismatched shapes", name);
+        return -1;
+    }
+    if (!nodes_in_range(*tri, nt, nx / 3, name)) {
+        ck_release(b);
+        return -1;
+    }
+    return nt / 3;
+}
+
 /* min_angles(x (n, 3) f64, tri (m, 3) i64, out (m,) f64): the smallest angle of each triangle. */
 PyObject *ck_min_angles(PyObject *self, PyObject *args)
 {
     Buffers b = {.n = 0};
-    Py_ssize_t nx, nt, nout;
-    const double *x = ck_arg(&b, args, 0, F64, 0, &nx);
-    const int64_t *tri = ck_arg(&b, args, 1, I64, 0, &nt);
-    double *out = ck_arg(&b, args, 2, F64, 1, &nout);
-    if (!out) {
-        ck_release(&b);
+    const double *x;
+    const int64_t *tri;
+    double *out;
+    Py_ssize_t m = triangle_args(&b, args, 1, "min_angles", &x, &tri, &out);
+    if (m < 0)
         return NULL;
-    }
-    if (nx % 3 || nt % 3 || nout != nt / 3) {
-        ck_release(&b);
-        PyErr_SetString(PyExc_ValueError, "min_angles: mismatched shapes");
-        return NULL;
-    }
-    if (!nodes_in_range(tri, nt, nx / 3, "min_angles")) {
-        ck_release(&b);
-        return NULL;
-    }
-    for (Py_ssize_t t = 0; t < nout; t++)
+    for (Py_ssize_t t = 0; t < m; t++)
         out[t] = min_angle(x + 3 * tri[3 * t], x + 3 * tri[3 * t + 1], x + 3 * tri[3 * t + 2]);
     ck_release(&b);
     Py_RETURN_NONE;
@@ -127,24 +141,13 @@ PyObject *ck_incident_min(PyObject *self, PyObject *args)
 PyObject *ck_tri_normals(PyObject *self, PyObject *args)
 {
     Buffers b = {.n = 0};
-    Py_ssize_t nx, nt, nout;
-    const double *x = ck_arg(&b, args, 0, F64, 0, &nx);
-    const int64_t *tri = ck_arg(&b, args, 1, I64, 0, &nt);
-    double *out = ck_arg(&b, args, 2, F64, 1, &nout);
-    if (!out) {
-        ck_release(&b);
+    const double *x;
+    const int64_t *tri;
+    double *out;
+    Py_ssize_t m = triangle_args(&b, args, 3, "tri_normals", &x, &tri, &out);
+    if (m < 0)
         return NULL;
-    }
-    if (nx % 3 || nt % 3 || nout != nt) {
-        ck_release(&b);
-        PyErr_SetString(PyExc_ValueError, "tri_normals: mismatched shapes");
-        return NULL;
-    }
-    if (!nodes_in_range(tri, nt, nx / 3, "tri_normals")) {
-        ck_release(&b);
-        return NULL;
-    }
-    for (Py_ssize_t t = 0; t < nt / 3; t++) {
+    for (Py_ssize_t t = 0; t < m; t++) {
         const double *a = x + 3 * tri[3 * t], *p = x + 3 * tri[3 * t + 1], *q = x + 3 * tri[3 * t + 2];
         double u[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]}, v[3] = {q[0] - a[0], q[1] - a[1], q[2] - a[2]};
         out[3 * t] = u[1] * v[2] - u[2] * v[1];
