@@ -49,3 +49,20 @@ def test_no_split_of_a_curve_segment_or_a_triangle_with_an_interior_node():
     inner[0] = True  # the corner triangle has a node that can move: smoothing's job, not a split's
     x2, tri2, _, uv = split_corner_triangles(x, tri, inner, fixed, _plane)
     assert np.array_equal(tri2, tri) and len(uv) == 0
+
+
+def test_a_strip_between_two_curves_is_split_only_where_that_lowers_nothing():
+    """A strip 0.16 wide between two curves cut into 0.28 segments, filled with no interior node (what
+    a collapse into the curves' nodes makes of it): 29.7 degrees, and an interior node in a quad could
+    only lower that. Its triangles have one side on a curve; they are left as they are."""
+    n = 6
+    top = np.column_stack([0.28 * np.arange(n), np.full(n, 0.16), np.zeros(n)])
+    bottom = np.column_stack([0.28 * np.arange(n), np.zeros(n), np.zeros(n)])
+    x = np.vstack([bottom, top])
+    tri = np.array([t for i in range(n - 1) for t in ([i, i + 1, n + i], [i + 1, n + i + 1, n + i])])
+    fixed = {(i, i + 1) for i in range(n - 1)} | {(n + i, n + i + 1) for i in range(n - 1)}
+    movable = np.zeros(len(x), dtype=bool)
+    before = triangle_angles(x, tri).min()
+    x2, tri2, _, uv = split_corner_triangles(x, tri, movable, fixed, _plane)
+    assert triangle_angles(x2, tri2).min() >= before - 1e-9
+    assert len(uv) == 0 and np.array_equal(tri2, tri)

@@ -83,9 +83,22 @@ def test_collapse_removes_a_crowded_node_that_moves_cannot_fix():
     assert np.allclose(params[kept], out[kept, :2])
 
 
-def test_collapse_never_touches_an_edge_with_a_boundary_node():
+def test_collapse_merges_a_node_into_a_curve_node_that_stays_put():
+    """A node on a curve never moves: the interior node beside it merges into it, where that lifts the
+    worst angle (a strip between two curves narrower than their segments is best filled with no interior
+    node at all)."""
     x, tri, movable = _crowded_hexagon()
-    movable[7] = False  # one of the two crowded nodes on a curve: nothing may collapse
+    movable[7] = False  # one of the two crowded nodes on a curve
+    out, new_tri, removed, params = collapse_edges(x, tri, movable, _plane)
+    assert np.flatnonzero(removed).tolist() == [6] and len(new_tri) == len(tri) - 2
+    assert np.array_equal(out[[0, 1, 2, 3, 4, 5, 7]], x[[0, 1, 2, 3, 4, 5, 7]])
+    assert triangle_angles(out, new_tri).min() > triangle_angles(x, tri).min() + 30
+    assert params.shape[1] == 0  # nothing moved onto the surface
+
+
+def test_collapse_never_touches_an_edge_whose_ends_are_both_on_curves():
+    x, tri, movable = _crowded_hexagon()
+    movable[[6, 7]] = False
     out, new_tri, removed, _ = collapse_edges(x, tri, movable, _plane)
     assert not removed.any() and np.array_equal(new_tri, tri) and np.array_equal(out, x)
 

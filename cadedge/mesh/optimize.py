@@ -16,7 +16,8 @@ Only nodes within two rings of a triangle under :data:`CLIMB_BELOW` degrees move
 the costly part on B-spline faces); the rest of a face is left as gmsh made it. A face still under
 :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW` degrees then gets passes with edge collapses
 (:mod:`cadedge.mesh.collapse`: one interior node less where triangles crowd around a point, e.g. a
-90-degree face corner fanned out in three 30-degree wedges) and edge splits (:mod:`cadedge.mesh.corners`:
+90-degree face corner fanned out in three 30-degree wedges, or beside a curve, merged into the curve's
+node) and edge splits (:mod:`cadedge.mesh.corners`:
 one interior node more where a triangle has all three nodes on the boundary, e.g. a face corner closed by
 one triangle; the stage's last pass only settles them), and then a few more without, each stage kept
 only if the face's worst angles rose (compared in order, the smallest first). These later stages are
