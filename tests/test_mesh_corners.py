@@ -66,3 +66,18 @@ def test_a_strip_between_two_curves_is_split_only_where_that_lowers_nothing():
     x2, tri2, _, uv = split_corner_triangles(x, tri, movable, fixed, _plane)
     assert triangle_angles(x2, tri2).min() >= before - 1e-9
     assert len(uv) == 0 and np.array_equal(tri2, tri)
+
+
+def test_no_split_whose_new_triangles_fold_against_the_surface():
+    """The new triangles are judged against their nodes' surface normals (the new node's where it
+    lands): against a surface facing the other way, every split folds and none is made."""
+    from cadedge.mesh.folds import NodeNormals
+
+    x, tri, movable, fixed = _corner()
+
+    def facing(z: float) -> NodeNormals:
+        return NodeNormals(np.tile([0.0, 0.0, z], (len(x), 1)), lambda params: np.tile([0.0, 0.0, z], (len(params), 1)))
+
+    assert len(split_corner_triangles(x, tri, movable, fixed, _plane, normals=facing(1.0))[3]) == 1
+    x2, tri2, _, uv = split_corner_triangles(x, tri, movable, fixed, _plane, normals=facing(-1.0))
+    assert len(uv) == 0 and np.array_equal(tri2, tri)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .collapse import _normal
+from .folds import NodeNormals, folded, reference_normals
 from .quality import min_angles
 
 #: All-boundary triangles under this many degrees are tried.
@@ -38,13 +39,21 @@ MIN_GAIN = -15.0
 OFFSETS = (0.0, 0.1, 0.2, 0.3, 0.4)
 
 
+def _folds(p: np.ndarray, up: np.ndarray) -> bool:
+    """Whether a triangle of the corners ``p`` (k, 3, 3) folds against its nodes' normals ``up``
+    (k, 3, 3)."""
+    rows = np.arange(3 * len(p)).reshape(-1, 3)
+    return bool(folded(p.reshape(-1, 3), rows, reference_normals(up.reshape(-1, 3), rows)).any())
+
+
 def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, fixed: set[tuple[int, int]],
-                           project, *, below: float = SPLIT_BELOW
+                           project, *, below: float = SPLIT_BELOW, normals: NodeNormals | None = None
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Split the inner edge of each triangle under ``below`` degrees whose three nodes are not
     ``movable``, where that raises the smallest angle there (see the module doc). ``fixed`` holds the
     curve segments as sorted node pairs; ``project(points (k, 3))`` returns the points on the surface and
-    their parametric coordinates (k, d).
+    their parametric coordinates (k, d). ``normals``: the nodes' oriented surface normals, against which
+    no new triangle may fold (the new node's taken where it is placed; see :mod:`cadedge.mesh.folds`).
 
     Returns ``(x, tri, movable, params)``: coordinates with the new nodes appended, the triangles
     (orientation kept), the movable mask extended (new nodes are movable), and the parametric coordinates
@@ -100,10 +109,14 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
                 r = tri[row]
                 halves.append((np.where(r == b, -1, r), np.where(r == a, -1, r)))
             normals0 = _normal(x[[tri[t], tri[t], tri[u], tri[u]]])
-            for pos, puv in zip(on, uv):
-                quads = np.array([h for pair_ in halves for h in pair_])
+            quads = np.array([h for pair_ in halves for h in pair_])
+            ups = None if normals is None else normals.at(uv)
+            for i, (pos, puv) in enumerate(zip(on, uv)):
                 p = np.where((quads == -1)[..., None], pos, x[np.maximum(quads, 0)])
                 if np.any(np.einsum("ij,ij->i", _normal(p), normals0) <= 0):
+                    continue
+                if ups is not None and _folds(p, np.where((quads == -1)[..., None], ups[i],
+                                                          normals.up[np.maximum(quads, 0)])):
                     continue
                 q = float(min_angles(p.reshape(-1, 3), np.arange(12).reshape(-1, 3)).min())
                 if q > old + slack and (best is None or q > best[0]):

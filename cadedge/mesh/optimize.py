@@ -184,7 +184,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
             if gone.any():
                 movable &= ~gone
                 tri = flip_edges(x, tri, fixed, up=oriented())
-            x, tri, movable, new_uv = split_corner_triangles(x, tri, movable, fixed, project)
+            x, tri, movable, new_uv = split_corner_triangles(x, tri, movable, fixed, project, normals=node_normals())
             if len(new_uv):  # new interior nodes: rows appended
                 uv = np.vstack([uv, new_uv])
                 moved = np.concatenate([moved, np.ones(len(new_uv), dtype=bool)])
