@@ -7,8 +7,8 @@ see it, since it grows from spacings, not from distances. Here the local width o
 segment is the distance from the segment's midpoint to the face's other boundary segments, leaving out
 the segment's own edge and the edges that share a B-rep vertex with it (a face that narrows to a corner
 has no width there: the corner's angle forces its triangles, see :mod:`cadedge.mesh.quality`). Segments
-longer than :data:`WIDTH_RATIO` times that width are split into pieces of equal arc length on their OCCT curve,
-pass after pass: near a tiny edge the splits halve towards it, so the boundary is graded down to the tiny
+longer than :data:`WIDTH_RATIO` (or :data:`FINE_RATIO`, where that costs few segments) times that width are
+split into pieces of equal arc length on their OCCT curve, pass after pass: near a tiny edge the splits halve towards it, so the boundary is graded down to the tiny
 edge's length instead of jumping to it. Grid points are kept and edge ends never move.
 
 Then the face corners (:func:`match_corners`): where a face's boundary segments meet at a B-rep vertex,
@@ -28,9 +28,15 @@ from ..splitting import split_segments
 from .proximity import TOLERANCE_SHARE, _LazyCurves
 
 #: A segment is split when longer than this many times its face's width at its midpoint: a strip of
-#: width w cut into pieces of 2 w is filled by right triangles of 26.6 degrees (1.5 w: 34 degrees, but a
-#: third more triangles on the thin plate and the faces around it).
+#: width w cut into pieces of 2 w is filled by right triangles of 26.6 degrees.
 WIDTH_RATIO = 2.0
+#: Pieces of at most 1.5 w give 33.7 degrees, and are cut instead where that adds at most
+#: :data:`FINE_SHARE` of the model's boundary segments: a filleted sphere-box's neck between two fillets,
+#: 0.15-0.5 mm wide (1 855 -> 1 946 segments at 1e-2, 26.9 -> 32.9 degrees; gmsh tuned: 31.8 with six
+#: times the triangles). Where thin faces make much of the model (the M6 screw's thread flanks, a thin
+#: plate, a thin washer: 25-43% more segments, up to 64% more triangles) the pieces stay at 2 w.
+FINE_RATIO = 1.5
+FINE_SHARE = 0.1
 #: Splitting halves segments towards a tiny edge each pass; 24 passes cover a ratio of 1.6e7.
 PASSES = 24
 #: The splits may add at most this many times the grid's segments (plus :data:`MIN_BUDGET`): a model with
@@ -85,9 +91,23 @@ def face_widths(edges: list) -> dict[int, np.ndarray]:
     return width
 
 
-def fit_to_widths(grid: ShapeGrid, *, ratio: float = WIDTH_RATIO, passes: int = PASSES) -> ShapeGrid:
-    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width."""
+def fit_to_widths(grid: ShapeGrid, *, ratio: float | None = None, passes: int = PASSES) -> ShapeGrid:
+    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width (by
+    default :data:`FINE_RATIO` where that adds at most :data:`FINE_SHARE` of the grid's segments, else
+    :data:`WIDTH_RATIO`), its face corners matched (:func:`match_corners`)."""
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
+    if ratio is not None:
+        return match_corners(_split_to_widths(grid, curves, ratio, passes), curves=curves)
+    fitted = _split_to_widths(grid, curves, FINE_RATIO, passes)
+    if fitted.segments > (1.0 + FINE_SHARE) * grid.segments:
+        coarse = _split_to_widths(grid, curves, WIDTH_RATIO, passes)
+        if fitted.segments > (1.0 + FINE_SHARE) * coarse.segments:
+            fitted = coarse
+    return match_corners(fitted, curves=curves)
+
+
+def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> ShapeGrid:
+    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width."""
     edges = list(grid.edges)
     budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
     added = 0
@@ -111,7 +131,7 @@ def fit_to_widths(grid: ShapeGrid, *, ratio: float = WIDTH_RATIO, passes: int = 
             changed = True
         if not changed:
             break
-    return match_corners(with_edges(grid, edges), curves=curves)
+    return with_edges(grid, edges)
 
 
 def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int = CORNER_PASSES,
