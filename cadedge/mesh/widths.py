@@ -7,9 +7,10 @@ see it, since it grows from spacings, not from distances. Here the local width o
 segment is the distance from the segment's midpoint to the face's other boundary segments, leaving out
 the segment's own edge and the edges that share a B-rep vertex with it (a face that narrows to a corner
 has no width there: the corner's angle forces its triangles, see :mod:`cadedge.mesh.quality`). Segments
-longer than :data:`WIDTH_RATIO` (or :data:`FINE_RATIO`, where that costs few segments) times that width are
-split into pieces of equal arc length on their OCCT curve, pass after pass: near a tiny edge the splits halve towards it, so the boundary is graded down to the tiny
-edge's length instead of jumping to it. Grid points are kept and edge ends never move.
+longer than :data:`WIDTH_RATIO` (or :data:`FINE_RATIO`, where that costs few segments) times that width
+are split into pieces of equal arc length on their OCCT curve, pass after pass: near a tiny edge the
+splits halve towards it, so the boundary is graded down to the tiny edge's length instead of jumping to
+it. Grid points are kept and edge ends never move.
 
 Then the face corners (:func:`match_corners`): where a face's boundary segments meet at a B-rep vertex,
 those longer than :data:`CORNER_RATIO` times the shortest are halved. A 90-degree corner between a
