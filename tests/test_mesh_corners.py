@@ -81,3 +81,17 @@ def test_no_split_whose_new_triangles_fold_against_the_surface():
     assert len(split_corner_triangles(x, tri, movable, fixed, _plane, normals=facing(1.0))[3]) == 1
     x2, tri2, _, uv = split_corner_triangles(x, tri, movable, fixed, _plane, normals=facing(-1.0))
     assert len(uv) == 0 and np.array_equal(tri2, tri)
+
+
+def test_a_triangle_between_all_boundary_ones_is_split_where_its_node_can_be_placed_well():
+    """twisted_blade's trailing edge at 1e-2: a 21.4-degree triangle with one side on a curve, between
+    two triangles whose nodes all lie on curves. Only the new node can ever move, so the split is placed
+    across the two triangles it cuts (not only along the inner edge's normal) and made only if that
+    gains: about 24.7 degrees."""
+    xy = [[8.8478, 0.3722], [9.66, 0.1643], [10.0, 0.0], [9.5573, -0.1382], [8.5761, -0.2472]]
+    x = np.column_stack([np.array(xy), np.zeros(5)])
+    tri = np.array([[0, 1, 3], [1, 2, 3], [0, 3, 4]])
+    fixed = {(0, 1), (1, 2), (2, 3), (3, 4)}
+    x2, tri2, movable2, uv = split_corner_triangles(x, tri, np.zeros(5, dtype=bool), fixed, _plane)
+    assert len(uv) == 1 and movable2.tolist() == [False] * 5 + [True]
+    assert triangle_angles(x2, tri2).min() > triangle_angles(x, tri).min() + 3.0
