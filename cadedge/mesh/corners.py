@@ -108,7 +108,7 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
                 continue
             length = np.linalg.norm(x[b] - x[a])
             trial = np.array([mid + s * length * inward / norm for s in OFFSETS])
-            if slack == 0.0:  # no smoothing will place the node better: try it across the two triangles
+            if slack == 0.0:  # no loss allowed now, none for smoothing to undo later: try more positions
                 trial = np.vstack([trial, _LATTICE @ x[[a, b, c, w]]])
             on, uv = project(trial)
             halves = []
