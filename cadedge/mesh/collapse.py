@@ -63,11 +63,12 @@ def _trial_min(x: np.ndarray, new: np.ndarray, a: int, pos: np.ndarray) -> float
     return float(min_angles(p.reshape(-1, 3), np.arange(3 * len(new)).reshape(-1, 3)).min())
 
 
-def _folds(normals: NodeNormals, new: np.ndarray, a: int, params: np.ndarray, new_normals: np.ndarray) -> bool:
+def _folds(normals: NodeNormals, new: np.ndarray, a: int, params: np.ndarray | None, new_normals: np.ndarray) -> bool:
     """Whether a triangle of ``new`` (its normals ``new_normals``) folds against the surface with node
-    ``a`` at parameters ``params``."""
+    ``a`` at parameters ``params`` (None: where it stands, its normal kept)."""
     kept = normals.up[a].copy()
-    normals.up[a] = normals.at(params[None])[0]
+    if params is not None:
+        normals.up[a] = normals.at(params[None])[0]
     try:
         return bool(np.any(np.einsum("ij,ij->i", new_normals, reference_normals(normals.up, new)) < 0))
     finally:
@@ -157,9 +158,7 @@ def collapse_edges(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project,
                 p[new == a] = pos
                 if np.any(np.einsum("ij,ij->i", _normal(p), normals0) <= 0):
                     continue
-                if normals is not None and (
-                        _folds(normals, new, a, puv, _normal(p)) if puv is not None
-                        else np.any(np.einsum("ij,ij->i", _normal(p), reference_normals(normals.up, new)) < 0)):
+                if normals is not None and _folds(normals, new, a, puv, _normal(p)):
                     continue
                 q = _trial_min(x, new, a, pos)
                 if q > old_min + (MIN_GAIN if movable[a] else CURVE_GAIN) and (best is None or q > best[0]):
