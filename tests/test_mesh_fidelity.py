@@ -408,15 +408,20 @@ def test_a_blade_face_meshed_by_delaunay_keeps_its_mesh_through_the_optimiser(tm
     assert result.report.min_angle >= 15.0
 
 
-def test_a_twisted_blade_is_left_with_no_folded_triangle_and_its_honest_deficit(tmp_path):
+def test_a_twisted_blade_is_left_with_no_folded_triangle_and_every_face_within_the_target(tmp_path):
     """twisted_blade of ``scripts/hard_models.py`` at 1e-2: gmsh's Delaunay mesh of its blade face folds a
     triangle, whose area counted twice: the face read 8.4e-3, within the target, and stayed so meshed.
-    Measured once unfolded it is over, meshed finer, and named with what it reaches."""
+    Measured once unfolded it is over (1.16e-2: its trailing edge's ridge, 0.013 mm in radius, spanned
+    by triangles at every size gmsh was given), and its edges are split on the surface until it is
+    within (:mod:`cadedge.mesh.midpoints`); it was named at 1.22e-2 before."""
+    from cadedge.mesh.report import AFTER_MESH_HOOK
+
     result = mesh_shape(_hard_model("twisted_blade", tmp_path), ald=1e-2)
     assert result.ok, result.problems()
     assert result.report.folded == 0
     deficits = _independent_deficits(result)
     for face in result.report.faces:
         assert face.area_deficit == pytest.approx(deficits[face.face - 1], abs=1e-9)
-        assert abs(face.area_deficit) <= 1e-2 or face.reason == "size floor"
-    assert np.all(np.abs(deficits) <= 2e-2), deficits
+    assert np.all(np.abs(deficits) <= 1e-2), deficits
+    assert result.extras[AFTER_MESH_HOOK]["split"] == [1]
+    assert result.report.min_angle >= 20.0

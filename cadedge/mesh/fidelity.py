@@ -438,8 +438,10 @@ def after_generate(ctx) -> None:
 
     Only the face's interior changes: its boundary curves keep their nodes, so neighbours stay conforming.
     Planar faces are left alone (their area is fixed by their boundary polygon). Then curved faces far
-    under the worst face are meshed again coarser (:func:`cadedge.mesh.coarsen.coarsen`). What was done
-    lands in ``ctx.fidelity``: the per-circle count each re-meshed face ended with.
+    under the worst face are meshed again coarser (:func:`cadedge.mesh.coarsen.coarsen`), and curved faces
+    still short of their area by up to :data:`DISAGREE` times the target get edges split on their surface
+    (:func:`cadedge.mesh.midpoints.split_short_face`). What was done lands in ``ctx.fidelity``: the
+    per-circle count each re-meshed face ended with, the faces coarsened and split.
     """
     import time
 
@@ -450,6 +452,7 @@ def after_generate(ctx) -> None:
     from .floored import DELAUNAY, try_delaunay
     from .generate import mesh_faces
     from .interior import use_per_circle
+    from .midpoints import split_short_face
     from .remesh import job_groups, remesh_group
 
     opts = ctx.job.options.get("fidelity")
@@ -554,7 +557,22 @@ def after_generate(ctx) -> None:
     coarser = coarsen(ctx, level=level, deficit=deficit, measured={s: final[s] for s in calm},
                       per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
-    ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "stuck": sorted(stuck),
+    # curved faces still short of their area (a sharp ridge spanned by triangles): edges split on the surface
+    split = []
+    short = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) in curved]
+    for s, a in unfolded_areas(short).items():
+        f = face_of.get(s, s)
+        if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
+            break
+        if target < deficit(s, a) <= DISAGREE * target:
+            say(f"refine {f}")  # the watchdog bounds it like any refinement
+            if split_short_face(s, float(areas[f - 1]), target):
+                split.append(f)
+                if f in stuck:
+                    stuck.remove(f)  # within its target now: the optimiser keeps it there
+            say(f"refined {f}")
+    ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "split": split,
+                    "stuck": sorted(stuck),
                     "floored": {face_of.get(s, s): h for s, h in floored.items()}}
 
 

@@ -76,7 +76,21 @@ class NodeNormals:
 
 def surface_normals(surface: int, x: np.ndarray, uv: np.ndarray, tags: np.ndarray | None = None) -> np.ndarray:
     """Unit normals (n, 3) of gmsh surface ``surface`` at nodes ``x``, from their parameters ``uv`` (NaN
-    rows: the curves' nodes); zero rows where unknown (a pole). Inside the gmsh process.
+    rows: the curves' nodes, see :func:`node_params`); zero rows where unknown (a pole). Inside the gmsh
+    process."""
+    import gmsh
+
+    uv = node_params(surface, x, uv, tags)
+    out = np.zeros_like(x)
+    ok = ~np.isnan(uv).any(axis=1)
+    if ok.any():
+        out[ok] = unit_normals(gmsh.model.getNormal(surface, uv[ok].ravel().tolist()))
+    return out
+
+
+def node_params(surface: int, x: np.ndarray, uv: np.ndarray, tags: np.ndarray | None = None) -> np.ndarray:
+    """The parameters (n, 2) on gmsh surface ``surface`` of nodes ``x``: ``uv`` where known, the rest (NaN
+    rows: the curves' nodes) found here; NaN where gmsh finds none. Inside the gmsh process.
 
     A curve's node (``tags``: the nodes' gmsh tags) gets its surface parameters from its curve parameter
     through the curve's trace on the surface (``reparametrizeOnSurface``); the rest, the points' nodes,
@@ -112,11 +126,7 @@ def surface_normals(surface: int, x: np.ndarray, uv: np.ndarray, tags: np.ndarra
     if edge.any():
         got = np.asarray(gmsh.model.getParametrization(2, surface, x[edge].ravel().tolist()), dtype=float)
         uv[edge] = got.reshape(-1, 2) if got.size == 2 * edge.sum() else np.nan
-    out = np.zeros_like(x)
-    ok = ~np.isnan(uv).any(axis=1)
-    if ok.any():
-        out[ok] = unit_normals(gmsh.model.getNormal(surface, uv[ok].ravel().tolist()))
-    return out
+    return uv
 
 
 def unit_normals(normals) -> np.ndarray:
