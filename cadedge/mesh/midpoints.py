@@ -96,10 +96,11 @@ def _surface_middles(surface: int, x: np.ndarray, uv: np.ndarray, a: np.ndarray,
     return p, par
 
 
-def split_short_face(surface: int, brep_area: float, target: float) -> bool:
-    """Split interior edges of meshed gmsh surface ``surface`` at its surface until its area deficit
-    (against ``brep_area``) is within :data:`AIM` of ``target``; the face keeps the result only if it is
-    then within ``target``, without folded triangles. Returns whether the face's mesh changed."""
+def split_short_face(surface: int, brep_area: float, target: float, *, above: float | None = None) -> bool:
+    """Split interior edges of meshed gmsh surface ``surface`` at its surface, if its area deficit (against
+    ``brep_area``) is over ``above`` (default ``target``), until it is within :data:`AIM` of ``target``;
+    the face keeps the result only if it is then within ``target``, without more folded triangles.
+    Returns whether the face's mesh changed."""
     import gmsh
 
     from .facemesh import read_face, write_interior
@@ -109,7 +110,7 @@ def split_short_face(surface: int, brep_area: float, target: float) -> bool:
     if mesh is None or brep_area <= 0:
         return False
     x, tri, movable = mesh.x, mesh.tri, mesh.movable
-    if 1.0 - triangle_areas(x, tri).sum() / brep_area <= target:
+    if 1.0 - triangle_areas(x, tri).sum() / brep_area <= (target if above is None else above):
         return False
     uv = node_params(surface, x, mesh.uv, mesh.tags)
     ok = ~np.isnan(uv).any(axis=1)
