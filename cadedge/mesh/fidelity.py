@@ -316,10 +316,6 @@ COARSEN_FLOOR = 0.5
 #: within its target, had no room left to move them (the propeller at 1e-2: 14.4 -> 25.8 degrees;
 #: sharp_blade at 1e-3: 14.8 -> 27.4 degrees with 60 298 triangles for 67 130).
 RIDGE_SPLIT = 0.5
-#: Passes of coarsening: a face kept coarser is tried coarser again while it stays far under the level
-#: (mesh_T106_V3's blade face at 1e-3, its deficit set by its loose boundary more than by its triangles:
-#: 3.35e-4 at 4 604 triangles after one pass, 3.6e-4 at 2 902 after three; the model 8 961 -> 6 611).
-COARSEN_PASSES = 3
 
 
 def not_converging(deficit: float, before: float | None, target: float) -> bool:
@@ -463,7 +459,7 @@ def after_generate(ctx) -> None:
     from .floored import DELAUNAY, try_delaunay
     from .generate import mesh_faces
     from .interior import use_per_circle
-    from .midpoints import split_short_face
+    from .midpoints import split_short_faces
     from .remesh import job_groups, remesh_group
 
     opts = ctx.job.options.get("fidelity")
@@ -567,31 +563,13 @@ def after_generate(ctx) -> None:
             and face_of.get(s, s) not in per_face and ctx.outcomes[s].strategy != DELAUNAY]
     coarser = coarsen(ctx, level=level, deficit=deficit, measured={s: final[s] for s in calm},
                       per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
-    for _ in range(COARSEN_PASSES - 1):  # a face whose deficit hardly moved may go coarser still
-        again = [s for s in calm if face_of.get(s, s) in coarser]
-        more = coarsen(ctx, level=level, deficit=deficit,
-                       measured={s: deficit(s, a) for s, a in unfolded_areas(again).items()},
-                       per_circle={s: coarser[face_of.get(s, s)] for s in again}) if again else {}
-        if not more:
-            break
-        coarser.update(more)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
     # curved faces still short of their area (a sharp ridge spanned by triangles), and faces held at a size
     # floor past RIDGE_SPLIT of it: edges split on the surface
-    split = []
     short = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) in curved]
-    for s, a in unfolded_areas(short).items():
-        f = face_of.get(s, s)
-        if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
-            break
-        above = RIDGE_SPLIT * target if s in floored else target
-        if above < deficit(s, a) <= DISAGREE * target:
-            say(f"refine {f}")  # the watchdog bounds it like any refinement
-            if split_short_face(s, float(areas[f - 1]), target, above=above):
-                split.append(f)
-                if f in stuck:
-                    stuck.remove(f)  # within its target now: the optimiser keeps it there
-            say(f"refined {f}")
+    split = split_short_faces(ctx, {s: RIDGE_SPLIT * target if s in floored else target for s in short},
+                              target=target, most=DISAGREE * target, deficit=deficit, areas=areas)
+    stuck = [f for f in stuck if f not in split]  # within their target now: the optimiser keeps them there
     ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "split": split,
                     "stuck": sorted(stuck),
                     "floored": {face_of.get(s, s): h for s, h in floored.items()}}

@@ -177,3 +177,28 @@ def split_short_face(surface: int, brep_area: float, target: float, *, above: fl
         return False
     write_interior(surface, mesh, x, tri, movable, uv)
     return True
+
+
+def split_short_faces(ctx, above: dict[int, float], *, target: float, most: float, deficit,
+                      areas) -> list[int]:
+    """:func:`split_short_face` on each gmsh surface of ``above`` (surface -> the deficit it is split
+    from) whose deficit (``deficit(s, mesh_area)``, as measured now) is over that and at most ``most``
+    (beyond it the face's mesh and B-rep areas disagree); ``areas`` the B-rep areas by face id. Stops
+    at the job's soft deadline. Returns the ids of the faces split."""
+    import time
+
+    from .areas import unfolded_areas
+
+    face_of = ctx.emap.face_of_surface
+    say = ctx.progress or (lambda line: None)
+    split = []
+    for s, a in unfolded_areas(list(above)).items():
+        if ctx.job.deadline is not None and time.time() > ctx.job.deadline:
+            break
+        f = face_of.get(s, s)
+        if above[s] < deficit(s, a) <= most:
+            say(f"refine {f}")  # the watchdog bounds it like any refinement
+            if split_short_face(s, float(areas[f - 1]), target, above=above[s]):
+                split.append(f)
+            say(f"refined {f}")
+    return split
