@@ -13,6 +13,7 @@ swaps that raised angles took the new nodes off the ridge again (twisted_blade: 
 face back over its target after the optimiser), so the optimiser, which keeps the face within its
 target, does that. Only interior edges are split: the curves' nodes stay, so neighbours stay conforming.
 """
+
 from __future__ import annotations
 
 import numpy as np
