@@ -78,13 +78,19 @@ def surface_normals(surface: int, x: np.ndarray, uv: np.ndarray, tags: np.ndarra
     """Unit normals (n, 3) of gmsh surface ``surface`` at nodes ``x``, from their parameters ``uv`` (NaN
     rows: the curves' nodes, see :func:`node_params`); zero rows where unknown (a pole). Inside the gmsh
     process."""
+    return normals_at(surface, node_params(surface, x, uv, tags))
+
+
+def normals_at(surface: int, params: np.ndarray) -> np.ndarray:
+    """Unit normals (k, 3) of gmsh surface ``surface`` at parameters ``params`` (k, 2); zero rows where
+    a row is NaN or there is no normal (a pole). Inside the gmsh process."""
     import gmsh
 
-    uv = node_params(surface, x, uv, tags)
-    out = np.zeros_like(x)
-    ok = ~np.isnan(uv).any(axis=1)
+    params = np.asarray(params, dtype=float).reshape(-1, 2)
+    out = np.zeros((len(params), 3))
+    ok = ~np.isnan(params).any(axis=1)
     if ok.any():
-        out[ok] = unit_normals(gmsh.model.getNormal(surface, uv[ok].ravel().tolist()))
+        out[ok] = unit_normals(gmsh.model.getNormal(surface, params[ok].ravel().tolist()))
     return out
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .areas import triangle_areas
-from .folds import folded, orientation, reference_normals, unit_normals
+from .folds import folded, normals_at, orientation, reference_normals
 
 #: Edges are split until the face's deficit is at most this share of its target, which leaves the face
 #: optimiser room to move nodes (twisted_blade at 1e-2: 25.2 degrees at 0.2 and 0.5, 22.2 at 0.3, 25.2
@@ -102,8 +102,6 @@ def split_short_face(surface: int, brep_area: float, target: float, *, above: fl
     ``brep_area``) is over ``above`` (default ``target``), until it is within :data:`AIM` of ``target``;
     the face keeps the result only if it is then within ``target``, without more folded triangles.
     Returns whether the face's mesh changed."""
-    import gmsh
-
     from .facemesh import read_face, write_interior
     from .folds import node_params
 
@@ -114,10 +112,7 @@ def split_short_face(surface: int, brep_area: float, target: float, *, above: fl
     if 1.0 - triangle_areas(x, tri).sum() / brep_area <= (target if above is None else above):
         return False
     uv = node_params(surface, x, mesh.uv, mesh.tags)
-    ok = ~np.isnan(uv).any(axis=1)
-    up = np.zeros_like(x)
-    if ok.any():
-        up[ok] = unit_normals(gmsh.model.getNormal(surface, uv[ok].ravel().tolist()))
+    up = normals_at(surface, uv)
     sign = orientation(up, tri, x)
     folds = folded(x, tri, reference_normals(up, tri, sign)).sum()
     cap = GROWTH * len(tri)
@@ -142,7 +137,7 @@ def split_short_face(surface: int, brep_area: float, target: float, *, above: fl
         gain[inner] = (sum(triangle_areas(xs, t[inner]) for t in new)
                        - triangle_areas(x, tri[t1[inner]]) - triangle_areas(x, tri[t2[inner]]))
         ups = np.vstack([up, np.zeros((len(a), 3))])
-        ups[len(up) + inner] = unit_normals(gmsh.model.getNormal(surface, par[inner].ravel().tolist()))
+        ups[len(up) + inner] = normals_at(surface, par[inner])
         for t in new:  # an edge whose split would fold a triangle against the surface is not split
             gain[inner[folded(xs, t[inner], reference_normals(ups, t[inner], sign))]] = -np.inf
         length = np.linalg.norm(x[a] - x[b], axis=1)

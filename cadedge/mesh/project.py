@@ -82,14 +82,9 @@ class Projector:
 
     def normals(self, params: np.ndarray) -> np.ndarray:
         """Unit surface normals (k, 3) at parameters ``params`` (k, 2); zero rows where there is none."""
-        import gmsh
+        from .folds import normals_at
 
-        from .folds import unit_normals
-
-        params = np.asarray(params, dtype=float).reshape(-1, 2)
-        if not len(params):
-            return np.zeros((0, 3))
-        return unit_normals(gmsh.model.getNormal(self.surface, params.ravel().tolist()))
+        return normals_at(self.surface, params)
 
     def __call__(self, points: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The points (k, 3) moved onto the surface and their parameters (k, 2); ``rows``: the node row
