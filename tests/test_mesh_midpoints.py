@@ -101,3 +101,32 @@ def test_a_short_cylinder_side_is_split_within_its_target_on_its_surface():
         # within its target already: nothing to do, the mesh stays
         assert not split_short_face(side, brep, 0.5)
         assert np.array_equal(read_face(side).tri, after.tri)
+
+
+def test_middles_across_a_seam_are_taken_the_short_way_round_only_where_the_surface_closes_up():
+    """A cylinder's side closes up across its seam (u = 0 and 2 pi give the same points): the middle of
+    an edge from u = 0.1 to u = 2 pi - 0.1 lies on the seam, not at u = pi across the cylinder. A box's
+    face does not close up: its middles are the plain parametric ones, however long the edge."""
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.midpoints import _periods, _seam_middles
+
+    with gmsh_session():
+        gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, 2, 1.0)
+        gmsh.model.occ.addBox(5, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        side = next(s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) == "Cylinder")
+        plane = next(s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) == "Plane"
+                     and gmsh.model.getBoundingBox(2, s)[0] >= 5 - 1e-9)
+        low, span = _periods(side)
+        (k,) = np.flatnonzero(np.isfinite(span))  # one direction closes up: the one around the axis
+        uv = np.zeros((4, 2))
+        uv[:, 1 - k] = low[1 - k] + 1.0
+        uv[:, k] = low[k] + np.array([0.1, span[k] - 0.1, 1.0, 2.0])
+        mid = _seam_middles(side, uv, np.array([0, 1, 2]), np.array([1, 0, 3]))
+        for m in mid[:2, k]:  # either way round: on the seam, at one end of the range or the other
+            assert min(abs(m - low[k]), abs(m - low[k] - span[k])) < 1e-12
+        assert mid[2, k] == pytest.approx(low[k] + 1.5) and np.allclose(mid[:, 1 - k], low[1 - k] + 1.0)
+        assert not np.isfinite(_periods(plane)[1]).any()
+        lo, hi = gmsh.model.getParametrizationBounds(2, plane)
+        ends = np.array([[lo[0] + 0.01, lo[1]], [hi[0] - 0.01, hi[1]]])
+        assert np.allclose(_seam_middles(plane, ends, np.array([0]), np.array([1])), ends.mean(axis=0))
