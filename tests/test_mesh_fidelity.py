@@ -197,6 +197,23 @@ def test_strip_width_is_the_distance_to_the_second_nearest_boundary_edge():
     assert strip_width(sliver, [side]) == np.inf
 
 
+def test_strip_width_finds_the_two_sides_of_one_closed_edge():
+    """A thin lens bounded by one closed polyline (an airfoil's end cap): its upper and lower sides are
+    parts of one edge, 0.1 apart in the middle; a round disk's boundary is nowhere that close to itself."""
+    from cadedge.mesh.quality import strip_width
+
+    x = np.linspace(-10.0, 10.0, 21)
+    half = 0.05 * (1.0 - (x / 10.0) ** 2)
+    lens = np.vstack([np.column_stack([x, half, 0 * x]), np.column_stack([x[::-1], -half[::-1], 0 * x])[1:]])
+    assert np.allclose(lens[0], lens[-1])
+    sliver = np.array([[-1.0, half[9], 0], [1.0, half[11], 0], [0.0, -0.05, 0]])
+    assert strip_width(sliver, [lens]) == pytest.approx(0.1, rel=0.05)
+    t = np.linspace(0.0, 2.0 * np.pi, 65)
+    disk = np.column_stack([np.cos(t), np.sin(t), 0 * t])
+    assert strip_width(np.array([[0.0, 0, 0], [0.5, 0, 0], [0, 0.5, 0]]), [disk]) > 0.5
+    assert strip_width(disk[[3, 4]], [disk]) > 1.5  # on the boundary: the far side is across the disk
+
+
 def test_a_zero_width_strip_is_named_as_forcing_small_angles():
     """A helical flight fused to a longer shaft: the flight's end line lies on the shaft cylinder's seam, so
     the shaft face has a strip of no width between the two, and whatever fills it is a sliver."""
@@ -207,7 +224,7 @@ def test_a_zero_width_strip_is_named_as_forcing_small_angles():
     result = mesh_shape(shaft.union(flight).val(), ald=1e-2)
     assert result.ok, result.problems()
     small = result.report.small_angles
-    strip = [s for s in small if s.forced and "wide there, between two of its boundary edges" in s.reason]
+    strip = [s for s in small if s.forced and "wide there, between two sides of its boundary" in s.reason]
     assert small and len(strip) >= 0.8 * len(small)  # before: none recognised (the strip has no corner)
 
 

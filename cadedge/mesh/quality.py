@@ -61,19 +61,43 @@ class SmallAngle:
     reason: str
 
 
+def _feet(p: np.ndarray, line: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's distance to each segment of polyline ``line`` (k, m) and where along the polyline its
+    foot there lies (arc length from the start, (k, m))."""
+    a, b = line[:-1], line[1:]
+    ab = b - a
+    seg = np.einsum("ij,ij->i", ab, ab)
+    t = np.clip(np.einsum("kij,ij->ki", p[:, None, :] - a[None], ab) / np.maximum(seg, 1e-300), 0.0, 1.0)
+    foot = a[None] + t[..., None] * ab[None]
+    start = np.concatenate([[0.0], np.cumsum(np.sqrt(seg))[:-1]])
+    return np.linalg.norm(foot - p[:, None, :], axis=2), start[None] + t * np.sqrt(seg)[None]
+
+
+def _fold_width(p: np.ndarray, line: np.ndarray) -> float:
+    """How far ``points`` lie from the far side of one boundary polyline: per point, the distance to the
+    nearest of its parts that lie farther along it (the short way round if it is closed) from the point's
+    nearest part than twice their distance from the point; the largest over the points (``inf`` if a point
+    has no such part). A straight or gently curved stretch has none; the two sides of a thin face bounded
+    by one closed edge (an airfoil's end cap) are such parts of each other."""
+    if len(line) < 3:
+        return np.inf
+    dist, along = _feet(p, line)
+    length = float(np.linalg.norm(np.diff(line, axis=0), axis=1).sum())
+    near = along[np.arange(len(p)), np.argmin(dist, axis=1)][:, None]
+    apart = np.abs(along - near)
+    if np.linalg.norm(line[0] - line[-1]) <= 1e-9 * max(length, 1e-300):
+        apart = np.minimum(apart, length - apart)
+    return float(np.where(apart > 2.0 * dist, dist, np.inf).min(axis=1).max())
+
+
 def strip_width(points: np.ndarray, polylines: Sequence[np.ndarray]) -> float:
     """How wide a face is where ``points`` lie, judged from its boundary: the smallest ``w`` such that
     every point is within ``w`` of two different ones of the face's boundary ``polylines`` (its edges'
-    grids); ``inf`` with fewer than two."""
+    grids), or of two parts of one of them (:func:`_fold_width`); ``inf`` if there is no such ``w``."""
     p = np.asarray(points, dtype=float).reshape(-1, 3)
-    far = []
-    for line in polylines:
-        a, b = line[:-1], line[1:]
-        ab = b - a
-        t = np.einsum("kij,ij->ki", p[:, None, :] - a[None], ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-        foot = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
-        far.append(float(np.linalg.norm(foot - p[:, None, :], axis=2).min(axis=1).max()))
-    return float(np.sort(far)[1]) if len(far) >= 2 else np.inf
+    far = [float(_feet(p, line)[0].min(axis=1).max()) for line in polylines]
+    two = float(np.sort(far)[1]) if len(far) >= 2 else np.inf
+    return min([two] + [_fold_width(p, np.asarray(line, dtype=float)) for line in polylines])
 
 
 def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray,
@@ -89,9 +113,9 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     :data:`WEDGE_BOUND` degrees (``atan(2 width / length)``, the width over the segment's middle; the
     segments are the edge grids', which stay).
 
-    Also forced: the triangle lies in a strip of its face between two of its boundary edges (``face_edges``:
-    face id -> its edges' grid polylines) so narrow (:func:`strip_width`) that no triangle as long as it
-    gets much over :data:`WEDGE_BOUND` degrees there. Two edges that coincide in space make a strip of no
+    Also forced: the triangle lies in a strip of its face between two of its boundary edges, or two sides
+    of one (``face_edges``: face id -> its edges' grid polylines), so narrow (:func:`strip_width`) that no
+    triangle as long as it gets much over :data:`WEDGE_BOUND` degrees there. Two edges that coincide in space make a strip of no
     width: a shaft's seam line with the end of a helical flight fused onto it.
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -146,7 +170,7 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             bound = float(np.degrees(np.arctan(2.0 * width / length))) if length > 0 else 0.0
             if bound < WEDGE_BOUND:
                 forced = True
-                reason = (f"the face is about {width:.2g} wide there, between two of its boundary edges, and "
+                reason = (f"the face is about {width:.2g} wide there, between two sides of its boundary, and "
                           f"the triangle is {length:.2g} long (no triangle that long gets much over "
                           f"{bound:.2g} degrees there)")
         out.append(SmallAngle(face=f, angle=float(ang[t].min()), forced=forced, reason=reason))
