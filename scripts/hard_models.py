@@ -13,8 +13,8 @@ shared by two solids), a STEP sewn across real gaps between its faces, disjoint 
 polyline and tolerances wider than a slot (OCCT BREP: STEP keeps no per-entity tolerances) and an IGES
 file of unsewn trimmed surfaces. A fourth: a thickened wavy plate (offset surfaces), a twisted blade
 with a sharp trailing edge (curvature radii from 27 mm to 0.1 mm on one face) and a propeller (three
-lofted blades with sharp edges on a hub), and a wing whose sections' splines hook back past the
-trailing edge to the seam. A fifth, parts drawn every day and scale: a gear, cadquery's
+lofted blades with sharp edges on a hub), and two wings whose sections' splines hook back past the
+trailing edge to the seam, one of them 0.12 mm thick. A fifth, parts drawn every day and scale: a gear, cadquery's
 bottle, a cut torus, an ellipsoid, a filleted cone on a cylinder, a mug, a filleted pocket box, a
 0.2 mm-walled shell, a thin washer, a sphere with a 0.3 mm hole, and the bracket fixture scaled by
 1e-3 and 1e3 and moved far from the origin.
@@ -69,18 +69,29 @@ def twisted_blade() -> object:
     return cq.Solid.makeLoft(wires, ruled=False).wrapped
 
 
-def hooked_wing() -> object:
-    """A wing lofted from a 20 mm NACA 0012 section to an 8 mm NACA 0010 one, 40 mm on: each section a
-    periodic spline through ten points starting at the trailing edge, which overshoots it by 0.3 mm and
-    hooks back to the seam (a sharp ridge beside the lofted face's seam)."""
+def _wing(scale: float) -> object:
+    """A wing lofted from a 20 mm NACA 0012 section to an 8 mm NACA 0010 one 40 mm on, its thickness
+    times ``scale``: each section a periodic spline through ten points starting at the trailing edge."""
     def section(chord: float, thickness: float, shift: float, z: float) -> cq.Wire:
         pts = []
         for k, x in enumerate((1.0, 0.8, 0.5, 0.25, 0.1, 0.0, 0.1, 0.25, 0.5, 0.8)):
             y = 5 * thickness * (0.2969 * math.sqrt(x) - 0.126 * x - 0.3516 * x**2 + 0.2843 * x**3 - 0.1036 * x**4)
-            pts.append(cq.Vector(shift + chord * x, chord * (y if k < 6 else -y), z))
+            pts.append(cq.Vector(shift + chord * x, scale * chord * (y if k < 6 else -y), z))
         return cq.Wire.assembleEdges([cq.Edge.makeSpline(pts, periodic=True)])
 
     return cq.Solid.makeLoft([section(20.0, 0.12, 0.0, 0.0), section(8.0, 0.10, 6.0, 40.0)], ruled=False).wrapped
+
+
+def hooked_wing() -> object:
+    """A wing whose sections' splines overshoot the trailing edge by 0.3 mm and hook back to the seam (a
+    sharp ridge beside the lofted face's seam)."""
+    return _wing(1.0)
+
+
+def razor_wing() -> object:
+    """hooked_wing 20 times thinner (0.12 mm over its 20 mm chord): its lofted face folds over a ridge at
+    both edges and its end caps are strips 0.03-0.1 mm wide bounded by one closed spline."""
+    return _wing(0.05)
 
 
 def thin_plate() -> object:
@@ -517,7 +528,8 @@ def write_pmi_step(path: Path) -> None:
 
 MODELS: dict[str, Callable[[], object]] = {
     "spring": spring, "revolved_spline": revolved_spline, "lofted_spline": lofted_spline,
-    "twisted_blade": twisted_blade, "hooked_wing": hooked_wing, "thin_plate": thin_plate, "sliver_faces": sliver_faces,
+    "twisted_blade": twisted_blade, "hooked_wing": hooked_wing, "razor_wing": razor_wing,
+    "thin_plate": thin_plate, "sliver_faces": sliver_faces,
     "tiny_edges": tiny_edges, "hole_through_fillet": hole_through_fillet, "bspline_cage": bspline_cage,
     "wavy_plate": wavy_plate, "loose_tolerance": loose_tolerance, "free_edges": free_edges,
     "seams_and_poles": seams_and_poles, "assembly": assembly,

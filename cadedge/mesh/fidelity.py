@@ -446,8 +446,8 @@ def after_generate(ctx) -> None:
     Planar faces are left alone (their area is fixed by their boundary polygon). Then curved faces far
     under the worst face are meshed again coarser (:func:`cadedge.mesh.coarsen.coarsen`), and curved faces
     short of their area by more than the target (faces held at a size floor: :data:`RIDGE_SPLIT` of it) and
-    at most :data:`DISAGREE` times it get edges split on their surface
-    (:func:`cadedge.mesh.midpoints.split_short_face`). What was done lands in ``ctx.fidelity``: the
+    at most :data:`DISAGREE` times it (faces held at a size floor: by any amount) get edges split on their
+    surface (:func:`cadedge.mesh.midpoints.split_short_faces`). What was done lands in ``ctx.fidelity``: the
     per-circle count each re-meshed face ended with, the faces coarsened and split.
     """
     import time
@@ -568,7 +568,8 @@ def after_generate(ctx) -> None:
     # floor past RIDGE_SPLIT of it: edges split on the surface
     short = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) in curved]
     split = split_short_faces(ctx, {s: RIDGE_SPLIT * target if s in floored else target for s in short},
-                              target=target, most=DISAGREE * target, deficit=deficit, areas=areas)
+                              target=target, most=DISAGREE * target, deficit=deficit, areas=areas,
+                              ridged=frozenset(floored))
     stuck = [f for f in stuck if f not in split]  # within their target now: the optimiser keeps them there
     ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "split": split,
                     "stuck": sorted(stuck),

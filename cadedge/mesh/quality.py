@@ -115,8 +115,8 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
 
     Also forced: the triangle lies in a strip of its face between two of its boundary edges, or two sides
     of one (``face_edges``: face id -> its edges' grid polylines), so narrow (:func:`strip_width`) that no
-    triangle as long as it gets much over :data:`WEDGE_BOUND` degrees there. Two edges that coincide in space make a strip of no
-    width: a shaft's seam line with the end of a helical flight fused onto it.
+    triangle as long as it gets much over :data:`WEDGE_BOUND` degrees there. Two edges that coincide in
+    space make a strip of no width: a shaft's seam line with the end of a helical flight fused onto it.
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     ang = triangle_angles(nodes, tris) if angles is None else angles
