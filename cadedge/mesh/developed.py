@@ -1,0 +1,352 @@
+"""Inside the gmsh job: a cone face with its apex on its boundary, cut along its seam, laid flat, meshed
+in the plane by gmsh and rolled back up.
+
+gmsh meshes a face in its parameters, where a cone's apex is a whole line of them. On cones narrower than
+about 20 degrees at the apex, gmsh 4.15 leaves triangles that overlap beside the seam near the apex, in
+each of its algorithms and at any size (a cone of radius 1 and height 6, sizes 0.05 to 1), and every
+strategy of :mod:`cadedge.mesh.generate` failed: a cone of radius 1 and height 40 took 175 s and was
+reported as failed. A cone is developable: cut along a generator it unrolls without stretching into a
+circular sector, its radius the slant length and its angle ``2 pi sin(a)`` (``a`` the half-angle). The
+face's boundary nodes are laid out in that sector (the seam's nodes twice, on its two straight sides, the
+apex once at its centre), the sector is meshed by gmsh as a plane face whose only boundary nodes are
+those, sized as the cone face would be at the matching points of the cone, and its interior nodes are
+rolled back onto the cone, where lengths and angles are those of the plane.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: A boundary point of the face this close to the cone's apex (a share of the cone's size) is its apex.
+APEX_TOL = 1e-7
+#: A node this close (radians) to the seam's generator lies on the seam.
+SEAM_TOL = 1e-7
+#: Sizes in the plane are at most the sector's width at their distance from the apex over this: each
+#: triangle then turns about an eighth of the way round the axis, however narrow the cone (a triangle
+#: across the whole sector, between the seam's two sides, would wrap round it; sizes clamped at
+#: ``Mesh.MeshSizeMin`` left 3 triangles round a 1 x 40 cone near its apex).
+WRAP = 8
+#: The apex's fan has this many triangles for a whole turn round the axis: the fewest that close round
+#: it, whose angles at the apex (the sector's over 3) are the largest it allows.
+FAN_TURN = 3
+#: A rolled-up triangle whose nodes spread round the axis by more than this (radians) is refused.
+MOST_TURN = 0.75 * np.pi
+
+
+@dataclass(frozen=True)
+class Cone:
+    """A cone by its ``apex``, unit ``axis`` (from the apex into the cone), unit ``e1`` (towards the
+    seam) and ``e2`` (the way its first parameter turns), and its half-angle's sine and cosine."""
+
+    apex: np.ndarray
+    axis: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    sin: float
+    cos: float
+
+    def unroll(self, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Points (k, 3) on the cone as (distance from the apex, angle round the axis from the seam in
+        [0, 2 pi))."""
+        w = np.asarray(xyz, dtype=float) - self.apex
+        rho = np.linalg.norm(w, axis=1)
+        phi = np.mod(np.arctan2(w @ self.e2, w @ self.e1), 2.0 * np.pi)
+        return rho, phi
+
+    def roll_up(self, rho: np.ndarray, phi: np.ndarray) -> np.ndarray:
+        """The cone's points (k, 3) at distances ``rho`` from the apex and angles ``phi`` round the axis."""
+        radial = np.cos(phi)[:, None] * self.e1 + np.sin(phi)[:, None] * self.e2
+        return self.apex + rho[:, None] * (self.cos * self.axis + self.sin * radial)
+
+
+def _circle(p: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre and radius of the circle through three points (3, 3)."""
+    a, b = p[1] - p[0], p[2] - p[0]
+    n = np.cross(a, b)
+    centre = p[0] + np.cross(np.dot(a, a) * b - np.dot(b, b) * a, n) / (2.0 * np.dot(n, n))
+    return centre, float(np.linalg.norm(p[0] - centre))
+
+
+def cone_of(surface: int) -> Cone | None:
+    """The cone of gmsh surface ``surface`` if it is a cone (gmsh's type) with its apex at one of the face's
+    boundary points; else None."""
+    import gmsh
+
+    if gmsh.model.getType(2, surface) != "Cone":
+        return None
+    lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
+    u = lo[0] + (hi[0] - lo[0]) * np.array([0.0, 0.25, 0.5])
+    rings = []
+    for v in lo[1] + (hi[1] - lo[1]) * np.array([0.25, 0.75]):
+        p = np.asarray(gmsh.model.getValue(2, surface, np.column_stack([u, np.full(3, v)]).ravel().tolist()),
+                       dtype=float).reshape(3, 3)
+        rings.append((*_circle(p), p))
+    (c0, r0, p0), (c1, r1, _) = rings
+    step = float(np.linalg.norm(c1 - c0))
+    if not (np.isfinite(r0) and np.isfinite(r1)) or abs(r1 - r0) <= 1e-9 * max(r0, r1, step) or step == 0.0:
+        return None
+    apex = c0 + (c1 - c0) * r0 / (r0 - r1)
+    axis = (c1 - c0) / step * np.sign(r1 - r0)
+    slant = float(np.hypot(step, r1 - r0))
+    e1 = (p0[0] - c0) / r0
+    e2 = np.cross(axis, e1)
+    if np.dot(p0[1] - c0, e2) < 0:  # the first parameter turns the other way
+        e2 = -e2
+    size = float(np.linalg.norm(p0[0] - apex)) + slant
+    points = [t for _, t in gmsh.model.getBoundary([(2, surface)], combined=False, recursive=True)]
+    at_apex = [np.linalg.norm(np.asarray(gmsh.model.getValue(0, abs(t), []), dtype=float) - apex)
+               <= APEX_TOL * size for t in points]
+    if not any(at_apex):
+        return None
+    return Cone(apex, axis, e1, e2, abs(r1 - r0) / slant, step / slant)
+
+
+def _loops(segments: list[tuple[int, int]]) -> list[list[int]] | None:
+    """The closed chains of ``segments`` (pairs of point keys), each as its segments' indices in order and
+    signed (``-i - 1``: segment ``i`` run backwards); None if they do not close."""
+    ends: dict[int, list[int]] = {}
+    for i, (a, b) in enumerate(segments):
+        ends.setdefault(a, []).append(i)
+        ends.setdefault(b, []).append(i)
+    if any(len(v) != 2 for v in ends.values()):
+        return None
+    used = [False] * len(segments)
+    loops = []
+    for first in range(len(segments)):
+        if used[first]:
+            continue
+        loop, i, at = [], first, segments[first][0]
+        while not used[i]:
+            used[i] = True
+            a, b = segments[i]
+            loop.append(i if a == at else -i - 1)
+            at = b if a == at else a
+            i = next((j for j in ends[at] if not used[j]), i)
+        loops.append(loop)
+    return loops
+
+
+def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
+    """Mesh (empty) gmsh surface ``surface`` on ``cone`` unrolled (see the module doc) with gmsh's 2-D
+    ``algorithm``, at the sizes gmsh's options and the face's sampled sizes give it now (:func:`_sizes`);
+    None if it passed, else why not (the surface is then left empty)."""
+    import gmsh
+
+    from .gmsh_model import surface_curve_uses
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    where = {int(t): i for i, t in enumerate(tags)}
+    xyz = np.asarray(coords, dtype=float).reshape(-1, 3)
+    segments, keys = [], {}  # plane points: (node tag, copy on the far side of the seam?) -> (rho, psi)
+    for curve, uses in surface_curve_uses(surface).items():
+        _, seg = gmsh.model.mesh.getElementsByType(1, curve)
+        for a, b in np.asarray(seg, dtype=np.int64).reshape(-1, 2).tolist():
+            rho, phi = cone.unroll(xyz[[where[a], where[b]]])
+            apex = rho <= APEX_TOL * max(rho.max(), 1e-300)
+            seam = ~apex & ((phi < SEAM_TOL) | (phi > 2.0 * np.pi - SEAM_TOL))
+            if uses == 2 and not seam.all() and not (seam | apex).all():
+                return "its seam's nodes do not lie on the cone's seam"
+            sides = (False, True) if uses == 2 else (None,)
+            for far in sides:
+                ends = []
+                for k, node in enumerate((a, b)):
+                    if apex[k]:
+                        key, angle = (node, False), 0.0
+                    elif seam[k]:
+                        other = phi[1 - k] if not (seam[1 - k] or apex[1 - k]) else None
+                        side = far if far is not None else bool(other is not None and other > np.pi)
+                        key, angle = (node, side), 2.0 * np.pi if side else 0.0
+                    else:
+                        key, angle = (node, False), float(phi[k])
+                    keys[key] = (float(rho[k]), angle * cone.sin)
+                    ends.append(key)
+                if ends[0] != ends[1]:  # a segment of the apex's degenerate edge has no length
+                    segments.append(tuple(ends))
+    tol = APEX_TOL * max(k[0] for k in keys.values())
+    apex = [key for key, (r, _) in keys.items() if r <= tol]
+    if len(apex) != 1:
+        return "its apex is not one node"
+    sector = 2.0 * np.pi * cone.sin
+    fan, segments = _fan(keys, segments, apex[0], sector)
+    if fan is None:
+        return "its apex does not join two boundary segments"
+    order = list(keys)
+    index = {key: i for i, key in enumerate(order)}
+    loops = _loops([(index[a], index[b]) for a, b in segments])
+    if not loops:
+        return "its boundary does not close when unrolled"
+    rho = np.array([keys[k][0] for k in order])
+    psi = np.array([keys[k][1] for k in order])
+    plane = np.column_stack([rho * np.cos(psi), rho * np.sin(psi)])
+    near = np.zeros(len(order))
+    count = np.zeros(len(order))
+    for a, b in segments:
+        length = float(np.linalg.norm(plane[index[a]] - plane[index[b]]))
+        for key in (a, b):
+            near[index[key]] += length
+            count[index[key]] += 1
+    near = np.minimum(near / np.maximum(count, 1), rho * sector / WRAP)
+    sizes = _sizes(surface, cone, sector)
+    current = gmsh.model.getCurrent()
+    saved = {o: gmsh.option.getNumber(o) for o in ("Mesh.Algorithm", "Mesh.MeshSizeExtendFromBoundary",
+                                                  "Mesh.MeshOnlyVisible", "Mesh.MeshOnlyEmpty", "Mesh.MeshSizeMin")}
+    gmsh.model.add("cadedge unrolled cone")
+    try:
+        gmsh.option.setNumber("Mesh.Algorithm", algorithm)
+        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
+        gmsh.option.setNumber("Mesh.MeshOnlyVisible", 0)
+        gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 0)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)  # the field's floor, but near the apex
+        points = [gmsh.model.geo.addPoint(px, py, 0.0, h) for (px, py), h in zip(plane, near)]
+        lines = [gmsh.model.geo.addLine(points[index[a]], points[index[b]]) for a, b in segments]
+        areas = []
+        for loop in loops:
+            ring = np.array([plane[index[segments[i][0]]] if i >= 0 else plane[index[segments[-i - 1][1]]]
+                             for i in loop])
+            areas.append(0.5 * float(np.dot(ring[:, 0], np.roll(ring[:, 1], -1))
+                                     - np.dot(ring[:, 1], np.roll(ring[:, 0], -1))))
+        outer = int(np.argmax(np.abs(areas)))
+        curve_loops = [gmsh.model.geo.addCurveLoop([lines[i] if i >= 0 else -lines[-i - 1] for i in loops[k]])
+                       for k in [outer] + [k for k in range(len(loops)) if k != outer]]
+        gmsh.model.geo.addPlaneSurface(curve_loops)
+        gmsh.model.geo.synchronize()
+        for line in lines:
+            gmsh.model.mesh.setTransfiniteCurve(line, 2)
+        _size_field(*sizes)
+        try:
+            gmsh.model.mesh.generate(2)
+        except Exception as err:  # gmsh raises a bare Exception with its last error message
+            return f"unrolled: {err}"
+        key_of = {}
+        for key, point in zip(order, points):
+            got = gmsh.model.mesh.getNodes(0, point)[0]
+            if len(got):
+                key_of[int(got[0])] = key
+        ptags, pcoords, _ = gmsh.model.mesh.getNodes()
+        _, ptri = gmsh.model.mesh.getElementsByType(2)
+    finally:
+        gmsh.model.remove()
+        gmsh.model.setCurrent(current)
+        for o, value in saved.items():
+            gmsh.option.setNumber(o, value)
+    if not len(ptri):
+        return "unrolled: gmsh made no triangles"
+    flat = np.asarray(pcoords, dtype=float).reshape(-1, 3)[:, :2]
+    for t, (px, py) in zip(np.asarray(ptags, dtype=np.int64).tolist(), flat):  # gmsh's interior nodes
+        if t not in key_of:
+            key_of[t] = ("new", t)
+            keys[key_of[t]] = (float(np.hypot(px, py)), float(np.mod(np.arctan2(py, px), 2.0 * np.pi)))
+    tri = [tuple(key_of[int(t)] for t in row) for row in np.asarray(ptri, dtype=np.int64).reshape(-1, 3)]
+    first = np.asarray(ptri[:3], dtype=np.int64)
+    turn_sign = np.sign(np.cross(*(np.diff(flat[[list(map(int, ptags)).index(int(t)) for t in first]], axis=0))))
+    tri += [f if np.sign(_signed(keys, f)) == turn_sign else (f[0], f[2], f[1]) for f in fan]
+    fresh = [k for k in keys if not isinstance(k[0], int) or k[0] < 0]
+    base = int(gmsh.model.mesh.getMaxNodeTag()) + 1
+    tag_of = {k: k[0] for k in keys if k not in fresh}
+    tag_of.update({k: base + i for i, k in enumerate(fresh)})
+    corners = np.array([[keys[k][1] / cone.sin if keys[k][0] > tol else np.nan for k in f] for f in tri])
+    if np.nanmax(np.nanmax(corners, axis=1) - np.nanmin(corners, axis=1)) > MOST_TURN:
+        return "unrolled: a triangle wraps round the cone's axis"
+    if fresh:
+        r = np.array([keys[k][0] for k in fresh])
+        points3 = cone.roll_up(r, np.array([keys[k][1] for k in fresh]) / cone.sin)
+        params = np.asarray(gmsh.model.getParametrization(2, surface, points3.ravel().tolist()), dtype=float)
+        gmsh.model.mesh.addNodes(2, surface, [tag_of[k] for k in fresh], points3.ravel().tolist(), params.tolist())
+    elements = np.array([[tag_of[k] for k in f] for f in tri], dtype=np.int64)
+    _orient(surface, elements)
+    gmsh.model.mesh.addElementsByType(surface, 2, [], elements.ravel().tolist())
+    return None
+
+
+def _sizes(surface: int, cone: Cone, sector: float) -> tuple[float, float, float, float]:
+    """The cone face's size at a distance ``r`` from the apex (in the plane as on the cone), as gmsh would
+    size the face now, is ``min(max(min(c r, b sqrt(r)), floor), w r)``; returns (c, b, floor, w), ``c``
+    ``inf`` and ``b`` 0 where unused. gmsh's curvature size is ``2 pi / (N k)`` with ``k = 1 / (r tan a)``;
+    the face's sampled sizes (:mod:`cadedge.mesh.interior`) are ``alpha / sqrt(k)``; the floor is
+    ``Mesh.MeshSizeMin`` or the face's size floor; ``w r`` is the sector's width at ``r`` over
+    :data:`WRAP`."""
+    import gmsh
+
+    from .interior import SIZES
+
+    tan = cone.sin / max(cone.cos, 1e-300)
+    per_circle = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature")
+    curvature = 2.0 * np.pi * tan / per_circle if per_circle > 0 else np.inf
+    root = 0.0
+    face = SIZES.faces.get(surface)
+    if face is not None and face.sizes is not None and len(face.sizes):
+        root = float(np.median(face.sizes * np.sqrt(face.k))) * np.sqrt(tan)
+    floor = max(gmsh.option.getNumber("Mesh.MeshSizeMin"), SIZES.floors.get(surface, 0.0))
+    return float(curvature), float(root), float(floor), float(sector / WRAP)
+
+
+def _size_field(curvature: float, root: float, floor: float, wrap: float) -> None:
+    """:func:`_sizes`' sizes as the background field of the current (plane) model."""
+    import gmsh
+
+    field = gmsh.model.mesh.field
+
+    def formula(text: str) -> int:
+        tag = field.add("MathEval")
+        field.setString(tag, "F", text)
+        return tag
+
+    r = "Sqrt(x*x+y*y)"
+    terms = ([formula(f"{float(curvature):.17g}*{r}")] if np.isfinite(curvature) else []) + (
+        [formula(f"{float(root):.17g}*Sqrt({r})")] if root > 0 else [])
+    if terms:
+        low = field.add("Min")
+        field.setNumbers(low, "FieldsList", terms)
+        high = field.add("Max")
+        field.setNumbers(high, "FieldsList", [low, formula(f"{float(floor):.17g}")])
+        terms = [high]
+    final = field.add("Min")
+    field.setNumbers(final, "FieldsList", terms + [formula(f"{float(wrap):.17g}*{r}")])
+    field.setAsBackgroundMesh(final)
+
+
+def _signed(keys: dict, corners: tuple) -> float:
+    """Twice the signed area, in the plane, of the triangle of three plane points (keys of ``keys``)."""
+    p = np.array([[r * np.cos(a), r * np.sin(a)] for r, a in (keys[k] for k in corners)])
+    return float(np.cross(p[1] - p[0], p[2] - p[0]))
+
+
+def _fan(keys: dict, segments: list, apex, sector: float) -> tuple[list | None, list]:
+    """The apex's two boundary segments replaced by a polyline of new points (added to ``keys``) between
+    their other ends, :data:`FAN_TURN` segments for the ``sector``'s whole angle (at least 3), and the
+    triangles (key triples) that fan from the apex to it; (None, segments) if the apex does not join
+    exactly two segments. A cone's apex closes round in at least three triangles (two would lie on each
+    other), each turning a share of the way round, so they are made here: gmsh's isotropic triangles
+    spanned the whole sector of a narrow cone between the seam's two sides."""
+    ends = [(a if b == apex else b) for a, b in segments if apex in (a, b)]
+    if len(ends) != 2:
+        return None, segments
+    (r0, a0), (r1, a1) = keys[ends[0]], keys[ends[1]]
+    k = max(3, int(np.ceil(FAN_TURN * abs(a1 - a0) / sector)))
+    ring = [ends[0]]
+    for j in range(1, k):
+        key = (-(len(keys) + 1), False)  # a new node: negative, unlike gmsh's tags
+        keys[key] = (r0 + (r1 - r0) * j / k, a0 + (a1 - a0) * j / k)
+        ring.append(key)
+    ring.append(ends[1])
+    kept = [seg for seg in segments if apex not in seg]
+    return [(apex, ring[j], ring[j + 1]) for j in range(k)], kept + list(zip(ring[:-1], ring[1:]))
+
+
+def _orient(surface: int, tri: np.ndarray) -> None:
+    """Turn triangles ``tri`` (node tags, in place) to run as gmsh's own do on ``surface``: their normals
+    along the surface's at their nodes."""
+    import gmsh
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    where = {int(t): i for i, t in enumerate(tags)}
+    xyz = np.asarray(coords, dtype=float).reshape(-1, 3)
+    p = xyz[[where[int(t)] for t in tri[:, :3].ravel()]].reshape(-1, 3, 3)
+    centre = p.mean(axis=1)
+    normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    _, uv = gmsh.model.getClosestPoint(2, surface, centre.ravel().tolist())
+    up = np.asarray(gmsh.model.getNormal(surface, list(uv)), dtype=float).reshape(-1, 3)
+    if np.sum(np.einsum("ij,ij->i", normal, up)) < 0:
+        tri[:, [1, 2]] = tri[:, [2, 1]]

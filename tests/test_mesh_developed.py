@@ -1,0 +1,94 @@
+"""Cones meshed unrolled (cadedge.mesh.developed): the development's geometry on plain arrays, a gmsh cone
+meshed flat and rolled back up, and a narrow cone through the whole mesher."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cadedge.mesh.developed import Cone, _fan, _loops
+
+
+def _cone(half_angle: float) -> Cone:
+    """A cone with its apex at (0, 0, 6) opening downwards."""
+    return Cone(apex=np.array([0.0, 0.0, 6.0]), axis=np.array([0.0, 0.0, -1.0]), e1=np.array([1.0, 0.0, 0.0]),
+                e2=np.array([0.0, -1.0, 0.0]), sin=float(np.sin(half_angle)), cos=float(np.cos(half_angle)))
+
+
+def test_unrolling_keeps_distances_from_the_apex_and_angles_round_the_axis():
+    cone = _cone(np.arctan(1.0 / 6.0))
+    rho = np.array([0.5, 1.0, 3.0, 6.08])
+    phi = np.array([0.0, 1.0, 3.0, 6.0])
+    points = cone.roll_up(rho, phi)
+    radius = np.hypot(points[:, 0], points[:, 1])
+    assert np.allclose(radius, (6.0 - points[:, 2]) / 6.0)  # on the cone
+    back_rho, back_phi = cone.unroll(points)
+    assert np.allclose(back_rho, rho) and np.allclose(back_phi, phi)
+
+
+def test_the_apex_fan_closes_the_sector_in_three_triangles_at_least():
+    """The seam's two copies beside the apex (keys 1 and 2, at the sector's two sides) are joined by new
+    points round the apex; the apex's segments are gone and the boundary still closes."""
+    sector = 2.0 * np.pi * 0.1
+    keys = {(0, False): (0.0, 0.0), (1, False): (1.0, 0.0), (1, True): (1.0, sector), (2, False): (5.0, 0.0),
+            (2, True): (5.0, sector)}
+    segments = [((0, False), (1, False)), ((1, False), (2, False)), ((2, False), (2, True)),
+                ((2, True), (1, True)), ((1, True), (0, False))]
+    fan, kept = _fan(keys, segments, (0, False), sector)
+    assert len(fan) == 3 and all(f[0] == (0, False) for f in fan)
+    assert all((0, False) not in seg for seg in kept)
+    turns = [abs(keys[f[2]][1] - keys[f[1]][1]) / 0.1 for f in fan]
+    assert np.allclose(turns, 2.0 * np.pi / 3.0)  # each a third of the way round the axis
+    index = {k: i for i, k in enumerate(keys)}
+    loops = _loops([(index[a], index[b]) for a, b in kept])
+    assert loops is not None and len(loops) == 1 and len(loops[0]) == len(kept)
+
+
+gmsh = pytest.importorskip("gmsh")
+
+
+def test_a_narrow_gmsh_cone_is_meshed_unrolled_on_its_curves():
+    """A cone of radius 1 and height 6 (gmsh's OCC kernel): gmsh's own mesh of it is not conforming (its
+    triangles overlap beside the seam near the apex); unrolled, every node is on the cone, the curves'
+    segments bound it as they should (the seam twice) and its area is within the chords' of the cone's."""
+    from cadedge.mesh.developed import cone_of, mesh_unrolled
+    from cadedge.mesh.generate import clear, surface_ok
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    with gmsh_session():
+        gmsh.model.occ.addCone(0, 0, 0, 0, 0, 6, 1.0, 0.0)
+        gmsh.model.occ.synchronize()
+        (side,) = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) == "Cone"]
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.05)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.2)
+        gmsh.model.mesh.generate(2)
+        assert not surface_ok(side)  # gmsh alone
+        clear([(2, side)])
+        cone = cone_of(side)
+        assert cone is not None and cone.sin == pytest.approx(1.0 / np.hypot(1.0, 6.0))
+        assert np.allclose(cone.apex, [0.0, 0.0, 6.0])
+        assert mesh_unrolled(side, cone, 1) is None
+        assert surface_ok(side)
+        tags, coords, _ = gmsh.model.mesh.getNodes(2, side, includeBoundary=True)
+        x = np.asarray(coords, dtype=float).reshape(-1, 3)
+        assert np.allclose(np.hypot(x[:, 0], x[:, 1]), (6.0 - x[:, 2]) / 6.0, atol=1e-9)
+        _, tri = gmsh.model.mesh.getElementsByType(2, side)
+        nodes, xyz, _ = gmsh.model.mesh.getNodes()
+        where = {int(t): i for i, t in enumerate(nodes)}
+        p = np.asarray(xyz, dtype=float).reshape(-1, 3)[[where[int(t)] for t in tri]].reshape(-1, 3, 3)
+        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+        assert 0.98 * np.pi * np.hypot(1.0, 6.0) < area < np.pi * np.hypot(1.0, 6.0)
+        assert cone_of(next(s for _, s in gmsh.model.getEntities(2) if s != side)) is None  # its base
+
+
+def test_a_narrow_cone_meshes_within_the_target(tmp_path):
+    """A solid cone of radius 1 and height 6 at 1e-2: its cone face failed in every gmsh strategy (the
+    last ones hung); unrolled it is meshed and within the target, with no folded triangle."""
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+
+    result = mesh_shape(cq.Solid.makeCone(1.0, 0.0, 6.0), ald=1e-2)
+    assert result.ok, result.problems()
+    assert not result.failures
+    assert all(abs(f.area_deficit) <= 1e-2 for f in result.report.faces)
+    assert result.report.folded == 0
