@@ -135,6 +135,7 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
     import gmsh
 
     from .gmsh_model import surface_curve_uses
+    from .planar import polygon_area
 
     tags, coords, _ = gmsh.model.mesh.getNodes()
     where = {int(t): i for i, t in enumerate(tags)}
@@ -201,12 +202,8 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
         gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)  # the field's floor, but near the apex
         points = [gmsh.model.geo.addPoint(px, py, 0.0, h) for (px, py), h in zip(plane, near)]
         lines = [gmsh.model.geo.addLine(points[index[a]], points[index[b]]) for a, b in segments]
-        areas = []
-        for loop in loops:
-            ring = np.array([plane[index[segments[i][0]]] if i >= 0 else plane[index[segments[-i - 1][1]]]
-                             for i in loop])
-            areas.append(0.5 * float(np.dot(ring[:, 0], np.roll(ring[:, 1], -1))
-                                     - np.dot(ring[:, 1], np.roll(ring[:, 0], -1))))
+        areas = [polygon_area(np.array([plane[index[segments[i][0]] if i >= 0 else index[segments[-i - 1][1]]]
+                                        for i in loop])) for loop in loops]
         outer = int(np.argmax(np.abs(areas)))
         curve_loops = [gmsh.model.geo.addCurveLoop([lines[i] if i >= 0 else -lines[-i - 1] for i in loops[k]])
                        for k in [outer] + [k for k in range(len(loops)) if k != outer]]
