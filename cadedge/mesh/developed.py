@@ -137,14 +137,13 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
     from .gmsh_model import surface_curve_uses
     from .planar import polygon_area
 
-    tags, coords, _ = gmsh.model.mesh.getNodes()
-    where = {int(t): i for i, t in enumerate(tags)}
-    xyz = np.asarray(coords, dtype=float).reshape(-1, 3)
     segments, keys = [], {}  # plane points: (node tag, copy on the far side of the seam?) -> (rho, psi)
     for curve, uses in surface_curve_uses(surface).items():
+        tags, coords, _ = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
+        position = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords, dtype=float).reshape(-1, 3)))
         _, seg = gmsh.model.mesh.getElementsByType(1, curve)
         for a, b in np.asarray(seg, dtype=np.int64).reshape(-1, 2).tolist():
-            rho, phi = cone.unroll(xyz[[where[a], where[b]]])
+            rho, phi = cone.unroll(np.array([position[a], position[b]]))
             apex = rho <= APEX_TOL * max(rho.max(), 1e-300)
             seam = ~apex & ((phi < SEAM_TOL) | (phi > 2.0 * np.pi - SEAM_TOL))
             if uses == 2 and not seam.all() and not (seam | apex).all():
@@ -252,7 +251,9 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
         params = np.asarray(gmsh.model.getParametrization(2, surface, points3.ravel().tolist()), dtype=float)
         gmsh.model.mesh.addNodes(2, surface, [tag_of[k] for k in fresh], points3.ravel().tolist(), params.tolist())
     elements = np.array([[tag_of[k] for k in f] for f in tri], dtype=np.int64)
-    _orient(surface, elements)
+    corners3 = cone.roll_up(np.array([keys[k][0] for f in tri for k in f]),
+                            np.array([keys[k][1] for f in tri for k in f]) / cone.sin).reshape(-1, 3, 3)
+    _orient(surface, elements, corners3)
     gmsh.model.mesh.addElementsByType(surface, 2, [], elements.ravel().tolist())
     return None
 
@@ -332,18 +333,13 @@ def _fan(keys: dict, segments: list, apex, sector: float) -> tuple[list | None, 
     return [(apex, ring[j], ring[j + 1]) for j in range(k)], kept + list(zip(ring[:-1], ring[1:]))
 
 
-def _orient(surface: int, tri: np.ndarray) -> None:
-    """Turn triangles ``tri`` (node tags, in place) to run as gmsh's own do on ``surface``: their normals
-    along the surface's at their nodes."""
+def _orient(surface: int, tri: np.ndarray, corners: np.ndarray) -> None:
+    """Turn triangles ``tri`` (node tags, in place; their corners' points (m, 3, 3)) to run as gmsh's own
+    do on ``surface``: their normals along the surface's at their centres."""
     import gmsh
 
-    tags, coords, _ = gmsh.model.mesh.getNodes()
-    where = {int(t): i for i, t in enumerate(tags)}
-    xyz = np.asarray(coords, dtype=float).reshape(-1, 3)
-    p = xyz[[where[int(t)] for t in tri[:, :3].ravel()]].reshape(-1, 3, 3)
-    centre = p.mean(axis=1)
-    normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    _, uv = gmsh.model.getClosestPoint(2, surface, centre.ravel().tolist())
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    _, uv = gmsh.model.getClosestPoint(2, surface, corners.mean(axis=1).ravel().tolist())
     up = np.asarray(gmsh.model.getNormal(surface, list(uv)), dtype=float).reshape(-1, 3)
     if np.sum(np.einsum("ij,ij->i", normal, up)) < 0:
         tri[:, [1, 2]] = tri[:, [2, 1]]

@@ -64,11 +64,11 @@ STRATEGIES = (
     Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
     Strategy("unrolled cone, MeshAdapt", 1, unrolled=True),
 )
-#: The strategies of a cone with its apex on its boundary, in order: unrolled right after the first
+#: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled right after the first
 #: (gmsh's meshers leave triangles overlapping beside the seam near the apex of cones narrower than about
 #: 20 degrees, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone), then the others.
-APEX_CONE_ORDER = (0,) + tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled) + tuple(
-    k for k, s in enumerate(STRATEGIES) if k and not s.unrolled)
+GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if not s.unrolled)
+APEX_CONE_ORDER = GMSH_ORDER[:1] + tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled) + GMSH_ORDER[1:]
 
 
 @dataclass
@@ -420,10 +420,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
             rec = out[s]
             if rec.ok:
                 continue
-            for k in APEX_CONE_ORDER if s in apex_cones else range(len(STRATEGIES)):
+            for k in APEX_CONE_ORDER if s in apex_cones else GMSH_ORDER:
                 strategy = STRATEGIES[k]
-                if strategy.unrolled and s not in apex_cones:
-                    continue
                 if k == 0 and s in tried_first:
                     continue  # failed in its batch: recorded there
                 if k in skip.get(rec.face, {}):
