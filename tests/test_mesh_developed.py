@@ -44,6 +44,55 @@ def test_the_apex_fan_closes_the_sector_in_three_triangles_at_least():
     assert loops is not None and len(loops) == 1 and len(loops[0]) == len(kept)
 
 
+def _needle_tip(gaps: np.ndarray, sector: float):
+    """Plane points of a cone face's boundary near its apex: the apex, the seam's nodes at ``cumsum(gaps)``
+    from it (on both sides of the sector) and a far segment closing the boundary; with :func:`_tip` run."""
+    from cadedge.mesh.developed import _tip
+
+    cone = _cone(np.arcsin(sector / (2.0 * np.pi)))
+    rho = np.cumsum(gaps)
+    keys = {(0, False): (0.0, 0.0)}
+    for i, r in enumerate(rho, start=1):
+        keys[(i, False)], keys[(i, True)] = (float(r), 0.0), (float(r), sector)
+    n = len(rho)
+    segments = ([((0, False), (1, False)), ((0, False), (1, True)), ((n, False), (n, True))]
+                + [((i, side), (i + 1, side)) for i in range(1, n) for side in (False, True)])
+    tri, left = _tip(keys, segments, (0, False), sector, cone)
+    return cone, keys, tri, left
+
+
+def test_the_tip_is_meshed_in_rings_out_to_where_the_sector_is_wide_enough():
+    """A 1.4-degree cone whose seam has nodes every 0.066 near the apex (a 1 x 40 cone at 1e-2): the fan
+    goes on in bands of 6 triangles while the sector is narrower than TIP segments; the triangles tile the
+    rings' polygon, none turns more than a third of the way round, and the boundary left for gmsh closes."""
+    from cadedge.mesh.developed import TIP
+    from cadedge.mesh.planar import polygon_area
+
+    sector = 2.0 * np.pi / 40.0
+    gaps = np.full(30, 0.066)
+    cone, keys, tri, left = _needle_tip(gaps, sector)
+    rings = int(np.ceil(TIP / sector))  # ring i (at 0.066 i) steps out while 0.066 i sector < TIP 0.066
+    assert len(tri) == 3 + 6 * (rings - 1)
+    plane = {k: (r * np.cos(a), r * np.sin(a)) for k, (r, a) in keys.items()}
+    outer = max(r for k, (r, _) in keys.items() if k[0] < 0)
+    assert outer == pytest.approx(0.066 * rings)
+    ring = sorted([k for k, (r, _) in keys.items() if abs(r - outer) < 1e-12], key=lambda k: keys[k][1])
+    area = abs(polygon_area(np.array([plane[(0, False)]] + [plane[k] for k in ring])))
+    areas = [abs(polygon_area(np.array([plane[k] for k in t]))) for t in tri]
+    assert sum(areas) == pytest.approx(area) and min(areas) > 0
+    turns = [np.ptp([keys[k][1] for k in t if keys[k][0] > 0]) / cone.sin for t in tri]
+    assert max(turns) <= 2.0 * np.pi / 3.0 + 1e-9
+    assert all(keys[k][0] >= outer - 1e-12 for seg in left for k in seg)  # the seam inside the rings is gone
+    index = {k: i for i, k in enumerate(keys)}
+    assert _loops([(index[a], index[b]) for a, b in left]) is not None
+
+
+def test_a_cone_with_long_seam_segments_keeps_the_fan_only_where_the_sector_is_wide():
+    """A 30-degree cone (the sector half a turn wide): the fan alone, 3 triangles."""
+    _, _, tri, _ = _needle_tip(np.full(5, 0.066), np.pi)
+    assert len(tri) == 3
+
+
 gmsh = pytest.importorskip("gmsh")
 
 

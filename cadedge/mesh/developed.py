@@ -11,6 +11,13 @@ face's boundary nodes are laid out in that sector (the seam's nodes twice, on it
 apex once at its centre), the sector is meshed by gmsh as a plane face whose only boundary nodes are
 those, sized as the cone face would be at the matching points of the cone, and its interior nodes are
 rolled back onto the cone, where lengths and angles are those of the plane.
+
+Near the apex, where the sector is narrower than the seam's segments, gmsh's triangles on those segments
+either span the sector (wrapping round the axis) or are slivers beside them. There the mesh is made
+here (:func:`_tip`): a fan of three triangles at the apex, then bands of six between rings of three
+points at the seam's nodes, out to where the sector is :data:`TIP` segments wide; gmsh meshes the rest.
+A 1 x 40 cone at 1e-3: 22 s with Frontal-Delaunay, where MeshAdapt on the whole sector took 50 s and
+Frontal-Delaunay wrapped triangles round it.
 """
 
 from __future__ import annotations
@@ -24,13 +31,26 @@ APEX_TOL = 1e-7
 #: A node this close (radians) to the seam's generator lies on the seam.
 SEAM_TOL = 1e-7
 #: Sizes in the plane are at most the sector's width at their distance from the apex over this: each
-#: triangle then turns about an eighth of the way round the axis, however narrow the cone (a triangle
+#: triangle then turns about a quarter of the way round the axis, however narrow the cone (a triangle
 #: across the whole sector, between the seam's two sides, would wrap round it; sizes clamped at
-#: ``Mesh.MeshSizeMin`` left 3 triangles round a 1 x 40 cone near its apex).
-WRAP = 8
+#: ``Mesh.MeshSizeMin`` left 3 triangles round a 1 x 40 cone near its apex). An eighth left slivers beside
+#: the seam's segments near the apex (0.8 degrees on that cone at 1e-2, 1.97% of its triangles under 20
+#: degrees; a quarter: 0.99%).
+WRAP = 4
 #: The apex's fan has this many triangles for a whole turn round the axis: the fewest that close round
 #: it, whose angles at the apex (the sector's over 3) are the largest it allows.
 FAN_TURN = 3
+#: The apex's fan is carried out along the seam (:func:`_tip`) while the sector at the ring is narrower
+#: than this many of the seam's next segments: on a 1 x 40 cone at 1e-3 (seam segments 0.027 near the
+#: apex, the sector 0.157 radians wide) gmsh's Frontal-Delaunay joined the seam's two sides by triangles
+#: spanning the sector out to 0.2 from the apex, where the sector is as wide as a segment; with 0.002
+#: segments, 2 left triangles turning 136 degrees just beyond the rings.
+TIP = 3.0
+#: A cone whose half-angle's sine is under this (15 degrees) is meshed unrolled before gmsh tries it as
+#: it is (:data:`cadedge.mesh.generate.NARROW_CONE_ORDER`): gmsh's Frontal-Delaunay hung for 60 s on a
+#: 1 x 40 cone at 1e-3 (1.4 degrees) before the unrolled strategies had their turn, and it fails on a
+#: 1 x 6 one (9.5 degrees); it meshes a 1 x 3 one (18.4 degrees) well.
+NARROW = float(np.sin(np.radians(15.0)))
 #: A rolled-up triangle whose nodes spread round the axis by more than this (radians) is refused.
 MOST_TURN = 0.75 * np.pi
 
@@ -169,7 +189,7 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
     if len(apex) != 1:
         return "its apex is not one node"
     sector = 2.0 * np.pi * cone.sin
-    fan, segments = _fan(keys, segments, apex[0], sector)
+    fan, segments = _tip(keys, segments, apex[0], sector, cone)
     if fan is None:
         return "its apex does not join two boundary segments"
     order = list(keys)
@@ -215,11 +235,7 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
             gmsh.model.mesh.generate(2)
         except Exception as err:  # gmsh raises a bare Exception with its last error message
             return f"unrolled: {err}"
-        key_of = {}
-        for key, point in zip(order, points):
-            got = gmsh.model.mesh.getNodes(0, point)[0]
-            if len(got):
-                key_of[int(got[0])] = key
+        point_nodes = [gmsh.model.mesh.getNodes(0, point)[0] for point in points]
         ptags, pcoords, _ = gmsh.model.mesh.getNodes()
         _, ptri = gmsh.model.mesh.getElementsByType(2)
     finally:
@@ -229,30 +245,37 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
             gmsh.option.setNumber(o, value)
     if not len(ptri):
         return "unrolled: gmsh made no triangles"
+    # rows: the boundary's points (``order``) first, then gmsh's interior nodes
+    ptags = np.asarray(ptags, dtype=np.int64)
     flat = np.asarray(pcoords, dtype=float).reshape(-1, 3)[:, :2]
-    for t, (px, py) in zip(np.asarray(ptags, dtype=np.int64).tolist(), flat):  # gmsh's interior nodes
-        if t not in key_of:
-            key_of[t] = ("new", t)
-            keys[key_of[t]] = (float(np.hypot(px, py)), float(np.mod(np.arctan2(py, px), 2.0 * np.pi)))
-    tri = [tuple(key_of[int(t)] for t in row) for row in np.asarray(ptri, dtype=np.int64).reshape(-1, 3)]
-    first = np.asarray(ptri[:3], dtype=np.int64)
-    turn_sign = np.sign(np.cross(*(np.diff(flat[[list(map(int, ptags)).index(int(t)) for t in first]], axis=0))))
-    tri += [f if np.sign(_signed(keys, f)) == turn_sign else (f[0], f[2], f[1]) for f in fan]
-    fresh = [k for k in keys if not isinstance(k[0], int) or k[0] < 0]
-    base = int(gmsh.model.mesh.getMaxNodeTag()) + 1
-    tag_of = {k: k[0] for k in keys if k not in fresh}
-    tag_of.update({k: base + i for i, k in enumerate(fresh)})
-    corners = np.array([[keys[k][1] / cone.sin if keys[k][0] > tol else np.nan for k in f] for f in tri])
-    if np.nanmax(np.nanmax(corners, axis=1) - np.nanmin(corners, axis=1)) > MOST_TURN:
+    row = np.full(int(ptags.max()) + 1, -1, dtype=np.int64)
+    for i, got in enumerate(point_nodes):
+        if len(got):
+            row[int(got[0])] = i
+    inner = row[ptags] < 0
+    row[ptags[inner]] = len(order) + np.arange(int(inner.sum()))
+    rho = np.concatenate([rho, np.hypot(flat[inner, 0], flat[inner, 1])])
+    psi = np.concatenate([psi, np.mod(np.arctan2(flat[inner, 1], flat[inner, 0]), 2.0 * np.pi)])
+    tri = row[np.asarray(ptri, dtype=np.int64)].reshape(-1, 3)
+    fans = np.array([[index[k] for k in f] for f in fan], dtype=np.int64)
+    xy = np.column_stack([rho * np.cos(psi), rho * np.sin(psi)])
+    turn = np.sign([np.cross(xy[b] - xy[a], xy[c] - xy[a]) for a, b, c in np.vstack([tri[:1], fans])])
+    flip = turn[1:] != turn[0]  # the fan turns as gmsh's triangles do
+    fans[flip] = fans[flip][:, [0, 2, 1]]
+    tri = np.vstack([tri, fans])
+    gmsh_tag = np.array([k[0] if isinstance(k[0], int) and k[0] > 0 else -1 for k in order]
+                        + [-1] * int(inner.sum()), dtype=np.int64)  # the face's own nodes keep their tags
+    fresh = np.flatnonzero(gmsh_tag < 0)
+    gmsh_tag[fresh] = int(gmsh.model.mesh.getMaxNodeTag()) + 1 + np.arange(len(fresh))
+    phi = np.where(rho > tol, psi / cone.sin, np.nan)[tri]
+    if np.nanmax(np.nanmax(phi, axis=1) - np.nanmin(phi, axis=1)) > MOST_TURN:
         return "unrolled: a triangle wraps round the cone's axis"
-    if fresh:
-        r = np.array([keys[k][0] for k in fresh])
-        points3 = cone.roll_up(r, np.array([keys[k][1] for k in fresh]) / cone.sin)
-        params = np.asarray(gmsh.model.getParametrization(2, surface, points3.ravel().tolist()), dtype=float)
-        gmsh.model.mesh.addNodes(2, surface, [tag_of[k] for k in fresh], points3.ravel().tolist(), params.tolist())
-    elements = np.array([[tag_of[k] for k in f] for f in tri], dtype=np.int64)
-    corners3 = cone.roll_up(np.array([keys[k][0] for f in tri for k in f]),
-                            np.array([keys[k][1] for f in tri for k in f]) / cone.sin).reshape(-1, 3, 3)
+    xyz = cone.roll_up(rho, psi / cone.sin)
+    if len(fresh):
+        params = np.asarray(gmsh.model.getParametrization(2, surface, xyz[fresh].ravel().tolist()), dtype=float)
+        gmsh.model.mesh.addNodes(2, surface, gmsh_tag[fresh].tolist(), xyz[fresh].ravel().tolist(), params.tolist())
+    elements = gmsh_tag[tri]
+    corners3 = xyz[tri]
     _orient(surface, elements, corners3)
     gmsh.model.mesh.addElementsByType(surface, 2, [], elements.ravel().tolist())
     return None
@@ -305,12 +328,6 @@ def _size_field(curvature: float, root: float, floor: float, wrap: float) -> Non
     field.setAsBackgroundMesh(final)
 
 
-def _signed(keys: dict, corners: tuple) -> float:
-    """Twice the signed area, in the plane, of the triangle of three plane points (keys of ``keys``)."""
-    p = np.array([[r * np.cos(a), r * np.sin(a)] for r, a in (keys[k] for k in corners)])
-    return float(np.cross(p[1] - p[0], p[2] - p[0]))
-
-
 def _fan(keys: dict, segments: list, apex, sector: float) -> tuple[list | None, list]:
     """The apex's two boundary segments replaced by a polyline of new points (added to ``keys``) between
     their other ends, :data:`FAN_TURN` segments for the ``sector``'s whole angle (at least 3), and the
@@ -321,16 +338,70 @@ def _fan(keys: dict, segments: list, apex, sector: float) -> tuple[list | None, 
     ends = [(a if b == apex else b) for a, b in segments if apex in (a, b)]
     if len(ends) != 2:
         return None, segments
-    (r0, a0), (r1, a1) = keys[ends[0]], keys[ends[1]]
-    k = max(3, int(np.ceil(FAN_TURN * abs(a1 - a0) / sector)))
-    ring = [ends[0]]
+    ring = _ring(keys, *ends, max(3, int(np.ceil(FAN_TURN * abs(keys[ends[1]][1] - keys[ends[0]][1]) / sector))))
+    kept = [seg for seg in segments if apex not in seg]
+    return [(apex, ring[j], ring[j + 1]) for j in range(len(ring) - 1)], kept + list(zip(ring[:-1], ring[1:]))
+
+
+def _ring(keys: dict, first, last, k: int) -> list:
+    """``k`` segments from plane point ``first`` to ``last`` (keys of ``keys``), their new points (added to
+    ``keys``) evenly between them in distance from the apex and in angle."""
+    (r0, a0), (r1, a1) = keys[first], keys[last]
+    ring = [first]
     for j in range(1, k):
         key = (-(len(keys) + 1), False)  # a new node: negative, unlike gmsh's tags
         keys[key] = (r0 + (r1 - r0) * j / k, a0 + (a1 - a0) * j / k)
         ring.append(key)
-    ring.append(ends[1])
-    kept = [seg for seg in segments if apex not in seg]
-    return [(apex, ring[j], ring[j + 1]) for j in range(k)], kept + list(zip(ring[:-1], ring[1:]))
+    return ring + [last]
+
+
+def _tip(keys: dict, segments: list, apex, sector: float, cone: Cone) -> tuple[list | None, list]:
+    """:func:`_fan`, then carried out along the seam: while the seam's next segment is longer than the
+    sector is wide at the ring over :data:`TIP` (gmsh's triangles on such a segment either span the sector,
+    wrapping round the axis, or are slivers beside it), the ring's two ends step out to the seam's next
+    node and a ring as many points round joins them; the band between the two rings is filled with two
+    triangles per step round, split along the diagonal that gives them the larger smallest angle on the
+    cone. Stops before the seam's last segment and before any other boundary point comes as near the apex
+    as one segment beyond the ring. Returns the triangles and the boundary segments left for gmsh."""
+    from .quality import triangle_angles
+
+    fan, segments = _fan(keys, segments, apex, sector)
+    if fan is None:
+        return None, segments
+    ring = [fan[0][1]] + [f[2] for f in fan]
+    if ring[0][0] != ring[-1][0]:  # not the seam's two copies of one node: the apex's fan only
+        return fan, segments
+    tri = list(fan)
+    seam = {key[0] for key in keys if key[1] is True}
+    nearest = min((r for key, (r, _) in keys.items() if key[0] not in seam and key != apex and key[0] > 0),
+                  default=np.inf)  # the nearest boundary point off the seam
+    while True:
+        around = {}
+        for seg in segments:
+            for x, y in (seg, seg[::-1]):
+                around.setdefault(x, []).append(y)
+        step = [[n for n in around[end] if n != inner] for end, inner in ((ring[0], ring[1]), (ring[-1], ring[-2]))]
+        if any(len(nx) != 1 for nx in step):
+            return tri, segments
+        a, b = step[0][0], step[1][0]
+        beyond = [[n for n in around.get(x, []) if n != y] for x, y in ((a, ring[0]), (b, ring[-1]))]
+        rho, gap = keys[ring[0]][0], keys[a][0] - keys[ring[0]][0]
+        if (a[0] != b[0] or any(len(n) != 1 for n in beyond) or beyond[0][0][0] != beyond[1][0][0]
+                or not gap > 0 or rho * sector >= TIP * gap):
+            return tri, segments
+        if keys[a][0] + gap >= nearest:
+            return tri, segments
+        out = _ring(keys, a, b, len(ring) - 1)
+        for j in range(len(ring) - 1):
+            options = [((ring[j], ring[j + 1], out[j + 1]), (ring[j], out[j + 1], out[j])),
+                       ((ring[j], ring[j + 1], out[j]), (ring[j + 1], out[j + 1], out[j]))]
+            pts = cone.roll_up(*(np.array([keys[k][i] for o in options for t in o for k in t]) / (1.0, cone.sin)[i]
+                                 for i in (0, 1)))
+            worst = triangle_angles(pts, np.arange(12).reshape(-1, 3)).min(axis=1).reshape(2, 2).min(axis=1)
+            tri.extend(options[int(np.argmax(worst))])
+        old = set(zip(ring[:-1], ring[1:])) | {(ring[0], a), (a, ring[0]), (ring[-1], b), (b, ring[-1])}
+        segments = [seg for seg in segments if seg not in old] + list(zip(out[:-1], out[1:]))
+        ring = out
 
 
 def _orient(surface: int, tri: np.ndarray, corners: np.ndarray) -> None:

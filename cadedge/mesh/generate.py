@@ -63,12 +63,16 @@ STRATEGIES = (
     Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
     Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
     Strategy("unrolled cone, MeshAdapt", 1, unrolled=True),
+    Strategy("unrolled cone, Frontal-Delaunay", 6, unrolled=True),
 )
-#: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled right after the first
-#: (gmsh's meshers leave triangles overlapping beside the seam near the apex of cones narrower than about
-#: 20 degrees, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone), then the others.
+#: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled
+#: right after the first (gmsh's meshers leave triangles overlapping beside the seam near the apex of
+#: narrow cones, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone at 1e-2, 60 s and more at
+#: 1e-3), then the others; a cone narrower than :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
 GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if not s.unrolled)
-APEX_CONE_ORDER = GMSH_ORDER[:1] + tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled) + GMSH_ORDER[1:]
+UNROLLED = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled)
+APEX_CONE_ORDER = GMSH_ORDER[:1] + UNROLLED + GMSH_ORDER[1:]
+NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
 
 
 @dataclass
@@ -400,15 +404,18 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
     out = {s: FaceOutcome(face=face_of.get(s, s), surface=s) for s in surfaces}
-    from .developed import cone_of
+    from .developed import NARROW, cone_of
 
-    apex_cones = {s for s in surfaces if cone_of(s) is not None}
+    cones = {s: cone_of(s) for s in surfaces}
+    order = {s: GMSH_ORDER if c is None else NARROW_CONE_ORDER if c.sin < NARROW else APEX_CONE_ORDER
+             for s, c in cones.items()}
     split_done: set[int] = set()
     # faces with attempts barred (they hung, crashed or failed in an earlier run) go last: the others are
     # meshed before the time runs out
     queue = sorted(surfaces, key=lambda s: face_of.get(s, s) in skip and face_of.get(s, s) not in known_ok)
     late = deadline is not None and time.time() > deadline
     batched = [s for s in queue if batch_started is not None and out[s].face not in no_batch
+               and order[s][0] == 0
                and 0 not in skip.get(out[s].face, {}) and known_ok.get(out[s].face, 0) == 0
                and (not late or out[s].face in known_ok)]
     try:
@@ -420,7 +427,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
             rec = out[s]
             if rec.ok:
                 continue
-            for k in APEX_CONE_ORDER if s in apex_cones else GMSH_ORDER:
+            for k in order[s]:
                 strategy = STRATEGIES[k]
                 if k == 0 and s in tried_first:
                     continue  # failed in its batch: recorded there
