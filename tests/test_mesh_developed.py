@@ -93,6 +93,34 @@ def test_a_cone_with_long_seam_segments_keeps_the_fan_only_where_the_sector_is_w
     assert len(tri) == 3
 
 
+def test_slivers_at_a_needle_cones_apex_are_named_forced_by_it():
+    """The tip of a 1.4-degree cone rolled up: the fan's triangles (2.5 degrees at the apex) and the bands'
+    triangles standing on the seam's segments are forced by the cone, with the reason; a band triangle
+    standing on no curve segment is not."""
+    from cadedge.mesh.quality import small_angles, triangle_angles
+
+    sector = 2.0 * np.pi / 40.0
+    gaps = np.full(30, 0.066)
+    cone, keys, tri, _ = _needle_tip(gaps, sector)
+    order = [k for k in keys if k[1] is False]  # the seam's two copies of a node are one node on the cone
+    index = {k: i for i, k in enumerate(order)}
+    index.update({k: index[(k[0], False)] for k in keys if k[1] is True})
+    rho = np.array([keys[k][0] for k in order])
+    nodes = cone.roll_up(rho, np.array([keys[k][1] for k in order]) / cone.sin)
+    rows = np.array([[index[k] for k in t] for t in tri])
+    seam = cone.roll_up(np.concatenate([[0.0], np.cumsum(gaps)]), np.zeros(len(gaps) + 1))
+    smalls = small_angles(nodes, rows, np.ones(len(rows), dtype=int), cone.apex[None], face_edges={1: [seam]})
+    low = triangle_angles(nodes, rows).min(axis=1) < 5.0
+    at_apex = low & (rows == index[(0, False)]).any(axis=1)
+    on_seam = low & ~at_apex & np.array([any(a[0] > 0 and b[0] > 0 and keys[a][1] == keys[b][1] in (0.0, sector)
+                                             for a, b in zip(t, t[1:] + t[:1])) for t in tri])
+    assert len(smalls) == low.sum() and at_apex.sum() == 3 and on_seam.sum() > 0 and (low & ~at_apex & ~on_seam).any()
+    reasons = [s.reason for s in smalls if s.forced]
+    assert sum("at least 3 triangles meet there" in r for r in reasons) == 3
+    assert sum("curve segment" in r for r in reasons) == on_seam.sum()
+    assert sum(not s.forced for s in smalls) == (low & ~at_apex & ~on_seam).sum()
+
+
 gmsh = pytest.importorskip("gmsh")
 
 

@@ -100,6 +100,48 @@ def strip_width(points: np.ndarray, polylines: Sequence[np.ndarray]) -> float:
     return min([two] + [_fold_width(p, np.asarray(line, dtype=float)) for line in polylines])
 
 
+def _on_polyline(a: np.ndarray, b: np.ndarray, polylines: Sequence[np.ndarray]) -> bool:
+    """Whether the segment ``a``-``b`` is a segment of one of ``polylines`` (an edge grid's)."""
+    tol = 1e-9 * (1.0 + max(np.abs(a).max(), np.abs(b).max()))
+    for line in polylines:
+        line = np.asarray(line, dtype=float)
+        i = np.flatnonzero(np.linalg.norm(line - a, axis=1) <= tol)
+        j = np.flatnonzero(np.linalg.norm(line - b, axis=1) <= tol)
+        if len(i) and len(j) and np.min(np.abs(i[:, None] - j[None, :])) == 1:
+            return True
+    return False
+
+
+def _closing(nodes: np.ndarray, tri: np.ndarray, angles: np.ndarray, apex: int, total: float,
+             polylines: Sequence[np.ndarray]) -> tuple[bool, str]:
+    """Whether (and why) a face closing round a B-rep vertex inside its mesh (node ``apex``, its triangles'
+    angles there summing to ``total`` degrees, under three times :data:`SLIVER_DEG`: a narrow cone's
+    apex) forces a small angle on triangle ``tri`` (its ``angles``).
+
+    At least three triangles meet there (two would lie on each other), so one of them has at most a
+    third of ``total`` there: a triangle with its small angle at the apex is forced. Near the apex the face
+    is a thin tube about ``reach * total / pi`` across (``reach`` the distance from the apex: the tube's
+    girth is ``reach * total``): a triangle standing on an edge grid's segment (``polylines``, the seam's
+    among them) much longer than that is forced too when no triangle on that segment gets much over
+    :data:`WEDGE_BOUND` degrees there, ``atan(2 width / length)`` as for a wedge."""
+    corner = np.flatnonzero(tri == apex)
+    if len(corner) and angles[corner[0]] < SLIVER_DEG:
+        return True, (f"the face closes round a B-rep vertex (a cone's apex) in {total:.2g} degrees: at least 3 "
+                      f"triangles meet there, so one has at most {total / 3.0:.2g} degrees there")
+    p = nodes[tri]
+    for k in range(3):  # its sides that are curve segments
+        a, b = p[k], p[(k + 1) % 3]
+        length = float(np.linalg.norm(a - b))
+        reach = float(np.linalg.norm(0.5 * (a + b) - nodes[apex]))
+        width = reach * np.radians(total) / np.pi
+        bound = float(np.degrees(np.arctan(2.0 * width / length))) if length > 0 else 90.0
+        if bound < WEDGE_BOUND and _on_polyline(a, b, polylines):
+            return True, (f"the face closes round a B-rep vertex (a cone's apex) in {total:.2g} degrees and the "
+                          f"triangle stands on a {length:.2g} curve segment {reach:.2g} from it, where the face "
+                          f"is about {width:.2g} across (no triangle on it gets much over {bound:.2g} degrees)")
+    return False, "not forced by the B-rep"
+
+
 def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray,
                  vertex_points: np.ndarray, angles: np.ndarray | None = None, *,
                  face_edges: Mapping[int, Sequence[np.ndarray]] | None = None) -> list[SmallAngle]:
@@ -127,6 +169,7 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     nodes = np.asarray(nodes, dtype=float)
     vpts = np.asarray(vertex_points, dtype=float).reshape(-1, 3)
     wedges: dict[int, tuple[float, set[int], set[tuple[int, int]], np.ndarray | None]] = {}
+    apexes: dict[int, tuple[int, float]] = {}  # face -> its narrowest closing vertex's node and total angle
     for f in np.unique(faces[low]).tolist():
         mine = faces == f
         ftri, fang = tris[mine], ang[mine]
@@ -135,12 +178,15 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         boundary = set(np.unique(uniq[counts == 1]).tolist())
         sides = {(int(a), int(b)) for a, b in uniq[counts == 1]}
         sharpest, corner = 180.0, None
-        if len(vpts):
-            for node in boundary:
-                if np.min(np.linalg.norm(vpts - nodes[node], axis=1)) <= 1e-9 * (1.0 + np.abs(nodes[node]).max()):
-                    total = float(np.sum(fang[ftri == node]))
-                    if total < sharpest:
-                        sharpest, corner = total, nodes[node]
+        inner = set(np.unique(tris[low[faces[low] == f]]).tolist()) - boundary  # an apex is a slivers' node
+        for node in boundary | inner if len(vpts) else ():
+            if np.min(np.linalg.norm(vpts - nodes[node], axis=1)) <= 1e-9 * (1.0 + np.abs(nodes[node]).max()):
+                total = float(np.sum(fang[ftri == node]))
+                if node in inner:
+                    if total < apexes.get(f, (0, 3.0 * SLIVER_DEG))[1]:
+                        apexes[f] = (node, total)
+                elif total < sharpest:
+                    sharpest, corner = total, nodes[node]
         wedges[f] = (sharpest, boundary, sides, corner)
     out = []
     for t in low[np.argsort(ang[low].min(axis=1))]:
@@ -163,6 +209,8 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                     reason = (f"the face narrows to a {sharpest:.2g}-degree corner at a B-rep vertex and the "
                               f"triangle stands on a {length:.2g} boundary segment in its wedge, about "
                               f"{width:.2g} wide there (no triangle on it gets much over {bound:.2g} degrees)")
+        if not forced and f in apexes:
+            forced, reason = _closing(nodes, tris[t], ang[t], *apexes[f], (face_edges or {}).get(f, ()))
         if not forced and face_edges and f in face_edges:
             p = nodes[tris[t]]
             length = float(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1).max())
