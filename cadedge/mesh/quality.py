@@ -2,7 +2,8 @@
 
 A triangle's quality here is its smallest interior angle. Simulation wants none below 5 degrees and
 at least 99% at 20 degrees or more. A face corner sharper than 5 degrees (two boundary edges meeting
-almost tangentially) forces a small angle on whatever triangle fills it: such triangles are named with
+almost tangentially) forces a small angle on whatever triangle fills it, as do a strip narrower than its
+boundary segments and the apex of a cone narrower than about 2.4 degrees: such triangles are named with
 that reason instead of counted against the mesher.
 """
 
@@ -159,6 +160,10 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     of one (``face_edges``: face id -> its edges' grid polylines), so narrow (:func:`strip_width`) that no
     triangle as long as it gets much over :data:`WEDGE_BOUND` degrees there. Two edges that coincide in
     space make a strip of no width: a shaft's seam line with the end of a helical flight fused onto it.
+
+    Also forced: near a B-rep vertex inside the face's mesh round which its triangles' angles sum to under
+    three times :data:`SLIVER_DEG` (a narrow cone's apex; :func:`_closing`), a triangle with its small
+    angle there, or standing on a curve segment much longer than the face is across there.
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     ang = triangle_angles(nodes, tris) if angles is None else angles
