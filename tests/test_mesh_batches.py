@@ -14,14 +14,19 @@ pytest.importorskip("trimesh")
 
 import cadedge  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
-from cadedge.mesh.generate import BATCH_FACES, STRATEGIES, _chunks  # noqa: E402
+from cadedge.mesh.generate import BATCH_FACES, STRATEGIES, _chunk_size  # noqa: E402
 
 from conftest import FIXTURES  # noqa: E402
 
 
-def test_chunks_grow_from_one_face_to_the_batch_size():
-    sizes = [len(c) for c in _chunks(list(range(100)))]
-    assert sizes[:5] == [1, 2, 4, 8, 16] and set(sizes[5:-1]) == {BATCH_FACES} and sum(sizes) == 100
+def test_chunks_grow_from_one_face_to_the_batch_size_unless_faces_take_long():
+    sizes, size = [], 0
+    for _ in range(8):
+        size = _chunk_size(size, 0.5, 60.0)
+        sizes.append(size)
+    assert sizes == [1, 2, 4, 8, 16, BATCH_FACES, BATCH_FACES, BATCH_FACES]
+    assert _chunk_size(2, 17.5, 60.0) == 1  # two faces took 35 s: a quarter of the bound holds one
+    assert _chunk_size(8, 4.0, 60.0) == 3 and _chunk_size(8, 4.0, None) == 16
 
 
 def test_a_first_face_that_hangs_alone_costs_only_its_own_attempt():

@@ -2,7 +2,7 @@
 
 Every surface is meshed on its own (``Mesh.MeshOnlyVisible`` with only that surface visible), so one face
 that gmsh cannot mesh, or that hangs or crashes it, is known by name. The first attempt meshes faces in
-batches of 1, 2, 4, ... up to :data:`BATCH_FACES` faces (one ``generate`` call each: every call re-walks the
+batches of 1, 2, 4, ... up to :data:`BATCH_FACES` faces, fewer where faces take long (one ``generate`` call each: every call re-walks the
 whole model's mesh, so one call per face grows quadratically with the model, 15-25% of the time on a
 192-face model); a batch that hangs or crashes gmsh is done again face by face. A face passes when it carries
 triangles whose edges on its boundary curves are exactly the curve segments, each used as often as the
@@ -331,32 +331,41 @@ def remesh_curves(curves: list[int]) -> list[int]:
 #: Faces meshed in one gmsh call on the first attempt (see the module doc); a chunk must finish within the
 #: watchdog's time for one attempt.
 BATCH_FACES = 24
+#: A chunk is planned to take at most this share of the watchdog's bound on one attempt, at the CPU time
+#: per face the chunk before it took: sphere_grooves at ALD 1e-3 (tori of 190k-240k triangles each,
+#: 17 s of CPU a face) had 4 of them in one chunk, stopped as hung at 60 s and meshed again one by one.
+BATCH_SHARE = 0.25
 #: gmsh options a ``prepare`` hook may set per face: faces share a gmsh call only when these agree.
 FACE_OPTIONS = ("Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeMin", "Mesh.MeshSizeMax", "Mesh.MeshSizeFactor",
                 "Mesh.AlgorithmSwitchOnFailure")
 
 
-def _chunks(surfaces: list[int]) -> list[list[int]]:
-    """``surfaces`` in chunks of 1, 2, 4, ... faces, then :data:`BATCH_FACES`: a chunk stopped as hung
-    loses the time of all its faces, so the first chunks are small (on mesh_T106_V3 in sizes mode at ALD
-    1e-3, face 1 alone takes about 50 s of CPU: the 8 faces in one chunk were stopped at the bound of one
-    attempt, and meshed one by one after it only 1 face was done by the soft deadline); large models
-    still get chunks of :data:`BATCH_FACES` after the first few."""
-    out, i, size = [], 0, 1
-    while i < len(surfaces):
-        out.append(surfaces[i:i + size])
-        i += size
-        size = min(2 * size, BATCH_FACES)
-    return out
+def _chunk_size(last: int, per_face: float, bound: float | None) -> int:
+    """The next chunk's size after one of ``last`` faces (0: none yet) that took ``per_face`` seconds of CPU
+    a face: 1, 2, 4, ... then :data:`BATCH_FACES` (a chunk stopped as hung loses the time of all its faces,
+    so the first chunks are small: on mesh_T106_V3 in sizes mode at ALD 1e-3, face 1 alone takes about 50 s
+    of CPU; the 8 faces in one chunk were stopped at the bound of one attempt, and meshed one by one after
+    it only 1 face was done by the soft deadline), and no more than take :data:`BATCH_SHARE` of ``bound``
+    (the watchdog's bound on one attempt) at that rate."""
+    size = min(2 * last, BATCH_FACES) if last else 1
+    if bound and per_face > 0:
+        size = max(1, min(size, int(BATCH_SHARE * bound / per_face)))
+    return size
 
 
 def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
                   batch_started: Callable[[list[int]], None], prepare: Callable[[int, int], None],
-                  finished: Callable[[int, int, str | None], None]) -> None:
-    """The first strategy on ``surfaces`` in :func:`_chunks`, one gmsh call per group of
-    faces whose ``prepare`` leaves the same :data:`FACE_OPTIONS`; outcomes go into ``out``."""
+                  finished: Callable[[int, int, str | None], None], bound: float | None = None) -> None:
+    """The first strategy on ``surfaces`` in chunks (:func:`_chunk_size`, with the watchdog's ``bound`` on
+    one attempt), one gmsh call per group of faces whose ``prepare`` leaves the same :data:`FACE_OPTIONS`;
+    outcomes go into ``out``."""
     first = STRATEGIES[0]
-    for chunk in _chunks(surfaces):
+    done, size, per_face = 0, 0, 0.0
+    while done < len(surfaces):
+        size = _chunk_size(size, per_face, bound)
+        chunk = surfaces[done:done + size]
+        done += len(chunk)
+        cpu = time.process_time()
         batch_started([out[s].face for s in chunk])
         groups: dict[tuple[float, ...], list[int]] = {}
         for s in chunk:
@@ -370,6 +379,7 @@ def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
                     out[s].strategy = first.name
                 else:
                     out[s].attempts.append((first.name, reason))
+        per_face = (time.process_time() - cpu) / len(chunk)
 
 
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
@@ -381,7 +391,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                batch_started: Callable[[list[int]], None] | None = None,
                prepare: Callable[[int, int], None] = lambda face, strategy: None,
                no_batch: set[int] | frozenset[int] = frozenset(),
-               cleared: Callable[[list[int]], None] = lambda faces: None) -> dict[int, FaceOutcome]:
+               cleared: Callable[[list[int]], None] = lambda faces: None,
+               batch_bound: float | None = None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`STRATEGIES`; returns each surface's outcome.
 
     ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
@@ -396,6 +407,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     ``batch_started(faces)`` is called before each chunk, ``prepare(face, k)`` sets a face's options (it is
     also what ``started`` should call), ``finished`` follows each face of the batch. ``cleared(faces)`` names
     meshed faces cleared because a neighbour's strategy changed their boundary (they are meshed again).
+    ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches.
     """
     skip = skip or {}
     known_ok = known_ok or {}
@@ -420,7 +432,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                and (not late or out[s].face in known_ok)]
     try:
         if batched:
-            _mesh_batches(out, batched, batch_started=batch_started, prepare=prepare, finished=finished)
+            _mesh_batches(out, batched, batch_started=batch_started, prepare=prepare, finished=finished,
+                          bound=batch_bound)
         tried_first = set(batched)
         while queue:
             s = queue.pop(0)

@@ -221,6 +221,7 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     kill_at = t0 + KILL_SHARE * timeout
     job.deadline = time.time() + SOFT_SHARE * timeout
     job.finish_by = time.time() + FINISH_SHARE * timeout
+    job.attempt_bound = face_timeout
     events: list[str] = []
     skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
     known_ok: dict[int, int] = dict(job.known_ok)

@@ -65,6 +65,7 @@ class MeshJob:
     finish_by: float | None = None  # time.time() after which no optional step (the optimiser) goes on
     no_batch: set[int] = field(default_factory=set)  # faces meshed one by one (their batch hung or crashed)
     no_refine: set[int] = field(default_factory=set)  # faces not to mesh again finer (that hung or crashed)
+    attempt_bound: float | None = None  # the watchdog's bound on one face attempt, CPU seconds (sizes batches)
     hooks: dict[str, list[str]] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)  # free-form settings for hooks
 
@@ -339,7 +340,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
                                   batch_started=lambda faces: say("batch " + " ".join(map(str, faces))),
-                                  prepare=prepare, no_batch=job.no_batch | ctx.alone,
+                                  prepare=prepare, no_batch=job.no_batch | ctx.alone, batch_bound=job.attempt_bound,
                                   cleared=lambda faces: [deliver(2, f, None) for f in faces] if deliver else None)
         deliver_edges()
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
