@@ -2,9 +2,10 @@
 
 Every surface is meshed on its own (``Mesh.MeshOnlyVisible`` with only that surface visible), so one face
 that gmsh cannot mesh, or that hangs or crashes it, is known by name. The first attempt meshes faces in
-batches of 1, 2, 4, ... up to :data:`BATCH_FACES` faces, fewer where faces take long (one ``generate`` call each: every call re-walks the
-whole model's mesh, so one call per face grows quadratically with the model, 15-25% of the time on a
-192-face model); a batch that hangs or crashes gmsh is done again face by face. A face passes when it carries
+batches of 1, 2, 4, ... up to :data:`BATCH_FACES` faces, fewer where faces take long (one ``generate``
+call each: every call re-walks the whole model's mesh, so one call per face grows quadratically with the
+model, 15-25% of the time on a 192-face model); a batch that hangs or crashes gmsh is done again face by
+face. A face passes when it carries
 triangles whose edges on its boundary curves are exactly the curve segments, each used as often as the
 curve bounds the face (seams twice), and whose other edges are shared by two triangles. A face that
 fails is cleared and retried through :data:`STRATEGIES`: other 2-D algorithms, finer and coarser local
