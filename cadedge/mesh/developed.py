@@ -161,10 +161,11 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
     segments, keys = [], {}  # plane points: (node tag, copy on the far side of the seam?) -> (rho, psi)
     for curve, uses in surface_curve_uses(surface).items():
         tags, coords, _ = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
-        position = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords, dtype=float).reshape(-1, 3)))
+        at = {t: i for i, t in enumerate(np.asarray(tags, dtype=np.int64).tolist())}
+        curve_rho, curve_phi = cone.unroll(np.asarray(coords, dtype=float).reshape(-1, 3))  # once per curve
         _, seg = gmsh.model.mesh.getElementsByType(1, curve)
         for a, b in np.asarray(seg, dtype=np.int64).reshape(-1, 2).tolist():
-            rho, phi = cone.unroll(np.array([position[a], position[b]]))
+            rho, phi = curve_rho[[at[a], at[b]]], curve_phi[[at[a], at[b]]]
             apex = rho <= APEX_TOL * max(rho.max(), 1e-300)
             seam = ~apex & ((phi < SEAM_TOL) | (phi > 2.0 * np.pi - SEAM_TOL))
             if uses == 2 and not seam.all() and not (seam | apex).all():
