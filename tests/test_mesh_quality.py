@@ -167,6 +167,27 @@ def test_strips_are_cut_finer_where_that_costs_few_segments(name, finer):
     assert fitted.segments <= 1.1 * min(fit_to_widths(grid, ratio=r).segments for r in (FINE_RATIO, WIDTH_RATIO))
 
 
+def test_large_faces_widths_by_kd_trees_match_the_exact_ones_within_reach(monkeypatch):
+    """Faces with many boundary segments are searched near each segment only (k-d trees): every width
+    under ``reach`` times its segment's length is the exact one, and none beyond is reported under it."""
+    from cadedge import refine_shape
+    from cadedge.mesh import widths
+
+    shape = cq.Workplane().box(20, 5, 2).cut(cq.Workplane().box(0.05, 0.05, 2).translate((2, 2.5, 0))).val()
+    edges = list(refine_shape(shape, ald=1e-3, max_growth=2.0).edges)
+    exact = widths.face_widths(edges)
+    monkeypatch.setattr(widths, "_BLOCK", 50)  # every face takes the k-d tree path
+    near = widths.face_widths(edges, reach=0.5)
+    within = 0
+    for i, w in exact.items():
+        reach = 0.5 * edges[i].segment_lengths
+        inside = w <= reach
+        within += int(inside.sum())
+        assert np.allclose(near[i][inside], w[inside], rtol=1e-12, atol=0.0)
+        assert np.all(near[i][~inside] >= reach[~inside] * (1 - 1e-12))
+    assert within > 10
+
+
 def test_a_tiny_notch_is_graded_into_its_faces():
     """A 0.05 notch in a 20-long bar: the faces around it are graded down to the notch, not slivered."""
     bar = cq.Workplane().box(20, 5, 2)
