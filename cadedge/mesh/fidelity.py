@@ -223,7 +223,10 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 continue  # the grid's parameters are not this curve's: leave the edge alone
             mid_u = 0.5 * (e.params[:-1] + e.params[1:])
             sagitta = _sagittas(e.params, e.points, curve.evaluate)
-            probed = [(f, *probes.setdefault(f, _face_probe(topo.faces[f - 1]))(curve.edge, mid_u)) for f in e.faces]
+            for f in e.faces:  # one probe per face (its adaptor bounds the face's pcurves: costly on many holes)
+                if f not in probes:
+                    probes[f] = _face_probe(topo.faces[f - 1])
+            probed = [(f, *probes[f](curve.edge, mid_u)) for f in e.faces]
         except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
             continue
         chord = e.segment_lengths
