@@ -110,6 +110,25 @@ def test_the_whole_run_is_bounded_by_the_timeout(cylinder, tmp_path, monkeypatch
         assert (tmp_path / "c.msh").exists() == (len(result.triangles) > 0)
 
 
+def test_an_attempt_killed_late_ends_the_job_with_what_was_delivered(cylinder, tmp_path):
+    """An attempt still running at KILL_SHARE of the timeout (a slow batch, not a hang: the face bound is
+    far off) is killed, and the job ends there with the faces delivered so far. A new child's first attempt
+    would be killed at once in turn: a heat sink at 1e-3 went through 12 restarts that way and ended with
+    none of its 81 meshed faces."""
+    said: list[str] = []
+    result = mesh_shape(cylinder, output=tmp_path / "c.msh", hooks={"before_face": ["mesh_faults:hang"]},
+                        timeout=20, face_timeout=1000, progress=said.append)
+    assert not any("in a new process" in line for line in said)  # no new child after the kill
+    assert not result.ok
+    if result.error is not None:  # face 2 was batched with every other face: nothing was delivered
+        assert "out of time: meshing was stopped at 70% of --timeout (20 s)" in result.error
+        assert not (tmp_path / "c.msh").exists()
+    else:
+        failed = {f.face: f.reason for f in result.failures}
+        assert "out of time: meshing was stopped at 70% of --timeout (20 s)" in failed[FAULT_FACE]
+        assert (tmp_path / "c.msh").exists() and len(result.triangles)
+
+
 def _offset_edge(grid: cadedge.ShapeGrid) -> tuple[cadedge.ShapeGrid, int]:
     """The grid with one seamless circle edge lifted off its curve: no gmsh curve matches it any more."""
     g = copy.copy(grid)

@@ -20,10 +20,12 @@ caller) writes a progress line before each step and each face attempt. The watch
 A new child replays what the progress file says the killed one achieved: each face starts at the
 strategy that meshed it, and attempts that failed are not tried again. After :data:`SOFT_SHARE` of the
 timeout the child starts no new attempts (the faces left fail with "out of time"), and an attempt still
-running at :data:`KILL_SHARE` of it is killed, so a replay has the rest of the time to deliver what was
-meshed: a slow model ends with a partial mesh and the unfinished faces named, not with nothing. Faces an
-earlier child delivered that the last one did not mesh again are added to its mesh. The face optimiser,
-which improves meshed faces, may go on past the soft deadline up to :data:`FINISH_SHARE`.
+running at :data:`KILL_SHARE` of it is killed and the job ends there with the faces the children
+delivered (a new child's first attempt would be killed in turn: a heat sink at 1e-3 went through 12
+restarts that way and ended with none of its 81 meshed faces). A slow model ends with a partial mesh and
+the unfinished faces named, not with nothing; so does a job out of restarts. Faces an earlier child
+delivered that the last one did not mesh again are added to its mesh. The face optimiser, which improves
+meshed faces, may go on past the soft deadline up to :data:`FINISH_SHARE`.
 
 The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
 hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
@@ -247,15 +249,11 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                 else:
                     result.written = False
                 return result
-            if run.status == "timeout":
-                reason = f"no result within {timeout:g} s (--timeout)"
+            if run.status in ("timeout", "late"):  # past KILL_SHARE a new child's first attempt is killed too
+                reason = f"no result within {timeout:g} s (--timeout)" if run.status == "timeout" else \
+                    f"out of time: meshing was stopped at {KILL_SHARE:.0%} of --timeout ({timeout:g} s)"
                 _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-                delivered = _delivered(os.path.join(tmp, "faces"), job, known_ok, reason, events)
-                if delivered is None:
-                    return _failed(reason, events)
-                if output is not None:
-                    _write(delivered, output)
-                return delivered.result
+                return _deliver_or_fail(os.path.join(tmp, "faces"), job, known_ok, reason, events, output)
             words = run.last.split()
             if words[:1] == ["batch"] and len(words) == 2:  # a batch of one face: that face's first attempt
                 words = ["face", words[1], "0"]
@@ -290,7 +288,20 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                 barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
             events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                           "process")
-        return _failed(f"gave up after {MAX_RESTARTS} restarts of the mesh process", events)
+        return _deliver_or_fail(os.path.join(tmp, "faces"), job, known_ok,
+                                f"gave up after {MAX_RESTARTS} restarts of the mesh process", events, output)
+
+
+def _deliver_or_fail(path: str, job: MeshJob, known_ok: dict[int, int], reason: str, events: list[str],
+                     output: Path | None) -> JobResult:
+    """The job ends without a finished child: the faces the children delivered (written to ``output``),
+    the others failing with ``reason``; with none delivered the job fails with it."""
+    delivered = _delivered(path, job, known_ok, reason, events)
+    if delivered is None:
+        return _failed(reason, events)
+    if output is not None:
+        _write(delivered, output)
+    return delivered.result
 
 
 def _remove_orphaned_folders() -> None:
