@@ -173,6 +173,7 @@ def test_a_face_meshed_finer_into_its_target_is_never_taken_for_not_converging()
     assert not_converging(1.0e-3 * 1.5, 1.6e-3, 1e-3)  # still over, and finer bought little
     assert not not_converging(1.2e-3, 2.0e-3, 1e-3)  # still over, but going down: another pass
     assert not_converging(-0.028, None, 1e-3) and not not_converging(0.009, None, 1e-3)  # met once: 10x off
+    assert not not_converging(0.0101, None, 1e-3)  # 10x off but within 2%: a lobed gear's side, meshed finer
 
 
 def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():
