@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status"]
+MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import kernels
+from .segments import segment_feet
 
 #: Below this many degrees a triangle is a sliver unless the B-rep forces it.
 SLIVER_DEG = 5.0
@@ -65,13 +66,10 @@ class SmallAngle:
 def _feet(p: np.ndarray, line: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each point's distance to each segment of polyline ``line`` (k, m) and where along the polyline its
     foot there lies (arc length from the start, (k, m))."""
-    a, b = line[:-1], line[1:]
-    ab = b - a
-    seg = np.einsum("ij,ij->i", ab, ab)
-    t = np.clip(np.einsum("kij,ij->ki", p[:, None, :] - a[None], ab) / np.maximum(seg, 1e-300), 0.0, 1.0)
-    foot = a[None] + t[..., None] * ab[None]
-    start = np.concatenate([[0.0], np.cumsum(np.sqrt(seg))[:-1]])
-    return np.linalg.norm(foot - p[:, None, :], axis=2), start[None] + t * np.sqrt(seg)[None]
+    dist, t = segment_feet(p[:, None, :], line[None, :-1], line[None, 1:])
+    length = np.linalg.norm(np.diff(line, axis=0), axis=1)
+    start = np.concatenate([[0.0], np.cumsum(length)[:-1]])
+    return dist, start[None] + t * length[None]
 
 
 def _fold_width(p: np.ndarray, line: np.ndarray) -> float:

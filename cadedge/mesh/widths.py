@@ -21,12 +21,14 @@ undoes (42 once matched; gmsh alone, with near-uniform sizes, gets 40.4).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
 from ..shapegrid import ShapeGrid, with_edges
 from ..splitting import split_segments
 from .proximity import TOLERANCE_SHARE, _LazyCurves
+from .segments import segment_feet
 
 #: A segment is split when longer than this many times its face's width at its midpoint: a strip of
 #: width w cut into pieces of 2 w is filled by right triangles of 26.6 degrees.
@@ -58,19 +60,14 @@ def _segment_distances(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarra
     out = np.full(len(p), np.inf)
     if not len(a):
         return out
-    ab = b - a
-    ll = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
     step = max(1, _BLOCK // len(a))
     for s in range(0, len(p), step):
-        q = p[s:s + step, None, :]
-        t = np.clip(np.einsum("nmk,mk->nm", q - a[None], ab) / ll, 0.0, 1.0)
-        d = np.linalg.norm(q - (a[None] + t[..., None] * ab[None]), axis=2)
-        out[s:s + step] = d.min(axis=1)
+        out[s:s + step] = segment_feet(p[s:s + step, None, :], a[None], b[None])[0].min(axis=1)
     return out
 
 
 def _near_distances(p: np.ndarray, reach: np.ndarray, a: np.ndarray, b: np.ndarray,
-                    keep) -> np.ndarray:
+                    keep: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
     """Distance from each point ``p`` (n, 3) to the nearest of the segments ``a``-``b`` (m, 3) that
     ``keep(rows, cols)`` admits (boolean per point-segment pair), exact where it is at most the point's
     ``reach`` (n,), ``inf`` or exact beyond. The segments are grouped by length, each group within a factor
@@ -95,10 +92,7 @@ def _near_distances(p: np.ndarray, reach: np.ndarray, a: np.ndarray, b: np.ndarr
         rows, seg = rows[ok], seg[ok]
         for s in range(0, len(rows), _BLOCK):
             r, k = rows[s:s + _BLOCK], seg[s:s + _BLOCK]
-            ab = b[k] - a[k]
-            t = np.clip(np.einsum("ij,ij->i", p[r] - a[k], ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300),
-                        0.0, 1.0)
-            np.minimum.at(out, r, np.linalg.norm(p[r] - (a[k] + t[:, None] * ab), axis=1))
+            np.minimum.at(out, r, segment_feet(p[r], a[k], b[k])[0])
     return out
 
 
