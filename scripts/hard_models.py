@@ -567,16 +567,23 @@ def write_model(name: str, folder: Path) -> Path:
     return path
 
 
-def main(argv: list[str]) -> int:
+def write_all(argv: list[str], names: list[str], write: Callable[[str, Path], Path], what: str,
+              default: str) -> int:
+    """The command line of a model script: write every model of ``names`` (by ``write(name, folder)``)
+    into the folder given (``default`` if none), printing each path."""
     import argparse
 
-    ap = argparse.ArgumentParser(description="Write every hard model of the mesh benchmark into FOLDER.")
-    ap.add_argument("folder", nargs="?", type=Path, default=Path("hard_models"), help="default: hard_models")
+    ap = argparse.ArgumentParser(description=f"Write every {what} into FOLDER.")
+    ap.add_argument("folder", nargs="?", type=Path, default=Path(default), help=f"default: {default}")
     folder = ap.parse_args(argv).folder
     folder.mkdir(parents=True, exist_ok=True)
-    for name in NAMES:
-        print(write_model(name, folder))
+    for name in names:
+        print(write(name, folder))
     return 0
+
+
+def main(argv: list[str]) -> int:
+    return write_all(argv, NAMES, write_model, "hard model of the mesh benchmark", "hard_models")
 
 
 if __name__ == "__main__":
