@@ -1,10 +1,10 @@
-"""Large everyday parts for ``cadedge mesh``: many faces, long faces beside small features, sharp lobes.
+"""Large everyday parts for ``cadedge mesh``: many faces, long faces beside small features, sharp valleys.
 
-They are the parts whose speed figures docs/mesh.md quotes: a 1 000 mm I-beam with 0.4 mm fillets
-(tens of thousands of boundary segments on a face), a 200 x 200 plate with 900 holes, a heat sink with
+They are the parts of docs/mesh.md's *Large parts* table: a 1 000 mm I-beam with 0.4 mm fillets
+(over a hundred thousand boundary segments at 1e-2), a 200 x 200 plate with 900 holes, a heat sink with
 40 filleted fins, a disc with 72 filleted holes on a bolt circle, a gear whose side is one spline of 30
-sharp lobes (cyclo_gear) and a hex nut whose 30-degree chamfer cone touches its flats. They are kept
-apart from ``scripts/hard_models.py`` because each takes minutes at ``--ald 1e-3``.
+lobes with sharp valleys (cyclo_gear) and a hex nut whose 30-degree chamfer cone touches its flats.
+They are kept apart from ``scripts/hard_models.py`` because each takes minutes at ``--ald 1e-3``.
 
     python scripts/large_models.py large         # writes large/<name>.step for every model
     python scripts/bench_mesh_fidelity.py large/*.step --cadedge-only --eps 1e-2 1e-3 --timeout 300
@@ -63,7 +63,7 @@ def bolt_circle_fillets() -> object:
 
 def cyclo_gear() -> object:
     """A gear 10 thick whose side is one periodic spline through 600 points of r = 40 + 3 |cos 15 t|**0.3
-    (30 sharp lobes), with a 20 mm bore."""
+    (30 lobes with sharp valleys), with a 20 mm bore."""
     n = 600
     pts = []
     for k in range(n):
