@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cadedge.mesh.developed import Cone, _fan, _loops
+from cadedge.mesh import flat
+from cadedge.mesh.developed import Cone, _fan
 
 
 def _cone(half_angle: float) -> Cone:
@@ -40,7 +41,7 @@ def test_the_apex_fan_closes_the_sector_in_three_triangles_at_least():
     turns = [abs(keys[f[2]][1] - keys[f[1]][1]) / 0.1 for f in fan]
     assert np.allclose(turns, 2.0 * np.pi / 3.0)  # each a third of the way round the axis
     index = {k: i for i, k in enumerate(keys)}
-    loops = _loops([(index[a], index[b]) for a, b in kept])
+    loops = flat.loops([(index[a], index[b]) for a, b in kept])
     assert loops is not None and len(loops) == 1 and len(loops[0]) == len(kept)
 
 
@@ -84,7 +85,7 @@ def test_the_tip_is_meshed_in_rings_out_to_where_the_sector_is_wide_enough():
     assert max(turns) <= 2.0 * np.pi / 3.0 + 1e-9
     assert all(keys[k][0] >= outer - 1e-12 for seg in left for k in seg)  # the seam inside the rings is gone
     index = {k: i for i, k in enumerate(keys)}
-    assert _loops([(index[a], index[b]) for a, b in left]) is not None
+    assert flat.loops([(index[a], index[b]) for a, b in left]) is not None
 
 
 def test_a_cone_with_long_seam_segments_keeps_the_fan_only_where_the_sector_is_wide():

@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .flat import add_triangles, boundary_sizes, mesh_plane
+
 #: A boundary point of the face this close to the cone's apex (a share of the cone's size) is its apex.
 APEX_TOL = 1e-7
 #: A node this close (radians) to the seam's generator lies on the seam.
@@ -124,31 +126,6 @@ def cone_of(surface: int) -> Cone | None:
     return Cone(apex, axis, e1, e2, abs(r1 - r0) / slant, step / slant)
 
 
-def _loops(segments: list[tuple[int, int]]) -> list[list[int]] | None:
-    """The closed chains of ``segments`` (pairs of point keys), each as its segments' indices in order and
-    signed (``-i - 1``: segment ``i`` run backwards); None if they do not close."""
-    ends: dict[int, list[int]] = {}
-    for i, (a, b) in enumerate(segments):
-        ends.setdefault(a, []).append(i)
-        ends.setdefault(b, []).append(i)
-    if any(len(v) != 2 for v in ends.values()):
-        return None
-    used = [False] * len(segments)
-    loops = []
-    for first in range(len(segments)):
-        if used[first]:
-            continue
-        loop, i, at = [], first, segments[first][0]
-        while not used[i]:
-            used[i] = True
-            a, b = segments[i]
-            loop.append(i if a == at else -i - 1)
-            at = b if a == at else a
-            i = next((j for j in ends[at] if not used[j]), i)
-        loops.append(loop)
-    return loops
-
-
 def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
     """Mesh (empty) gmsh surface ``surface`` on ``cone`` unrolled (see the module doc) with gmsh's 2-D
     ``algorithm``, at the sizes gmsh's options and the face's sampled sizes give it now (:func:`_sizes`);
@@ -156,7 +133,6 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
     import gmsh
 
     from .gmsh_model import surface_curve_uses
-    from .planar import polygon_area
 
     segments, keys = [], {}  # plane points: (node tag, copy on the far side of the seam?) -> (rho, psi)
     for curve, uses in surface_curve_uses(surface).items():
@@ -196,69 +172,20 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
         return "its apex does not join two boundary segments"
     order = list(keys)
     index = {key: i for i, key in enumerate(order)}
-    loops = _loops([(index[a], index[b]) for a, b in segments])
-    if not loops:
-        return "its boundary does not close when unrolled"
+    rows = [(index[a], index[b]) for a, b in segments]
     rho = np.array([keys[k][0] for k in order])
     psi = np.array([keys[k][1] for k in order])
     plane = np.column_stack([rho * np.cos(psi), rho * np.sin(psi)])
-    near = np.zeros(len(order))
-    count = np.zeros(len(order))
-    for a, b in segments:
-        length = float(np.linalg.norm(plane[index[a]] - plane[index[b]]))
-        for key in (a, b):
-            near[index[key]] += length
-            count[index[key]] += 1
-    near = np.minimum(near / np.maximum(count, 1), rho * sector / WRAP)
+    near = np.minimum(boundary_sizes(plane, rows), rho * sector / WRAP)
     sizes = _sizes(surface, cone, sector)
-    current = gmsh.model.getCurrent()
-    saved = {o: gmsh.option.getNumber(o) for o in ("Mesh.Algorithm", "Mesh.MeshSizeExtendFromBoundary",
-                                                  "Mesh.MeshOnlyVisible", "Mesh.MeshOnlyEmpty", "Mesh.MeshSizeMin")}
-    gmsh.model.add("cadedge unrolled cone")
-    try:
-        gmsh.option.setNumber("Mesh.Algorithm", algorithm)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
-        gmsh.option.setNumber("Mesh.MeshOnlyVisible", 0)
-        gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)  # the field's floor, but near the apex
-        points = [gmsh.model.geo.addPoint(px, py, 0.0, h) for (px, py), h in zip(plane, near)]
-        lines = [gmsh.model.geo.addLine(points[index[a]], points[index[b]]) for a, b in segments]
-        areas = [polygon_area(np.array([plane[index[segments[i][0]] if i >= 0 else index[segments[-i - 1][1]]]
-                                        for i in loop])) for loop in loops]
-        outer = int(np.argmax(np.abs(areas)))
-        curve_loops = [gmsh.model.geo.addCurveLoop([lines[i] if i >= 0 else -lines[-i - 1] for i in loops[k]])
-                       for k in [outer] + [k for k in range(len(loops)) if k != outer]]
-        gmsh.model.geo.addPlaneSurface(curve_loops)
-        gmsh.model.geo.synchronize()
-        for line in lines:
-            gmsh.model.mesh.setTransfiniteCurve(line, 2)
-        _size_field(*sizes)
-        try:
-            gmsh.model.mesh.generate(2)
-        except Exception as err:  # gmsh raises a bare Exception with its last error message
-            return f"unrolled: {err}"
-        point_nodes = [gmsh.model.mesh.getNodes(0, point)[0] for point in points]
-        ptags, pcoords, _ = gmsh.model.mesh.getNodes()
-        _, ptri = gmsh.model.mesh.getElementsByType(2)
-    finally:
-        gmsh.model.remove()
-        gmsh.model.setCurrent(current)
-        for o, value in saved.items():
-            gmsh.option.setNumber(o, value)
-    if not len(ptri):
-        return "unrolled: gmsh made no triangles"
-    # rows: the boundary's points (``order``) first, then gmsh's interior nodes
-    ptags = np.asarray(ptags, dtype=np.int64)
-    flat = np.asarray(pcoords, dtype=float).reshape(-1, 3)[:, :2]
-    row = np.full(int(ptags.max()) + 1, -1, dtype=np.int64)
-    for i, got in enumerate(point_nodes):
-        if len(got):
-            row[int(got[0])] = i
-    inner = row[ptags] < 0
-    row[ptags[inner]] = len(order) + np.arange(int(inner.sum()))
-    rho = np.concatenate([rho, np.hypot(flat[inner, 0], flat[inner, 1])])
-    psi = np.concatenate([psi, np.mod(np.arctan2(flat[inner, 1], flat[inner, 0]), 2.0 * np.pi)])
-    tri = row[np.asarray(ptri, dtype=np.int64)].reshape(-1, 3)
+    got = mesh_plane(plane, rows, near, algorithm, lambda: _size_field(*sizes),
+                     {"Mesh.MeshSizeMin": 0.0})  # the field's floor, but near the apex
+    if isinstance(got, str):
+        return got
+    xy, tri = got
+    inner = xy[len(order):]
+    rho = np.concatenate([rho, np.hypot(inner[:, 0], inner[:, 1])])
+    psi = np.concatenate([psi, np.mod(np.arctan2(inner[:, 1], inner[:, 0]), 2.0 * np.pi)])
     fans = np.array([[index[k] for k in f] for f in fan], dtype=np.int64)
     xy = np.column_stack([rho * np.cos(psi), rho * np.sin(psi)])
     p = xy[np.vstack([tri[:1], fans])]
@@ -267,21 +194,12 @@ def mesh_unrolled(surface: int, cone: Cone, algorithm: int) -> str | None:
     flip = turn[1:] != turn[0]  # the fan turns as gmsh's triangles do
     fans[flip] = fans[flip][:, [0, 2, 1]]
     tri = np.vstack([tri, fans])
-    gmsh_tag = np.array([k[0] if isinstance(k[0], int) and k[0] > 0 else -1 for k in order]
-                        + [-1] * int(inner.sum()), dtype=np.int64)  # the face's own nodes keep their tags
-    fresh = np.flatnonzero(gmsh_tag < 0)
-    gmsh_tag[fresh] = int(gmsh.model.mesh.getMaxNodeTag()) + 1 + np.arange(len(fresh))
     phi = np.where(rho > tol, psi / cone.sin, np.nan)[tri]
     if np.nanmax(np.nanmax(phi, axis=1) - np.nanmin(phi, axis=1)) > MOST_TURN:
         return "unrolled: a triangle wraps round the cone's axis"
-    xyz = cone.roll_up(rho, psi / cone.sin)
-    if len(fresh):
-        params = np.asarray(gmsh.model.getParametrization(2, surface, xyz[fresh].ravel().tolist()), dtype=float)
-        gmsh.model.mesh.addNodes(2, surface, gmsh_tag[fresh].tolist(), xyz[fresh].ravel().tolist(), params.tolist())
-    elements = gmsh_tag[tri]
-    corners3 = xyz[tri]
-    _orient(surface, elements, corners3)
-    gmsh.model.mesh.addElementsByType(surface, 2, [], elements.ravel().tolist())
+    tags = np.array([k[0] if isinstance(k[0], int) and k[0] > 0 else -1 for k in order]
+                    + [-1] * len(inner), dtype=np.int64)  # the face's own nodes keep their tags
+    add_triangles(surface, tags, cone.roll_up(rho, psi / cone.sin), tri)
     return None
 
 
@@ -404,15 +322,3 @@ def _tip(keys: dict, segments: list, apex, sector: float, cone: Cone) -> tuple[l
         old = set(zip(ring[:-1], ring[1:])) | {(ring[0], a), (a, ring[0]), (ring[-1], b), (b, ring[-1])}
         segments = [seg for seg in segments if seg not in old] + list(zip(out[:-1], out[1:]))
         ring = out
-
-
-def _orient(surface: int, tri: np.ndarray, corners: np.ndarray) -> None:
-    """Turn triangles ``tri`` (node tags, in place; their corners' points (m, 3, 3)) to run as gmsh's own
-    do on ``surface``: their normals along the surface's at their centres."""
-    import gmsh
-
-    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    _, uv = gmsh.model.getClosestPoint(2, surface, corners.mean(axis=1).ravel().tolist())
-    up = np.asarray(gmsh.model.getNormal(surface, list(uv)), dtype=float).reshape(-1, 3)
-    if np.sum(np.einsum("ij,ij->i", normal, up)) < 0:
-        tri[:, [1, 2]] = tri[:, [2, 1]]
