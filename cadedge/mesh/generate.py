@@ -39,7 +39,8 @@ class Strategy:
     split: bool = False
     own_curves: bool = False  # drop the imposed curve meshes of the face: gmsh meshes its curves itself
     uniform: bool = False  # curvature sizes as one size from the face's sampled curvature (cheap to evaluate)
-    unrolled: bool = False  # a cone with its apex on its boundary, meshed flat (:mod:`cadedge.mesh.developed`)
+    unrolled: str = ""  # meshed flat: "cone", a cone with its apex on its boundary (:mod:`cadedge.mesh.developed`);
+    # "extrusion", a face of linear extrusion (:mod:`cadedge.mesh.extruded`)
 
     @property
     def sizes(self) -> tuple:
@@ -63,17 +64,22 @@ STRATEGIES = (
     Strategy("split boundary segments, MeshAdapt", 1, 1.0, True),
     Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
     Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
-    Strategy("unrolled cone, MeshAdapt", 1, unrolled=True),
-    Strategy("unrolled cone, Frontal-Delaunay", 6, unrolled=True),
+    Strategy("unrolled cone, MeshAdapt", 1, unrolled="cone"),
+    Strategy("unrolled cone, Frontal-Delaunay", 6, unrolled="cone"),
+    Strategy("unrolled extrusion, Frontal-Delaunay", 6, unrolled="extrusion"),
+    Strategy("unrolled extrusion, MeshAdapt", 1, unrolled="extrusion"),
 )
 #: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled
 #: right after the first (gmsh's meshers leave triangles overlapping beside the seam near the apex of
 #: narrow cones, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone at 1e-2, 60 s and more at
 #: 1e-3), then the others; a cone narrower than :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
 GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if not s.unrolled)
-UNROLLED = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled)
+UNROLLED = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "cone")
 APEX_CONE_ORDER = GMSH_ORDER[:1] + UNROLLED + GMSH_ORDER[1:]
 NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
+#: A face of linear extrusion is meshed flat first: in the plane gmsh meets no parameters to distort (on
+#: a spline with sharp valleys it hung in its own, every strategy), and the triangles keep their shapes.
+EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "extrusion") + GMSH_ORDER
 
 
 @dataclass
@@ -223,14 +229,22 @@ def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
 
 
 def _unrolled(surface: int, strategy: Strategy) -> str | None:
-    """Mesh (empty) ``surface`` unrolled if it is a cone with its apex on its boundary; None if it passed,
-    else why not (the surface is then cleared)."""
-    from .developed import cone_of, mesh_unrolled
+    """Mesh (empty) ``surface`` laid flat: a cone with its apex on its boundary or a face of linear
+    extrusion, as ``strategy.unrolled`` says; None if it passed, else why not (the surface is then
+    cleared)."""
+    if strategy.unrolled == "cone":
+        from .developed import cone_of, mesh_unrolled
 
-    cone = cone_of(surface)
-    if cone is None:
-        return "not a cone with its apex on its boundary"
-    reason = mesh_unrolled(surface, cone, strategy.algorithm)
+        cone = cone_of(surface)
+        reason = "not a cone with its apex on its boundary" if cone is None else mesh_unrolled(
+            surface, cone, strategy.algorithm)
+    else:
+        from . import extruded
+
+        nodes = sum(len(gmsh.model.mesh.getNodes(1, c, includeBoundary=True)[0]) for c in surface_curve_uses(surface))
+        ext = extruded.extrusion_of(surface, nodes)
+        reason = "not a face of linear extrusion" if ext is None else extruded.mesh_unrolled(
+            surface, ext, strategy.algorithm)
     if reason is None and not surface_ok(surface):
         reason = "unrolled: triangles that do not match the face's boundary curves"
     if reason is not None:
@@ -383,6 +397,18 @@ def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
         per_face = (time.process_time() - cpu) / len(chunk)
 
 
+def face_order(surface: int) -> tuple[int, ...]:
+    """The strategies (indices into :data:`STRATEGIES`) gmsh surface ``surface`` is tried with, in order:
+    :data:`EXTRUSION_ORDER`, the cones' orders or :data:`GMSH_ORDER`."""
+    from .developed import NARROW, cone_of
+    from .extruded import is_extrusion
+
+    cone = cone_of(surface)
+    if cone is not None:
+        return NARROW_CONE_ORDER if cone.sin < NARROW else APEX_CONE_ORDER
+    return EXTRUSION_ORDER if is_extrusion(surface) else GMSH_ORDER
+
+
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                skip: dict[int, dict[int, str]] | None = None,
                started: Callable[[int, int], None] = lambda face, strategy: None,
@@ -417,11 +443,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
     out = {s: FaceOutcome(face=face_of.get(s, s), surface=s) for s in surfaces}
-    from .developed import NARROW, cone_of
-
-    cones = {s: cone_of(s) for s in surfaces}
-    order = {s: GMSH_ORDER if c is None else NARROW_CONE_ORDER if c.sin < NARROW else APEX_CONE_ORDER
-             for s, c in cones.items()}
+    order = {s: face_order(s) for s in surfaces}
     split_done: set[int] = set()
     # faces with attempts barred (they hung, crashed or failed in an earlier run) go last: the others are
     # meshed before the time runs out

@@ -100,6 +100,7 @@ class InteriorSizes:
     def __init__(self) -> None:
         self.faces: dict[int, _Face] = {}
         self.floors: dict[int, float] = {}
+        self.per_circle: dict[int, float] = {}  # what :func:`use_per_circle` last set each surface to
 
     def sample(self, surface: int) -> bool:
         """Sample gmsh surface ``surface``'s curvature; False (left to gmsh) if it is flat or cannot be
@@ -119,19 +120,10 @@ class InteriorSizes:
     def set(self, surface: int, per_circle: float) -> bool:
         """Size ``surface`` here at ``per_circle`` (0: not at all) within gmsh's ``Mesh.MeshSizeMin`` and
         ``Mesh.MeshSizeMax`` as set now; False if it was not sampled."""
-        import gmsh
-
         face = self.faces.get(surface)
         if face is None:
             return False
-        face.sizes = None
-        if per_circle > 0:
-            lo = max(gmsh.option.getNumber("Mesh.MeshSizeMin"), 1e-12)
-            hi = gmsh.option.getNumber("Mesh.MeshSizeMax")
-            hi = hi if 0 < hi < 1e22 else 2.0 * np.pi / (per_circle * face.k[face.k > 0].min())
-            alpha = matched_scale(face.k, face.da, per_circle, lo, max(hi, lo))
-            with np.errstate(divide="ignore"):
-                face.sizes = np.clip(alpha / np.sqrt(face.k), lo, max(hi, lo))
+        face.sizes = root_sizes(face.k, face.da, per_circle) if per_circle > 0 else None
         return True
 
     def __call__(self, dim: int, tag: int, x: float, y: float, z: float, lc: float) -> float:
@@ -141,6 +133,20 @@ class InteriorSizes:
         if face is not None and face.sizes is not None:
             lc = min(lc, idw_size(face.points, face.sizes, x, y, z, NEAREST))
         return max(lc, self.floors.get(tag, 0.0))
+
+
+def root_sizes(k: np.ndarray, da: np.ndarray, per_circle: float) -> np.ndarray:
+    """Sizes ``clip(alpha / sqrt(k), lo, hi)`` of samples of curvature ``k`` and area element ``da`` at
+    ``per_circle`` (:func:`matched_scale`), within gmsh's ``Mesh.MeshSizeMin`` and ``Mesh.MeshSizeMax`` as
+    set now (unset, the largest is curvature sizing's at the flattest sample)."""
+    import gmsh
+
+    lo = max(gmsh.option.getNumber("Mesh.MeshSizeMin"), 1e-12)
+    hi = gmsh.option.getNumber("Mesh.MeshSizeMax")
+    hi = max(hi if 0 < hi < 1e22 else 2.0 * np.pi / (per_circle * k[k > 0].min()), lo)
+    alpha = matched_scale(k, da, per_circle, lo, hi)
+    with np.errstate(divide="ignore"):
+        return np.clip(alpha / np.sqrt(k), lo, hi)
 
 
 #: The sizes of the job running in this process (one gmsh model at a time).
@@ -206,6 +212,7 @@ def install(surfaces: list[int], floors: dict[int, float] | None = None) -> list
     import gmsh
 
     SIZES.faces.clear()
+    SIZES.per_circle.clear()
     SIZES.floors = dict(floors or {})
     done = [s for s in surfaces if SIZES.sample(s)]
     if done or SIZES.floors:
@@ -228,6 +235,7 @@ def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) ->
     import gmsh
 
     gmsh.option.setNumber("Mesh.AlgorithmSwitchOnFailure", 0 if surface in SIZES.floors else 1)
+    SIZES.per_circle[surface] = per_circle
 
     if not uniform and SIZES.set(surface, per_circle):
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)

@@ -76,20 +76,22 @@ def attempt_again(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
     """Mesh gmsh ``surfaces`` (one group of :func:`job_groups`) again from scratch in one call at
     ``per_circle`` triangles per ``2 pi`` (see :func:`cadedge.mesh.interior.use_per_circle`); a face that
-    call fails is meshed again on its own through every strategy (:func:`cadedge.mesh.fidelity.remesh_face`).
+    call fails, or whose first strategy is not gmsh's (a face laid flat, :func:`~cadedge.mesh.generate.face_order`),
+    is meshed again on its own through every strategy (:func:`cadedge.mesh.fidelity.remesh_face`).
     Returns each surface's :class:`~cadedge.mesh.generate.FaceOutcome`."""
     import gmsh
 
     from .fidelity import remesh_face
-    from .generate import STRATEGIES, FaceOutcome
+    from .generate import STRATEGIES, FaceOutcome, face_order
     from .interior import use_per_circle
 
     for s in surfaces:  # one group is sized one way (see job_groups), so the gmsh options agree
         use_per_circle(s, per_circle)
-    reasons = attempt_again(surfaces, STRATEGIES[0])
+    together = [s for s in surfaces if face_order(s)[0] == 0]  # the others are meshed first another way
+    reasons = attempt_again(together, STRATEGIES[0]) if together else {}
     out = {}
     for s in surfaces:
-        if reasons[s] is None:
+        if reasons.get(s, "") is None:
             out[s] = FaceOutcome(face=face_of.get(s, s), surface=s, strategy=STRATEGIES[0].name,
                                  triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
         else:

@@ -1,0 +1,71 @@
+"""Faces of linear extrusion (cadedge.mesh.extruded): a spline with sharp valleys extruded by gmsh's OCC
+kernel, meshed laid flat."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+gmsh = pytest.importorskip("gmsh")
+
+HEIGHT = 4.0
+
+
+def _valleyed_prism() -> tuple[int, list[int]]:
+    """In the current gmsh model: a periodic spline through 120 points of ``r = 10 + |cos 3t|**0.3`` (3
+    sharp valleys) extruded by :data:`HEIGHT`; returns its side surface and its spline curves."""
+    points = []
+    for k in range(120):
+        t = 2.0 * math.pi * k / 120
+        r = 10.0 + abs(math.cos(3.0 * t)) ** 0.3
+        points.append(gmsh.model.occ.addPoint(r * math.cos(t), r * math.sin(t), 0.0))
+    spline = gmsh.model.occ.addSpline(points + points[:1])
+    base = gmsh.model.occ.addPlaneSurface([gmsh.model.occ.addCurveLoop([spline])])
+    gmsh.model.occ.extrude([(2, base)], 0.0, 0.0, HEIGHT)
+    gmsh.model.occ.synchronize()
+    (side,) = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) != "Plane"]
+    splines = [c for _, c in gmsh.model.getEntities(1) if gmsh.model.occ.getMass(1, c) > 2.0 * HEIGHT]
+    return side, splines
+
+
+def test_a_sharp_valleyed_extrusion_is_meshed_flat_within_its_chords():
+    """The side is an extrusion, meshed flat first; unrolled it meshes, matches its curves' segments (the
+    seam twice), its nodes lie on it, its triangles keep gmsh's plane shapes (no angle under 20 degrees)
+    and its area is under its exact one (its section's length times the height) by at most what its
+    boundary chords lose."""
+    from cadedge.mesh.extruded import extrusion_of, is_extrusion, mesh_unrolled
+    from cadedge.mesh.generate import EXTRUSION_ORDER, GMSH_ORDER, face_order, surface_ok
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.quality import triangle_angles
+
+    with gmsh_session():
+        side, splines = _valleyed_prism()
+        assert face_order(side) == EXTRUSION_ORDER
+        assert all(face_order(s) == GMSH_ORDER and not is_extrusion(s)
+                   for _, s in gmsh.model.getEntities(2) if s != side)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+        gmsh.model.mesh.generate(1)
+        ext = extrusion_of(side)
+        length = gmsh.model.occ.getMass(1, splines[0])
+        assert ext is not None and ext.closed and ext.length == pytest.approx(length, rel=1e-6)
+        assert np.allclose(np.abs(ext.along), [0.0, 0.0, 1.0])
+        assert mesh_unrolled(side, ext, 6) is None
+        assert surface_ok(side)
+        tags, coords, params = gmsh.model.mesh.getNodes(2, side)
+        x = np.asarray(coords, dtype=float).reshape(-1, 3)
+        on = np.asarray(gmsh.model.getValue(2, side, list(params)), dtype=float).reshape(-1, 3)
+        assert len(x) and np.abs(on - x).max() < 1e-9
+        nodes, xyz, _ = gmsh.model.mesh.getNodes()
+        where = {int(t): i for i, t in enumerate(nodes)}
+        _, tri = gmsh.model.mesh.getElementsByType(2, side)
+        rows = np.array([where[int(t)] for t in tri]).reshape(-1, 3)
+        p = np.asarray(xyz, dtype=float).reshape(-1, 3)
+        assert triangle_angles(p, rows).min() > 20.0
+        t = p[rows]
+        area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1).sum()
+        _, seg = gmsh.model.mesh.getElementsByType(1, splines[0])
+        chords = np.linalg.norm(np.diff(p[[where[int(s)] for s in seg]].reshape(-1, 2, 3), axis=1), axis=2).sum()
+        assert 0.999 * chords * HEIGHT < area < length * HEIGHT
+
