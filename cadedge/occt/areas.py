@@ -32,9 +32,11 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepGProp import BRepGProp
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.BRepTools import BRepTools
+from OCP.GeomAbs import GeomAbs_CN, GeomAbs_SurfaceOfExtrusion
 from OCP.GProp import GProp_GProps
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
 from OCP.Standard import Standard_Failure
+from OCP.TColStd import TColStd_Array1OfReal
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_REVERSED
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
@@ -57,6 +59,13 @@ _A1, _B1, _A2, _B2 = 0.445948490915965, 0.108103018168070, 0.091576213509771, 0.
 _BARY = np.array([[_A1, _A1, _B1], [_A1, _B1, _A1], [_B1, _A1, _A1],
                   [_A2, _A2, _B2], [_A2, _B2, _A2], [_B2, _A2, _A2]])
 _WEIGHTS = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
+#: A face of linear extrusion: Gauss-Legendre points per part of a span of its swept curve (the parts
+#: doubled until the section's integral changes by less than a hundredth of ``AREA_EPS``), and the
+#: composite rule along each pcurve, its pieces doubled from the first count until the integral changes
+#: by less than ``AREA_EPS`` (each at most :data:`SWEPT_LEVELS` times).
+SWEPT_POINTS = 8
+SWEPT_PIECES = 4
+SWEPT_LEVELS = 8
 #: Gauss-Legendre points per boundary chord for its sliver.
 SLIVER_POINTS = 6
 #: Gaps in a face's boundary narrower than this share of the square root of its area (in 3-D, through its
@@ -77,9 +86,13 @@ def face_areas(shape: TopoDS_Shape) -> np.ndarray:
 
 
 def face_area(face: TopoDS_Face) -> float:
-    """One face's area: OCCT's two integrations (with the gaps of an open boundary closed, see
-    :func:`closure`) where they agree, else the one the check confirms."""
+    """One face's area: a face of linear extrusion's by :func:`extrusion_area`; else OCCT's two
+    integrations (with the gaps of an open boundary closed, see :func:`closure`) where they agree, else
+    the one the check confirms."""
     forward = TopoDS.Face_s(face.Oriented(TopAbs_FORWARD))
+    swept = extrusion_area(forward)
+    if swept is not None:
+        return swept
     props = GProp_GProps()
     BRepGProp.SurfaceProperties_s(forward, props, AREA_EPS)
     adaptive = props.Mass()
@@ -96,6 +109,90 @@ def face_area(face: TopoDS_Face) -> float:
     if check is None or not low <= check <= high:  # no check, or one far from both: OCCT's nearest
         return adaptive if check is None else min((adaptive, fixed), key=lambda a: abs(a - check))
     return check
+
+
+def extrusion_area(face: TopoDS_Face) -> float | None:
+    """The area of a FORWARD face of linear extrusion, by Green's theorem: ``F(u) dv`` integrated along
+    its pcurves (and the chords closing any gaps between them), ``F`` the area element (alike at every
+    v) integrated over u from the swept curve's first parameter, span by span of it (composite
+    Gauss-Legendre, :data:`SWEPT_POINTS`). None if the face is not one, its wires cannot be walked or the surface
+    fails to evaluate.
+
+    OCCT's integrations sample such a face as any surface; on a gear's side, the extrusion by 10 mm of a
+    periodic spline through 600 points with 30 sharp valleys (section 367.107 mm long, so 3 671.07 mm2),
+    the adaptive one gave 3 940.4 and at a precision of 1e-9 4 143.1, and the check took minutes; here
+    it is exact to rounding, in milliseconds a span."""
+    try:
+        surface = BRepAdaptor_Surface(face, False)
+        if surface.GetType() != GeomAbs_SurfaceOfExtrusion:
+            return None
+        loops = _loops(face)
+        if not loops:
+            return None
+        swept = surface.BasisCurve()
+        n = swept.NbIntervals(GeomAbs_CN)
+        knots = TColStd_Array1OfReal(1, n + 1)
+        swept.Intervals(knots, GeomAbs_CN)
+        knots = np.array([knots.Value(i) for i in range(1, n + 2)])
+        period = swept.Period() if swept.IsPeriodic() else None
+        v0 = 0.5 * sum(BRepTools.UVBounds_s(face)[2:])  # alike at every v; the surface's v may be infinite
+        x, w = np.polynomial.legendre.leggauss(SWEPT_POINTS)
+
+        def along(lo: np.ndarray, hi: np.ndarray, pieces: int) -> np.ndarray:
+            """The area element integrated over u from ``lo`` to ``hi`` (within one span each), each in
+            ``pieces`` equal parts."""
+            edges = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, pieces + 1)
+            half = 0.5 * np.diff(edges, axis=1)
+            u = (edges[:, :-1] + half)[..., None] + half[..., None] * x
+            element = _area_element(surface, np.column_stack([u.ravel(), np.full(u.size, v0)])).reshape(u.shape)
+            return np.sum(half * (element @ w), axis=1)
+
+        pieces, at_knots = 1, None
+        for _ in range(SWEPT_LEVELS):  # the spans' parts doubled until the whole section's F settles
+            spans = along(knots[:-1], knots[1:], pieces)
+            if at_knots is not None and abs(spans.sum() - at_knots[-1]) <= 1e-2 * AREA_EPS * abs(spans.sum()):
+                break
+            at_knots = np.concatenate([[0.0], np.cumsum(spans)])
+            pieces *= 2
+        at_knots = np.concatenate([[0.0], np.cumsum(spans)])
+
+        def integral(u: np.ndarray) -> np.ndarray:
+            """``F(u)``: from the first knot, whole periods added for a periodic curve."""
+            turns = np.floor((u - knots[0]) / period) if period else np.zeros(len(u))
+            u = u - turns * (period or 0.0)
+            span = np.clip(np.searchsorted(knots, u, side="right") - 1, 0, n - 1)
+            return turns * at_knots[-1] + at_knots[span] + along(knots[span], u, pieces)
+
+        def piece(points, a: float, b: float) -> float:
+            """``F dv`` along the curve ``points(t) -> (uv, d uv / dt)`` from ``a`` to ``b``."""
+            previous = None
+            for level in range(SWEPT_LEVELS):
+                s = np.linspace(a, b, (SWEPT_PIECES << level) + 1)
+                half = 0.5 * np.diff(s)
+                t = ((s[:-1] + half)[:, None] + half[:, None] * x).ravel()
+                uv, d = points(t)
+                moving = d[:, 1] != 0.0
+                if not moving.any():
+                    return 0.0
+                f = np.zeros(len(t))
+                f[moving] = integral(uv[moving, 0]) * d[moving, 1]
+                total = float(np.sum(f.reshape(len(half), -1) @ w * half))
+                if previous is not None and abs(total - previous) <= AREA_EPS * max(abs(total), 1e-300):
+                    break
+                previous = total
+            return total
+
+        total = 0.0
+        for loop in loops:
+            for pcurve, a, b in loop:
+                total += piece(lambda t, c=pcurve: _pcurve_points(c, t), a, b)
+            for start, end in _chord_gaps(loop):
+                if np.any(start != end):
+                    total += piece(lambda t, p=start, q=end: (p + np.outer(t, q - p), np.tile(q - p, (len(t), 1))),
+                                   0.0, 1.0)
+    except Standard_Failure:
+        return None
+    return abs(total) if np.isfinite(total) else None
 
 
 def domain_area(face: TopoDS_Face, deflection: float) -> float | None:
