@@ -51,7 +51,7 @@ def test_a_sharp_valleyed_extrusion_is_meshed_flat_within_its_chords():
         length = gmsh.model.occ.getMass(1, splines[0])
         assert ext is not None and ext.closed and ext.length == pytest.approx(length, rel=1e-6)
         assert np.allclose(np.abs(ext.along), [0.0, 0.0, 1.0])
-        assert mesh_unrolled(side, ext, 6) is None
+        assert mesh_unrolled(side, 6) is None
         assert surface_ok(side)
         tags, coords, params = gmsh.model.mesh.getNodes(2, side)
         x = np.asarray(coords, dtype=float).reshape(-1, 3)

@@ -146,10 +146,10 @@ def extrusion_of(surface: int, nodes: int = 0) -> Extrusion | None:
     return Extrusion(swap, along, rate, float(lo[a]), t, x, points @ along, closed)
 
 
-def mesh_unrolled(surface: int, ext: Extrusion, algorithm: int) -> str | None:
-    """Mesh (empty) gmsh surface ``surface``, the extrusion ``ext``, laid flat (see the module doc) with
-    gmsh's 2-D ``algorithm``, sized as :func:`_sizes`; None if it passed, else why not (the surface is
-    then left empty)."""
+def mesh_unrolled(surface: int, algorithm: int) -> str | None:
+    """Mesh (empty) gmsh surface ``surface``, if it is a face of linear extrusion (:func:`extrusion_of`),
+    laid flat (see the module doc) with gmsh's 2-D ``algorithm``, sized as :func:`_sizes`; None if it
+    passed, else why not (the surface is then left empty)."""
     import gmsh
 
     from .gmsh_model import surface_curve_uses
@@ -166,6 +166,9 @@ def mesh_unrolled(surface: int, ext: Extrusion, algorithm: int) -> str | None:
     xyz = np.vstack([c[2] for c in curves])
     if not len(xyz):
         return "its boundary curves carry no nodes"
+    ext = extrusion_of(surface, len(xyz))
+    if ext is None:
+        return "not a face of linear extrusion"
     uv = np.vstack([c[4] for c in curves])  # from the curves' own parameters: exact, and 4 ms a node faster
     within = NODE_TOL * max(float(np.ptp(xyz, axis=0).max()), ext.length)  # than gmsh's projection
     off = np.isnan(uv).any(axis=1)

@@ -239,12 +239,9 @@ def _unrolled(surface: int, strategy: Strategy) -> str | None:
         reason = "not a cone with its apex on its boundary" if cone is None else mesh_unrolled(
             surface, cone, strategy.algorithm)
     else:
-        from . import extruded
+        from .extruded import mesh_unrolled
 
-        nodes = sum(len(gmsh.model.mesh.getNodes(1, c, includeBoundary=True)[0]) for c in surface_curve_uses(surface))
-        ext = extruded.extrusion_of(surface, nodes)
-        reason = "not a face of linear extrusion" if ext is None else extruded.mesh_unrolled(
-            surface, ext, strategy.algorithm)
+        reason = mesh_unrolled(surface, strategy.algorithm)
     if reason is None and not surface_ok(surface):
         reason = "unrolled: triangles that do not match the face's boundary curves"
     if reason is not None:
