@@ -3,7 +3,8 @@
 They are the parts of docs/mesh.md's *Large parts* table: a 1 000 mm I-beam with 0.4 mm fillets
 (over a hundred thousand boundary segments at 1e-2), a 200 x 200 plate with 900 holes, a heat sink with
 40 filleted fins, a disc with 72 filleted holes on a bolt circle, a gear whose side is one spline of 30
-lobes with sharp valleys (cyclo_gear) and a hex nut whose 30-degree chamfer cone touches its flats.
+lobes with sharp valleys (cyclo_gear), the same with rounder valleys (lobed_gear) and a hex nut whose
+30-degree chamfer cone touches its flats.
 They are kept apart from ``scripts/hard_models.py`` because each takes minutes at ``--ald 1e-3``.
 
     python scripts/large_models.py large         # writes large/<name>.step for every model
@@ -61,17 +62,27 @@ def bolt_circle_fillets() -> object:
     return disc.wrapped
 
 
-def cyclo_gear() -> object:
-    """A gear 10 thick whose side is one periodic spline through 600 points of r = 40 + 3 |cos 15 t|**0.3
-    (30 lobes with sharp valleys), with a 20 mm bore."""
+def _lobed_gear(power: float) -> object:
+    """A gear 10 thick whose side is one periodic spline through 600 points of r = 40 + 3 |cos 15 t|**power
+    (30 lobes), with a 20 mm bore."""
     n = 600
     pts = []
     for k in range(n):
         t = 2 * math.pi * k / n
-        r = 40.0 + 3.0 * abs(math.cos(15 * t)) ** 0.3
+        r = 40.0 + 3.0 * abs(math.cos(15 * t)) ** power
         pts.append((r * math.cos(t), r * math.sin(t)))
     side = cq.Workplane("XY").spline(pts, periodic=True).close().extrude(10.0)
     return side.faces(">Z").workplane().hole(20.0).val().wrapped
+
+
+def cyclo_gear() -> object:
+    """:func:`_lobed_gear` with sharp valleys: r = 40 + 3 |cos 15 t|**0.3."""
+    return _lobed_gear(0.3)
+
+
+def lobed_gear() -> object:
+    """:func:`_lobed_gear` with rounder valleys: r = 40 + 3 |cos 15 t|."""
+    return _lobed_gear(1.0)
 
 
 def hex_nut() -> object:
@@ -91,7 +102,8 @@ def hex_nut() -> object:
 
 MODELS: dict[str, Callable[[], object]] = {
     "i_beam": i_beam, "perforated_plate": perforated_plate, "heat_sink": heat_sink,
-    "bolt_circle_fillets": bolt_circle_fillets, "cyclo_gear": cyclo_gear, "hex_nut": hex_nut,
+    "bolt_circle_fillets": bolt_circle_fillets, "cyclo_gear": cyclo_gear, "lobed_gear": lobed_gear,
+    "hex_nut": hex_nut,
 }
 
 
