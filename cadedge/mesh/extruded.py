@@ -75,6 +75,7 @@ class Extrusion:
 
 
 def _values(surface: int, uv: np.ndarray) -> np.ndarray:
+    """The points (k, 3) of gmsh surface ``surface`` at parameters ``uv`` (k, 2), in one call."""
     import gmsh
 
     return np.asarray(gmsh.model.getValue(2, surface, np.asarray(uv, dtype=float).ravel().tolist()),
