@@ -36,13 +36,12 @@ from OCP.GeomAbs import GeomAbs_CN, GeomAbs_SurfaceOfExtrusion
 from OCP.GProp import GProp_GProps
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
 from OCP.Standard import Standard_Failure
-from OCP.TColStd import TColStd_Array1OfReal
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_REVERSED
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
 
-from .compat import TopoDS
+from .compat import TColStd_Array1OfReal, TopoDS
 from .topology import Topology, walked_wires
 
 #: Precision asked of OCCT's adaptive integration.
