@@ -123,6 +123,23 @@ def test_mapping_falls_back_on_geometry_for_reordered_reversed_edges(grids):
     assert any("by geometry" in n for n in result.details)
 
 
+def test_coinciding_free_curves_and_unsewn_faces_map_by_topology():
+    """Free curves first in the compound, each on a boundary edge of one of two unsewn faces (every
+    corner is three vertices at one point): gmsh binds the faces' curves first, and matched by position
+    alone the free curves took the faces' curves and the corners the wrong points, so no face's boundary
+    closed (a real file: a cage of unsewn spline faces with its construction curves)."""
+    cq = pytest.importorskip("cadquery")
+    left = cq.Face.makeFromWires(cq.Wire.makePolygon([(0, 0, 0), (4, 0, 0), (4, 3, 0), (0, 3, 0)], close=True))
+    right = cq.Face.makeFromWires(cq.Wire.makePolygon([(4, 0, 0), (9, 0, 0), (9, 3, 0), (4, 3, 0)], close=True))
+    free = [cq.Edge.makeLine(cq.Vector(*a), cq.Vector(*b)) for a, b in (((4, 0, 0), (4, 3, 0)), ((0, 3, 0), (4, 3, 0)))]
+    shape = cq.Compound.makeCompound([*free, left, right]).wrapped
+    result = mesh_shape(shape, ald=ALD)
+    assert result.ok, result.problems(verbose=True)
+    assert not result.own_mesh_edges and all(not o.attempts for o in result.faces)
+    assert result.check.missing_grid_nodes == 0 and result.check.grid_nodes > 0
+    assert any("through its edges" in n for n in result.details)
+
+
 def test_a_folded_grid_fails_its_faces_until_gmsh_meshes_that_edge_itself(grids):
     """A folded grid on one box edge: its faces fail on that grid (each attempt named with gmsh's reason),
     then mesh on gmsh's own curve mesh of the edge; the other faces mesh at once."""

@@ -193,9 +193,15 @@ def map_entities(grid: ShapeGrid) -> EntityMap:
         pending.append(e)
     taken = {m.tag for m in edges.values()} | set(degenerate_curves)
     unmatched_edges = []
+    surfaces_of = {t: {int(s) for s in gmsh.model.getAdjacencies(1, t)[0]} for t in curve_tags} if pending else {}
     for e in pending:
+        faces = set(e.faces)
+        # coinciding curves (a free curve drawn along a face's edge, unsewn faces): the one bounding the
+        # same faces first, then one bounding as many
+        candidates = sorted((t for t in curve_tags if t not in taken),
+                            key=lambda t: (surfaces_of[t] != faces, len(surfaces_of[t]) != len(faces)))
         try:
-            m = _match_by_geometry(e, [t for t in curve_tags if t not in taken], tol)
+            m = _match_by_geometry(e, candidates, tol)
         except Exception:  # gmsh raises on curves it cannot evaluate or project onto
             m = None
         if m is None:
@@ -205,9 +211,35 @@ def map_entities(grid: ShapeGrid) -> EntityMap:
         taken.add(m.tag)
         notes.append(f"edge {e.id} matched to gmsh curve {m.tag} by geometry")
     unmatched = [t for t in curve_tags if t not in taken]
+    _vertices_from_edges(grid, edges, vertices, tol, notes)
     faces = _match_faces(grid, edges)
     return EntityMap(vertices=vertices, edges=edges, faces=faces, degenerate_curves=degenerate_curves,
                      unmatched_curves=unmatched, unmatched_edges=unmatched_edges, notes=notes)
+
+
+def _vertices_from_edges(grid: ShapeGrid, edges: dict[int, CurveMatch], vertices: dict[int, int], tol: float,
+                         notes: list[str]) -> None:
+    """Correct ``vertices`` (id -> gmsh point, matched by order or position) by the matched ``edges``: a
+    vertex is the gmsh point at the same end of its edge's curve. Coinciding vertices (unsewn faces, a
+    free curve ending on a face's corner) are told apart only this way: matched by position, the four
+    corners of splinecage's unsewn faces went to one point each and no face's boundary closed. A vertex
+    whose edges name different points keeps its match."""
+    implied: dict[int, set[int]] = {}
+    for e in grid.edges:
+        m = edges.get(e.id)
+        if m is None or len(m.params) < 2:
+            continue
+        ends = [abs(t) for _, t in gmsh.model.getBoundary([(1, m.tag)], combined=False, oriented=False)]
+        if len(ends) != 2:
+            continue  # a closed curve: its one point is found by position
+        first, last = (ends[0], ends[1]) if m.params[0] < m.params[-1] else (ends[1], ends[0])
+        for v, tag, p in ((e.vertices[0], first, e.points[0]), (e.vertices[1], last, e.points[-1])):
+            if np.linalg.norm(np.asarray(gmsh.model.getValue(0, tag, []), dtype=float) - p) <= tol:
+                implied.setdefault(v, set()).add(tag)
+    for v, tags in sorted(implied.items()):
+        if len(tags) == 1 and vertices.get(v) != (tag := next(iter(tags))):
+            vertices[v] = tag
+            notes.append(f"vertex {v} matched to gmsh point {tag} through its edges")
 
 
 def _match_faces(grid: ShapeGrid, edges: dict[int, CurveMatch]) -> dict[int, int]:
