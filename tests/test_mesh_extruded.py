@@ -100,3 +100,33 @@ def test_an_extrusions_area_is_its_sections_length_times_its_height(tmp_path):
     (area,) = [a for a in swept if a is not None]
     assert area == pytest.approx(section * HEIGHT, rel=1e-9)
     assert face_area(topo.faces[swept.index(area)]) == area
+
+
+def test_the_size_field_of_a_long_thin_extrusion_keeps_few_squat_cells():
+    """A rod 2 mm round and 1 000 mm long: its table of sizes, 54 816 samples, was one cell per step over
+    the whole height (0.0001 wide, 1 000 tall), and gmsh's search through those cells hung the face. The
+    field keeps the samples where its sizes vary (a cylinder's: two), in cells no taller than
+    ``CELL_ASPECT`` times their column's width (past ``FIELD_CELLS`` cells taller, but still a small part
+    of the height), and still gives the table's sizes."""
+    from cadedge.mesh.extruded import CELL_ASPECT, FIELD_CELLS, SIZE_STEP, Extrusion, _kept_samples, _size_field
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    x = np.linspace(0.0, 2.0 * math.pi, 54_816)
+    along = np.array([0.0, 0.0, 1.0])
+    ext = Extrusion(False, along, along, 0.0, x, x, np.zeros_like(x), True)
+    assert list(_kept_samples(np.full(len(x), 0.17))) == [0, len(x) - 1]
+    wavy = 0.2 + 0.1 * np.sin(3.0 * x) ** 2
+    keep = _kept_samples(wavy)
+    assert len(keep) < len(x) / 50
+    assert np.abs(np.interp(x, x[keep], wavy[keep]) / wavy - 1.0).max() <= SIZE_STEP
+    for table, aspect in ((np.full(len(x), 0.17), CELL_ASPECT), (wavy, np.inf)):
+        with gmsh_session():
+            view = _size_field(ext, table, -500.0, 500.0, None)
+            _, _, data = gmsh.view.getListData(view)
+            cells = np.asarray(data[0]).reshape(-1, 12)  # per triangle: 3 x, 3 y, 3 z, 3 sizes
+            widths = np.ptp(cells[:, 0:3], axis=1)
+            assert len(cells) <= FIELD_CELLS
+            assert (np.ptp(cells[:, 3:6], axis=1) <= aspect * widths * (1 + 1e-9)).all()
+            assert np.isclose(np.ptp(cells[:, 3:6]), 1020.0)  # the whole height, padded
+            assert np.ptp(cells[:, 3:6], axis=1).max() < 1020.0 / 20
+            assert np.abs(cells[:, 9:12].min() / table.min() - 1.0) < 1e-9
