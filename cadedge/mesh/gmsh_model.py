@@ -211,7 +211,8 @@ def map_entities(grid: ShapeGrid) -> EntityMap:
         taken.add(m.tag)
         notes.append(f"edge {e.id} matched to gmsh curve {m.tag} by geometry")
     unmatched = [t for t in curve_tags if t not in taken]
-    _vertices_from_edges(grid, edges, vertices, tol, notes)
+    if pending or any(tag != v for v, tag in vertices.items()):  # else gmsh's order held throughout
+        _vertices_from_edges(grid, edges, vertices, tol, notes)
     faces = _match_faces(grid, edges)
     return EntityMap(vertices=vertices, edges=edges, faces=faces, degenerate_curves=degenerate_curves,
                      unmatched_curves=unmatched, unmatched_edges=unmatched_edges, notes=notes)
