@@ -355,3 +355,89 @@ def test_untangle_moves_a_node_back_into_its_ring():
     out, params = untangle_nodes(x, tri, inner, _plane, ref)
     assert not folded(out, tri, ref).any()
     assert np.array_equal(out[~inner], x[~inner]) and params is not None
+
+
+def _spoil(gmsh, side: int) -> None:
+    """Crowd the cylinder side's interior nodes: every other one moved 0.7 of the way to a neighbour along
+    the surface (many triangles under 20 degrees, as Frontal-Delaunay left surf114's pinched faces)."""
+    from cadedge.mesh.facemesh import read_face
+
+    face = read_face(side)
+    for p in np.flatnonzero(face.movable)[::2].tolist():
+        q = next(int(v) for t in face.tri[(face.tri == p).any(axis=1)] for v in t if v != p)
+        uv = face.uv[p] + 0.7 * ((face.uv[q] if face.movable[q] else face.uv[p]) - face.uv[p])
+        if face.movable[q]:
+            gmsh.model.mesh.setNode(int(face.tags[p]), list(gmsh.model.getValue(2, side, uv.tolist())), uv.tolist())
+
+
+def _adapt_context(side: int, brep_area: float, target: float):
+    """What :func:`cadedge.mesh.adapt.after_generate` reads of a job: one face, meshed by Frontal-Delaunay."""
+    import time
+    from types import SimpleNamespace
+
+    from cadedge.mesh.generate import FaceOutcome
+
+    options = {"fidelity": {"surface_ald": target, "brep_areas": np.array([brep_area]), "per_circle": 20.0,
+                            "face_per_circle": {1: 20.0}}}  # 0.31 on the radius-1 cylinder
+    lines: list[str] = []
+    ctx = SimpleNamespace(job=SimpleNamespace(options=options, no_refine=set(), deadline=None),
+                          emap=SimpleNamespace(face_of_surface={side: 1}), progress=lines.append,
+                          outcomes={side: FaceOutcome(face=1, surface=side, strategy="Frontal-Delaunay")},
+                          cpu_started=time.process_time(), fidelity={})
+    return ctx, lines
+
+
+def _boundary(gmsh, side: int) -> set[tuple]:
+    """The tags and coordinates of the nodes on the side's curves."""
+    out = set()
+    for _, c in gmsh.model.getBoundary([(2, side)], oriented=False):
+        tags, xyz, _ = gmsh.model.mesh.getNodes(1, c, includeBoundary=True)
+        out.update(zip(np.asarray(tags).tolist(), map(tuple, np.reshape(xyz, (-1, 3)).round(12).tolist())))
+    return out
+
+
+def test_a_poor_face_is_meshed_again_by_meshadapt_and_keeps_its_boundary(gmsh_cylinder):
+    """A face Frontal-Delaunay left with many triangles under 20 degrees is meshed again by MeshAdapt
+    (``cadedge.mesh.adapt``), which is kept: better angles, area within the target, curves' nodes as they
+    were."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh.adapt import MESH_ADAPT, POOR_SHARE, after_generate, face_quality
+
+    boundary = _boundary(gmsh, side)
+    _spoil(gmsh, side)
+    spoiled = face_quality(side)
+    assert spoiled[1] > 2 * POOR_SHARE
+    ctx, lines = _adapt_context(side, 4.0 * np.pi, 1e-2)
+    after_generate(ctx)
+    assert ctx.outcomes[side].strategy == MESH_ADAPT and lines == ["refine 1", "refined 1"]
+    now = face_quality(side)
+    assert now[1] <= POOR_SHARE and now[0] > spoiled[0] and ctx.outcomes[side].triangles == now[2]
+    assert _boundary(gmsh, side) == boundary
+
+
+def test_meshadapt_is_not_kept_past_the_faces_area_target(gmsh_cylinder):
+    """A poor face's MeshAdapt mesh misses an area target that its first mesh meets: the face gets its
+    first mesh back, and keeps its strategy."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh.adapt import after_generate
+    from cadedge.mesh.facemesh import read_face
+    from cadedge.mesh.optimize import _area
+
+    _spoil(gmsh, side)
+    before = read_face(side)
+    ctx, lines = _adapt_context(side, _area(before.x, before.tri), 1e-9)  # the spoiled mesh is exact
+    after_generate(ctx)
+    assert lines == ["refine 1", "refined 1"] and ctx.outcomes[side].strategy == "Frontal-Delaunay"
+    back = read_face(side)
+    assert len(back.tri) == len(before.tri)
+    assert np.array_equal(np.sort(back.x.round(12), axis=0), np.sort(before.x.round(12), axis=0))
+
+
+def test_a_face_with_few_small_angles_is_left_to_the_optimiser(gmsh_cylinder):
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh.adapt import POOR_SHARE, after_generate, face_quality
+
+    assert face_quality(side)[1] <= POOR_SHARE  # the cylinder as gmsh meshed it
+    ctx, lines = _adapt_context(side, 4.0 * np.pi, 1e-2)
+    after_generate(ctx)
+    assert not lines and ctx.outcomes[side].strategy == "Frontal-Delaunay"

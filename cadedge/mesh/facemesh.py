@@ -83,3 +83,22 @@ def write_interior(surface: int, face: FaceMesh, x: np.ndarray, tri: np.ndarray,
     tags = np.concatenate([face.tags, np.zeros(len(x) - len(face.tags), dtype=np.int64)])
     tags[rows] = np.asarray(added, dtype=np.int64)  # in the order they were added
     gmsh.model.mesh.addElementsByType(surface, 2, [], tags[tri].ravel().tolist())
+
+
+def triangle_min_angles(surface: int) -> np.ndarray | None:
+    """The smallest angle (degrees) of each triangle of gmsh surface ``surface``, read without the rest of
+    :func:`read_face`; None if it has no triangles or they name nodes it does not hold."""
+    import gmsh
+
+    from .generate import node_lookup
+    from .quality import min_angles
+
+    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
+    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+    if not len(tri) or not len(tags):
+        return None
+    lookup = node_lookup(tags)
+    tri = np.asarray(tri, dtype=np.int64)
+    if tri.max() >= len(lookup) or (lookup[tri] < 0).any():
+        return None
+    return min_angles(np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri].reshape(-1, 3))

@@ -338,7 +338,8 @@ def not_converging(deficit: float, before: float | None, target: float) -> bool:
 #: The hooks that carry the surface target into the gmsh job (see :mod:`cadedge.mesh.worker`).
 HOOKS = {"before_generate": ["cadedge.mesh.fidelity:before_generate"],
          "before_face": ["cadedge.mesh.fidelity:before_face"],
-         "after_generate": ["cadedge.mesh.fidelity:after_generate", "cadedge.mesh.optimize:after_generate"],
+         "after_generate": ["cadedge.mesh.fidelity:after_generate", "cadedge.mesh.adapt:after_generate",
+                            "cadedge.mesh.optimize:after_generate"],
          "before_write": ["cadedge.mesh.groups:before_write"],
          "after_mesh": ["cadedge.mesh.fidelity:after_mesh"]}
 

@@ -350,19 +350,10 @@ def unfold_face(surface: int) -> bool:
 
 def _face_min_angle(surface: int) -> float:
     """The smallest triangle angle of one meshed gmsh surface (180 for a face without triangles)."""
-    import gmsh
+    from .facemesh import triangle_min_angles
 
-    from .generate import node_lookup
-
-    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
-    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
-    if not len(tri) or not len(tags):
-        return 180.0
-    lookup = node_lookup(tags)
-    tri = np.asarray(tri, dtype=np.int64)
-    if tri.max() >= len(lookup) or (lookup[tri] < 0).any():
-        return 180.0
-    return float(min_angles(np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri].reshape(-1, 3)).min())
+    angles = triangle_min_angles(surface)
+    return 180.0 if angles is None else float(angles.min())
 
 
 def after_generate(ctx) -> None:

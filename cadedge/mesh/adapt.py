@@ -1,0 +1,125 @@
+"""Inside the gmsh job: faces Frontal-Delaunay left with poor triangles, meshed again by MeshAdapt.
+
+gmsh's Frontal-Delaunay places its nodes in the face's parameter plane, sized by the surface's metric
+there. Where that metric degenerates inside a face, it crowds nodes: surf114.igs (a pythonocc-demos
+model) has two lens-shaped B-spline faces whose ``u`` iso-lines shrink to a point at two places inside
+them, where the face's long sides cross at about 50 degrees. Frontal-Delaunay put nodes 0.0002 mm
+apart there and left 14-23% of those faces' triangles under 20 degrees, down to 0.3 degrees, which the
+face optimiser could not lift. gmsh's MeshAdapt refines by splitting, collapsing and swapping edges
+measured in 3-D, and meshed the same faces at the same sizes with 1-3% under 20 degrees and none under
+7 degrees.
+
+So after the surface target's passes (:mod:`cadedge.mesh.fidelity`) and before the face optimiser
+(:mod:`cadedge.mesh.optimize`), every face Frontal-Delaunay meshed with more than :data:`POOR_SHARE` of
+its triangles under :data:`~cadedge.mesh.quality.GOOD_DEG` degrees is meshed again by MeshAdapt at the
+sizes it had. A face with only a few small angles is left to the optimiser: the M6 screw's thread flank
+at 1e-3 (28 454 triangles, none under 20 degrees but one corner of 2.2) took MeshAdapt 33 s for the
+same smallest angle. The new mesh is kept when it is no worse in both figures, clearly better in one
+(:func:`better`), and its area deficit stays within the target (or no larger than before); otherwise the
+face gets its first mesh back. A face held at a size floor (:mod:`cadedge.mesh.floored`, as surf114's are) is meshed with
+gmsh's switch to other algorithms on failure off, as it was first meshed: gmsh's whole fallback chain
+never finished on such faces. Only a face's interior changes: its boundary curves keep their nodes, so
+neighbours stay conforming.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+#: A face with a larger share of its triangles under ``GOOD_DEG`` is meshed again by MeshAdapt. Faces at
+#: 1-2% are left to the optimiser: the propeller's and sharp_blade's blade faces at 1e-3 (1.6-1.7%, 7 000
+#: to 23 000 triangles each) took MeshAdapt 25-30 s a face, for a smallest angle of 0 degrees or four
+#: times the triangles.
+POOR_SHARE = 0.05
+#: MeshAdapt's mesh must improve the share under ``GOOD_DEG`` by this fraction of it, or the smallest angle
+#: by :data:`GAIN_DEG` degrees (razor_wing's 0.12 mm thin wing at 1e-3: 44.2% -> 44.1%, which no one needs).
+GAIN = 0.1
+GAIN_DEG = 1.0
+#: MeshAdapt's mesh may have at most this many times the triangles of the face's first mesh.
+GROWTH = 1.5
+#: The retries stop once they have taken this share of the CPU time the job took before them, at least
+#: :data:`MIN_BUDGET` seconds (the poorest faces go first). MeshAdapt can be slow on B-spline faces:
+#: wing_fuselage's fuselage face at 1e-3 (3 753 triangles) took it 61 s.
+BUDGET_SHARE = 0.5
+MIN_BUDGET = 10.0
+#: The strategy name a face kept as MeshAdapt meshed it is recorded with (``FaceOutcome.strategy``).
+MESH_ADAPT = "MeshAdapt"
+
+
+def face_quality(surface: int) -> tuple[float, float, int] | None:
+    """Gmsh surface ``surface``'s smallest triangle angle (degrees), its share of triangles under
+    :data:`~cadedge.mesh.quality.GOOD_DEG` and its triangle count; None if it has no (readable) triangles."""
+    from .facemesh import triangle_min_angles
+    from .quality import GOOD_DEG
+
+    angles = triangle_min_angles(surface)
+    if angles is None:
+        return None
+    return float(angles.min()), float(np.mean(angles < GOOD_DEG)), len(angles)
+
+
+def poor(quality: tuple[float, float, int]) -> bool:
+    """Whether a face of this :func:`face_quality` is worth meshing again."""
+    return quality[1] > POOR_SHARE
+
+
+def better(new: tuple[float, float, int], old: tuple[float, float, int]) -> bool:
+    """Whether quality ``new`` beats ``old``: no lower smallest angle, no larger share under 20 degrees,
+    at most :data:`GROWTH` times the triangles, and a share at least :data:`GAIN` smaller or a smallest
+    angle :data:`GAIN_DEG` larger."""
+    return (new[0] >= old[0] and new[1] <= old[1] and new[2] <= GROWTH * old[2]
+            and (new[1] <= (1.0 - GAIN) * old[1] or new[0] >= old[0] + GAIN_DEG))
+
+
+def after_generate(ctx) -> None:
+    """Hook (after :func:`cadedge.mesh.fidelity.after_generate`): mesh the poor faces again by MeshAdapt
+    and keep the better mesh (see the module docstring), the poorest first, within :data:`BUDGET_SHARE`
+    of the job's CPU time so far (at least :data:`MIN_BUDGET`) and the job's soft deadline. Each attempt
+    is announced as ``refine F`` / ``refined F``: the watchdog bounds it like a refinement, and a hang or
+    crash there keeps the face as first meshed (it joins ``job.no_refine``, which this hook skips)."""
+    from .areas import unfolded_areas
+    from .facemesh import read_face, write_interior
+    from .generate import STRATEGIES
+    from .interior import use_per_circle
+    from .remesh import attempt_again
+
+    opts = ctx.job.options.get("fidelity")
+    if not opts:
+        return
+    target = opts["surface_ald"]
+    areas = np.asarray(opts["brep_areas"], dtype=float)
+    face_of = ctx.emap.face_of_surface
+    done = getattr(ctx, "fidelity", None) or {}
+    counts = {**done.get("refined", {}), **done.get("coarsened", {})}  # face -> the count it was meshed at
+    adapt = next(st for st in STRATEGIES if st.name == MESH_ADAPT)
+    say = ctx.progress or (lambda line: None)
+    quality = {}
+    for s, outcome in ctx.outcomes.items():
+        f = face_of.get(s, s)
+        if (outcome.ok and outcome.strategy == STRATEGIES[0].name and f not in ctx.job.no_refine
+                and 1 <= f <= len(areas) and areas[f - 1] > 0 and (q := face_quality(s)) is not None and poor(q)):
+            quality[s] = q
+    cpu = time.process_time()
+    cpu_end = cpu + max(MIN_BUDGET, BUDGET_SHARE * (cpu - ctx.cpu_started))
+    for s in sorted(quality, key=lambda s: (-quality[s][1], s)):  # the poorest first
+        if time.process_time() > cpu_end or (ctx.job.deadline is not None and time.time() > ctx.job.deadline):
+            break
+        outcome, f, old, kept = ctx.outcomes[s], face_of.get(s, s), quality[s], read_face(s)
+        if kept is None:
+            continue
+        before = 1.0 - unfolded_areas([s]).get(s, 0.0) / areas[f - 1]
+        say(f"refine {f}")
+        use_per_circle(s, counts.get(f, opts["face_per_circle"].get(f, opts["per_circle"])))
+        failed = attempt_again([s], adapt)[s]
+        new = None if failed else face_quality(s)
+        if new is not None and better(new, old):
+            after = 1.0 - unfolded_areas([s]).get(s, 0.0) / areas[f - 1]
+            if abs(after) <= max(target, abs(before)):
+                ctx.outcomes[s] = dataclasses.replace(outcome, strategy=adapt.name, triangles=new[2])
+                say(f"refined {f}")
+                continue
+        write_interior(s, kept, kept.x, kept.tri, kept.movable, kept.uv)
+        say(f"refined {f}")
