@@ -287,6 +287,28 @@ def test_projector_walks_from_each_nodes_parameters_and_searches_only_across_the
     assert project.searched == 1 and np.abs(on[0] - across).max() < 1e-7
 
 
+def test_projector_projects_onto_a_plane_in_closed_form(gmsh_cylinder):
+    """The cylinder's caps are planes: their points are projected without gmsh, to the same foot points,
+    parameters and normals as gmsh's own projection and evaluation."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh.project import Projector
+
+    caps = [t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) == "Plane"]
+    assert len(caps) == 2
+    rng = np.random.default_rng(7)
+    for cap in caps:
+        project = Projector(cap)
+        assert project.plane is not None and Projector(side).plane is None
+        points = rng.uniform(-1.0, 1.0, (20, 3)) + np.array([0.0, 0.0, 1.0])
+        on, par = project(points)
+        ref, ref_par = project._search(points)
+        assert project.searched == 20 and np.abs(on - ref).max() < 1e-12  # only the reference searched
+        assert np.abs(np.asarray(gmsh.model.getValue(2, cap, par.ravel().tolist())).reshape(-1, 3) - on).max() < 1e-12
+        assert np.abs(par - ref_par).max() < 1e-9
+        normals = np.asarray(gmsh.model.getNormal(cap, par.ravel().tolist())).reshape(-1, 3)
+        assert np.abs(project.normals(par) - normals).max() < 1e-12
+
+
 def test_a_face_out_of_time_keeps_gmshs_triangles(gmsh_cylinder):
     gmsh, side = gmsh_cylinder
     from cadedge.mesh.optimize import smooth_face

@@ -23,7 +23,12 @@ class Projector:
     from its own ``(u, v)`` find the same foot point. A point whose start is unknown, whose steps leave
     the parametric bounds (a seam or the face's edge), hit a pole (singular derivatives) or do not
     converge goes to ``getClosestPoint`` instead. ``uv`` (node row -> parameters, NaN where unknown) is
-    read at each call; :attr:`searched` counts the points given to ``getClosestPoint``."""
+    read at each call; :attr:`searched` counts the points given to ``getClosestPoint``.
+
+    A plane (gmsh type "Plane": OCCT's, ``origin + u du + v dv``) is projected in closed form, without
+    gmsh, and its normal is one vector: on an assembly of 18 solids, mostly planes (as1_pe_203 of the
+    pythonocc-demos at 1e-2), gmsh's evaluations for the Gauss-Newton steps and the normals took a third
+    of the optimiser's 30 s, in 38 000 calls."""
 
     def __init__(self, surface: int, uv: np.ndarray | None = None):
         import gmsh
@@ -36,6 +41,7 @@ class Projector:
         self.size = max(float(np.linalg.norm(box[3:] - box[:3])), 1e-300)
         self.searched = 0
         self.walked = 0
+        self.plane = _plane(surface, self.lo, self.hi) if gmsh.model.getType(2, surface) == "Plane" else None
 
     def _search(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         import gmsh
@@ -84,12 +90,20 @@ class Projector:
         """Unit surface normals (k, 3) at parameters ``params`` (k, 2); zero rows where there is none."""
         from .folds import normals_at
 
+        if self.plane is not None:
+            params = np.asarray(params, dtype=float).reshape(-1, 2)
+            return np.where(np.isnan(params).any(axis=1)[:, None], 0.0, self.plane[3])
         return normals_at(self.surface, params)
 
     def __call__(self, points: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The points (k, 3) moved onto the surface and their parameters (k, 2); ``rows``: the node row
         each point belongs to (its parameters start the search)."""
         points = np.asarray(points, dtype=float).reshape(-1, 3)
+        if self.plane is not None:
+            origin, axes, inverse, _ = self.plane
+            par = (points - origin) @ inverse
+            self.walked += len(points)
+            return origin + par @ axes, par
         out = np.empty_like(points)
         par = np.full((len(points), 2), np.nan)
         todo = np.ones(len(points), dtype=bool)
@@ -105,3 +119,27 @@ class Projector:
         if todo.any():
             out[todo], par[todo] = self._search(points[todo])
         return out, par
+
+
+def _plane(surface: int, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, ...] | None:
+    """A planar gmsh surface's ``origin`` (the point at parameters 0, 0), ``axes`` (2, 3: the derivatives
+    along u and v), the (3, 2) matrix taking a point's offset from the origin to its parameters, and its
+    unit normal as gmsh orients it; None if the parametrisation is not affine after all (checked at the
+    middle of the bounds) or degenerate."""
+    import gmsh
+
+    mid = 0.5 * (lo + hi)
+    probe = [0.0, 0.0, *mid.tolist()]
+    values = np.asarray(gmsh.model.getValue(2, surface, probe), dtype=float).reshape(2, 3)
+    axes = np.asarray(gmsh.model.getDerivative(2, surface, probe), dtype=float).reshape(2, 2, 3)
+    normal = np.asarray(gmsh.model.getNormal(surface, mid.tolist()), dtype=float)
+    origin, du, dv = values[0], axes[0, 0], axes[0, 1]
+    gram = np.array([[du @ du, du @ dv], [du @ dv, dv @ dv]])
+    if not np.all(np.isfinite(gram)) or np.linalg.det(gram) <= 1e-12 * gram[0, 0] * gram[1, 1]:
+        return None
+    scale = max(float(np.linalg.norm(values[1] - origin)), float(np.linalg.norm(du) + np.linalg.norm(dv)), 1e-300)
+    if (np.abs(axes[1] - axes[0]).max() > 1e-9 * (np.linalg.norm(du) + np.linalg.norm(dv))
+            or np.linalg.norm(origin + mid @ axes[0] - values[1]) > 1e-9 * scale
+            or not abs(np.linalg.norm(normal) - 1.0) < 1e-6):
+        return None
+    return origin, axes[0], axes[0].T @ np.linalg.inv(gram), normal
