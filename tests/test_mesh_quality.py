@@ -273,6 +273,7 @@ def test_projector_walks_from_each_nodes_parameters_and_searches_only_across_the
     rows = np.flatnonzero(inside)
     moved = x[rows] * np.array([1.02, 0.99, 1.0]) + np.array([0.01, 0.02, 0.03])  # off the surface
     project = Projector(side, uv)
+    project.cylinder = None  # the walk any curved surface gets (a cylinder's closed form: the next test)
     on, par = project(moved, rows)
     assert project.searched == 0 and project.walked == len(rows)
     ref, _ = project._search(moved)
@@ -307,6 +308,30 @@ def test_projector_projects_onto_a_plane_in_closed_form(gmsh_cylinder):
         assert np.abs(par - ref_par).max() < 1e-9
         normals = np.asarray(gmsh.model.getNormal(cap, par.ravel().tolist())).reshape(-1, 3)
         assert np.abs(project.normals(par) - normals).max() < 1e-12
+
+
+def test_projector_projects_onto_a_cylinder_in_closed_form(gmsh_cylinder):
+    """The cylinder's side: points (one pushed across the seam) projected without gmsh, to the same foot
+    points, parameters and normals as gmsh's own projection and evaluation."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh.project import Projector
+
+    _, xyz, uv = gmsh.model.mesh.getNodes(2, side, includeBoundary=False, returnParametricCoord=True)
+    x, uv = np.reshape(xyz, (-1, 3)), np.reshape(uv, (-1, 2))
+    project = Projector(side, uv)
+    assert project.cylinder is not None
+    rows = np.arange(len(x))
+    moved = x * np.array([1.02, 0.99, 1.0]) + np.array([0.01, 0.02, 0.03])
+    lo, hi = gmsh.model.getParametrizationBounds(2, side)
+    seam = int(np.argmax(uv[:, 0]))
+    moved[seam] = gmsh.model.getValue(2, side, [lo[0] + 0.01 * (hi[0] - lo[0]), uv[seam, 1]])
+    on, par = project(moved, rows)
+    ref, ref_par = project._search(moved)
+    assert project.searched == len(rows) and np.abs(on - ref).max() < 1e-12  # only the reference searched
+    assert np.abs(par - ref_par).max() < 1e-9 and lo[0] <= par[seam, 0] < lo[0] + 0.02 * (hi[0] - lo[0])
+    assert np.abs(np.asarray(gmsh.model.getValue(2, side, par.ravel().tolist())).reshape(-1, 3) - on).max() < 1e-12
+    normals = np.asarray(gmsh.model.getNormal(side, par.ravel().tolist())).reshape(-1, 3)
+    assert np.abs(project.normals(par) - normals).max() < 1e-12
 
 
 def test_a_face_out_of_time_keeps_gmshs_triangles(gmsh_cylinder):
