@@ -87,51 +87,86 @@ PyObject *ck_min_angles(PyObject *self, PyObject *args)
     Py_RETURN_NONE;
 }
 
-/* incident_min(x (n, 3) f64, tri (m, 3) i64, node (q,) i64, slot (q,) i64, t (q,) i64, pos (n, 3) f64,
- * out (n,) f64): for each incidence (node at corner slot of triangle t), the smallest angle of the triangle
- * with that corner at pos[node]; out[node] is the smallest over its incidences (inf for a node without). */
-PyObject *ck_incident_min(PyObject *self, PyObject *args)
+/* climb_trials(x (n, 3) f64, tri (m, 3) i64, node (q,) i64, slot (q,) i64, t (q,) i64, u (n, 3) f64,
+ * v (n, 3) f64, h (n,) f64, steps (s,) f64, cosines (a,) f64, sines (a,) f64, best (n,) f64, best_pos (n, 3)
+ * f64): the local search's trials (cadedge.mesh.moves.climb_nodes) in one call. For each step and then
+ * each direction, every node of the incidences is tried at x + (step h) (cos u + sin v), its smallest
+ * angle there that of its worst triangle; where that beats best by more than 1e-9, best and best_pos get it
+ * (both read and written). The sums and products in numpy's order, so the same results as one numpy
+ * expression and kernel call per trial, which cost 5 s of the optimiser's 20 s on an 18-solid assembly
+ * (96 000 calls). */
+PyObject *ck_climb_trials(PyObject *self, PyObject *args)
 {
     Buffers b = {.n = 0};
-    Py_ssize_t nx, nt, nn, ns, ntt, np_, nout;
+    Py_ssize_t nx, nt, nn, ns, ntt, nu, nv, nh, nsteps, nc, nsn, nbest, npos;
     const double *x = ck_arg(&b, args, 0, F64, 0, &nx);
     const int64_t *tri = ck_arg(&b, args, 1, I64, 0, &nt);
     const int64_t *node = ck_arg(&b, args, 2, I64, 0, &nn);
     const int64_t *slot = ck_arg(&b, args, 3, I64, 0, &ns);
     const int64_t *t = ck_arg(&b, args, 4, I64, 0, &ntt);
-    const double *pos = ck_arg(&b, args, 5, F64, 0, &np_);
-    double *out = ck_arg(&b, args, 6, F64, 1, &nout);
-    if (!out) {
+    const double *u = ck_arg(&b, args, 5, F64, 0, &nu);
+    const double *v = ck_arg(&b, args, 6, F64, 0, &nv);
+    const double *h = ck_arg(&b, args, 7, F64, 0, &nh);
+    const double *steps = ck_arg(&b, args, 8, F64, 0, &nsteps);
+    const double *cosines = ck_arg(&b, args, 9, F64, 0, &nc);
+    const double *sines = ck_arg(&b, args, 10, F64, 0, &nsn);
+    double *best = ck_arg(&b, args, 11, F64, 1, &nbest);
+    double *best_pos = ck_arg(&b, args, 12, F64, 1, &npos);
+    if (!best_pos) {
         ck_release(&b);
         return NULL;
     }
     Py_ssize_t n = nx / 3, m = nt / 3;
-    if (nx % 3 || nt % 3 || ns != nn || ntt != nn || np_ != nx || nout != n) {
+    if (nx % 3 || nt % 3 || ns != nn || ntt != nn || nu != nx || nv != nx || nh != n || nsn != nc || nbest != n
+        || npos != nx) {
         ck_release(&b);
-        PyErr_SetString(PyExc_ValueError, "incident_min: mismatched shapes");
+        PyErr_SetString(PyExc_ValueError, "climb_trials: mismatched shapes");
         return NULL;
     }
-    if (!nodes_in_range(tri, nt, n, "incident_min")) {
+    if (!nodes_in_range(tri, nt, n, "climb_trials")) {
         ck_release(&b);
         return NULL;
     }
     for (Py_ssize_t i = 0; i < nn; i++)
         if (node[i] < 0 || node[i] >= n || slot[i] < 0 || slot[i] > 2 || t[i] < 0 || t[i] >= m) {
             ck_release(&b);
-            PyErr_SetString(PyExc_IndexError, "incident_min: incidence out of range");
+            PyErr_SetString(PyExc_IndexError, "climb_trials: incidence out of range");
             return NULL;
         }
-    for (Py_ssize_t i = 0; i < n; i++)
-        out[i] = INFINITY;
-    for (Py_ssize_t i = 0; i < nn; i++) {
-        const double *p[3];
-        for (int k = 0; k < 3; k++)
-            p[k] = x + 3 * tri[3 * t[i] + k];
-        p[slot[i]] = pos + 3 * node[i];
-        double angle = min_angle(p[0], p[1], p[2]);
-        if (angle < out[node[i]] || angle != angle)
-            out[node[i]] = angle; /* NaN (a degenerate corner) stays, as numpy's min keeps it */
+    double *q = PyMem_Malloc((size_t)(4 * n + 1) * sizeof(double)); /* each node's worst, then its trial */
+    if (!q) {
+        ck_release(&b);
+        return PyErr_NoMemory();
     }
+    double *pos = q + n;
+    for (Py_ssize_t s = 0; s < nsteps; s++)
+        for (Py_ssize_t a = 0; a < nc; a++) {
+            for (Py_ssize_t i = 0; i < n; i++)
+                q[i] = INFINITY;
+            for (Py_ssize_t i = 0; i < nn; i++) {
+                Py_ssize_t j = node[i];
+                if (q[j] == INFINITY) /* its trial position, once per node */
+                    for (int d = 0; d < 3; d++)
+                        pos[3 * j + d] = x[3 * j + d]
+                                         + steps[s] * h[j] * (cosines[a] * u[3 * j + d] + sines[a] * v[3 * j + d]);
+                const double *p[3];
+                for (int k = 0; k < 3; k++)
+                    p[k] = x + 3 * tri[3 * t[i] + k];
+                p[slot[i]] = pos + 3 * j;
+                double angle = min_angle(p[0], p[1], p[2]);
+                if (angle < q[j] || angle != angle)
+                    q[j] = angle;
+            }
+            for (Py_ssize_t i = 0; i < nn; i++) {
+                Py_ssize_t j = node[i];
+                if (q[j] != INFINITY && q[j] > best[j] + 1e-9) {
+                    best[j] = q[j];
+                    for (int d = 0; d < 3; d++)
+                        best_pos[3 * j + d] = pos[3 * j + d];
+                }
+            }
+        }
+    PyMem_Free(q);
     ck_release(&b);
     Py_RETURN_NONE;
 }

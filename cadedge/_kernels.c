@@ -761,7 +761,7 @@ static PyMethodDef methods[] = {
     {"parse_curves", ck_parse_curves, METH_VARARGS, "Curves written by OCCT's BinTools_CurveSet as geometry table rows."},
     {"parse_shapes", ck_parse_shapes, METH_VARARGS, "A shape written by OCCT's BinTools_ShapeSet: topology and edges."},
     {"min_angles", ck_min_angles, METH_VARARGS, "The smallest angle of each triangle, in degrees."},
-    {"incident_min", ck_incident_min, METH_VARARGS, "Each node's smallest triangle angle with it moved."},
+    {"climb_trials", ck_climb_trials, METH_VARARGS, "The local search's trial positions, the best per node."},
     {"tri_normals", ck_tri_normals, METH_VARARGS, "Each triangle's normal, twice its area in length."},
     {"idw_size", ck_idw_size, METH_VARARGS, "Inverse-distance mean of the nearest samples' sizes at a point."},
     {NULL, NULL, 0, NULL},

@@ -90,7 +90,7 @@ PyObject *ck_parse_curves(PyObject *self, PyObject *args);
 PyObject *ck_parse_shapes(PyObject *self, PyObject *args);
 PyObject *ck_edge_lengths(PyObject *self, PyObject *args);
 PyObject *ck_min_angles(PyObject *self, PyObject *args);
-PyObject *ck_incident_min(PyObject *self, PyObject *args);
+PyObject *ck_climb_trials(PyObject *self, PyObject *args);
 PyObject *ck_tri_normals(PyObject *self, PyObject *args);
 PyObject *ck_idw_size(PyObject *self, PyObject *args);
 

@@ -163,12 +163,17 @@ def idw_size(points: np.ndarray, sizes: np.ndarray, x: float, y: float, z: float
     return _kernels.idw_size(points, sizes, x, y, z, k)
 
 
-def incident_min(x: np.ndarray, tri: np.ndarray, node: np.ndarray, slot: np.ndarray, t: np.ndarray,
-                 pos: np.ndarray) -> np.ndarray:
-    """For incidences (``node`` at corner ``slot`` of triangle ``t``), the smallest angle of each node's
-    triangles with that node moved to ``pos[node]`` (``inf`` for a node without incidences)."""
-    out = np.empty(len(x))
+def climb_trials(x: np.ndarray, tri: np.ndarray, node: np.ndarray, slot: np.ndarray, t: np.ndarray,
+                 u: np.ndarray, v: np.ndarray, h: np.ndarray, steps: np.ndarray, cosines: np.ndarray,
+                 sines: np.ndarray, best: np.ndarray, best_pos: np.ndarray) -> None:
+    """The local search's trials in one call: for each of ``steps`` and then each direction (``cosines``,
+    ``sines``), each node of the incidences tried at ``x + step * h * (cos * u + sin * v)``; where its
+    smallest angle there (that of its worst triangle) beats ``best`` by more than 1e-9, ``best`` and
+    ``best_pos`` (float64, C-contiguous, updated in place) take it."""
     i64 = np.int64
-    _kernels.incident_min(_f64(x), np.ascontiguousarray(tri, dtype=i64), np.ascontiguousarray(node, dtype=i64),
-                          np.ascontiguousarray(slot, dtype=i64), np.ascontiguousarray(t, dtype=i64), _f64(pos), out)
-    return out
+    for a in (best, best_pos):
+        if a.dtype != np.float64 or not a.flags.c_contiguous:
+            raise ValueError("climb_trials: best and best_pos must be C-contiguous float64 arrays")
+    _kernels.climb_trials(_f64(x), np.ascontiguousarray(tri, dtype=i64), np.ascontiguousarray(node, dtype=i64),
+                          np.ascontiguousarray(slot, dtype=i64), np.ascontiguousarray(t, dtype=i64), _f64(u), _f64(v),
+                          _f64(h), _f64(steps), _f64(cosines), _f64(sines), best, best_pos)

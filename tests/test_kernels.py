@@ -96,29 +96,50 @@ def test_min_angles_is_the_smallest_of_numpys_triangle_angles(seed):
         min_angles(x, [[0, 1, len(x)]])
 
 
-def test_incident_min_is_each_nodes_worst_triangle_with_it_moved():
-    """For each node with incidences, the smallest angle of its triangles with it moved to its trial
-    position and every other node left in place; inf for the others (the local search's trial)."""
-    from cadedge.kernels import incident_min
+def test_climb_trials_keep_each_nodes_best_trial_position():
+    """The local search's trials in one call: each node with incidences tried at ``x + step h (cos u +
+    sin v)`` for every step and direction, its smallest angle there with every other node in place; the
+    best over the trials kept where it beats the node's start by more than 1e-9 (the first of equals),
+    the start kept elsewhere. As numpy computes each trial, to the last bit."""
+    from cadedge.kernels import climb_trials
+    from cadedge.mesh.moves import STEPS
     from cadedge.mesh.quality import triangle_angles
 
     rng = np.random.default_rng(7)
     x = rng.uniform(-1, 1, (40, 3))
     tri = np.array([rng.choice(40, 3, replace=False) for _ in range(90)])
-    pos = x + rng.normal(0, 0.05, x.shape)
+    u, v = rng.normal(0, 1, x.shape), rng.normal(0, 1, x.shape)
+    h = rng.uniform(0.05, 0.2, len(x))
     node, slot, t = tri.ravel(), np.tile(np.arange(3), len(tri)), np.repeat(np.arange(len(tri)), 3)
     keep = node % 3 != 0  # only some nodes try a move
     node, slot, t = node[keep], slot[keep], t[keep]
-    want = np.full(len(x), np.inf)
-    for nd, sl, tt in zip(node, slot, t):
-        p = x[tri[tt]].copy()
-        p[sl] = pos[nd]
-        want[nd] = min(want[nd], triangle_angles(p, [[0, 1, 2]]).min())
-    got = incident_min(x, tri, node, slot, t, pos)
-    assert np.all(np.isinf(got) == np.isinf(want)) and np.isinf(got[::3]).all()
-    assert np.allclose(got[np.isfinite(want)], want[np.isfinite(want)], rtol=0, atol=1e-12)
+    keep_nodes = np.unique(node)
+    phi = np.arange(8) * np.pi / 4
+    cosines, sines = np.array([np.cos(a) for a in phi]), np.array([np.sin(a) for a in phi])
+    start = np.full(len(x), np.inf)  # each node's worst angle where it is
+    for nd, tt in zip(node, t):
+        start[nd] = min(start[nd], triangle_angles(x[tri[tt]], [[0, 1, 2]]).min())
+    start[np.isinf(start)] = 30.0
+    start[keep_nodes[::2]] = 90.0  # no trial beats these
+    want, want_pos = start.copy(), x.copy()
+    for step in STEPS:
+        for c, s in zip(cosines, sines):
+            pos = x + step * h[:, None] * (c * u + s * v)
+            q = np.full(len(x), np.inf)
+            for nd, sl, tt in zip(node, slot, t):
+                p = x[tri[tt]].copy()
+                p[sl] = pos[nd]
+                q[nd] = min(q[nd], triangle_angles(p, [[0, 1, 2]]).min())
+            better = np.isfinite(q) & (q > want + 1e-9)
+            want[better], want_pos[better] = q[better], pos[better]
+    best, best_pos = start.copy(), x.copy()
+    climb_trials(x, tri, node, slot, t, u, v, h, np.asarray(STEPS), cosines, sines, best, best_pos)
+    assert (want[::3] == 30.0).all() and (want > start).sum() > 10 and (want[keep_nodes[::2]] == 90.0).all()
+    assert np.allclose(best, want, rtol=0, atol=1e-12) and np.array_equal(best_pos, want_pos)
     with pytest.raises(IndexError):
-        incident_min(x, tri, node, slot + 1, t, pos)
+        climb_trials(x, tri, node, slot + 1, t, u, v, h, np.asarray(STEPS), cosines, sines, best, best_pos)
+    with pytest.raises(ValueError):
+        climb_trials(x, tri, node, slot, t, u, v, h, np.asarray(STEPS), cosines, sines, best, best_pos.T)
 
 
 def test_tri_normals_is_numpys_cross_product_of_two_edges():

@@ -276,6 +276,7 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
     node, slot, t = node[sel], slot[sel], t[sel]
     e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     phi = np.arange(8) * np.pi / 4
+    cosines, sines = np.array([np.cos(a) for a in phi]), np.array([np.sin(a) for a in phi])
     params = None
     for _ in range(iterations):
         ang = min_angles(x, tri)
@@ -297,14 +298,9 @@ def climb_nodes(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, project, *,
         best = node0.copy()
         best_pos = x.copy()
         sub = go[node]
-        nd, sl, tt = node[sub], slot[sub], t[sub]
-        for step in STEPS:
-            for a in phi:
-                pos = x + step * h[:, None] * (np.cos(a) * u + np.sin(a) * v)
-                q = kernels.incident_min(x, tri, nd, sl, tt, pos)  # each node's worst with it at pos
-                better = go & (q > best + 1e-9)
-                best[better] = q[better]
-                best_pos[better] = pos[better]
+        # each wanted node at each trial position: its worst angle there, the best kept (one compiled call)
+        kernels.climb_trials(x, tri, node[sub], slot[sub], t[sub], u, v, h, np.asarray(STEPS, dtype=float),
+                             cosines, sines, best, best_pos)
         improves = go & (best > node0 + 1e-9)
         # one node per neighbourhood: of two neighbours that can improve, the worse off moves first
         rank = node0 + np.arange(n) * 1e-12
