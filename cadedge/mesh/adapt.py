@@ -16,10 +16,10 @@ sizes it had. A face with only a few small angles is left to the optimiser: the 
 at 1e-3 (28 454 triangles, none under 20 degrees but one corner of 2.2) took MeshAdapt 33 s for the
 same smallest angle. The new mesh is kept when it is no worse in both figures, clearly better in one
 (:func:`better`), and its area deficit stays within the target (or no larger than before); otherwise the
-face gets its first mesh back. A face held at a size floor (:mod:`cadedge.mesh.floored`, as surf114's are) is meshed with
-gmsh's switch to other algorithms on failure off, as it was first meshed: gmsh's whole fallback chain
-never finished on such faces. Only a face's interior changes: its boundary curves keep their nodes, so
-neighbours stay conforming.
+face gets its first mesh back (:func:`cadedge.mesh.remesh.mesh_again`). A face held at a size floor
+(:mod:`cadedge.mesh.floored`, as surf114's are) is meshed with gmsh's switch to other algorithms on
+failure off, as it was first meshed: gmsh's whole fallback chain never finished on such faces. Only a
+face's interior changes: its boundary curves keep their nodes, so neighbours stay conforming.
 """
 
 from __future__ import annotations
@@ -80,11 +80,11 @@ def after_generate(ctx) -> None:
     of the job's CPU time so far (at least :data:`MIN_BUDGET`) and the job's soft deadline. Each attempt
     is announced as ``refine F`` / ``refined F``: the watchdog bounds it like a refinement, and a hang or
     crash there keeps the face as first meshed (it joins ``job.no_refine``, which this hook skips)."""
+    import gmsh
+
     from .areas import unfolded_areas
-    from .facemesh import read_face, write_interior
     from .generate import STRATEGIES
-    from .interior import use_per_circle
-    from .remesh import attempt_again
+    from .remesh import mesh_again
 
     opts = ctx.job.options.get("fidelity")
     if not opts:
@@ -107,19 +107,16 @@ def after_generate(ctx) -> None:
     for s in sorted(quality, key=lambda s: (-quality[s][1], s)):  # the poorest first
         if time.process_time() > cpu_end or (ctx.job.deadline is not None and time.time() > ctx.job.deadline):
             break
-        outcome, f, old, kept = ctx.outcomes[s], face_of.get(s, s), quality[s], read_face(s)
-        if kept is None:
-            continue
+        outcome, f, old = ctx.outcomes[s], face_of.get(s, s), quality[s]
         before = 1.0 - unfolded_areas([s]).get(s, 0.0) / areas[f - 1]
+
+        def improved() -> bool:  # called at once, with the new mesh in place
+            new = face_quality(s)
+            return (new is not None and better(new, old)
+                    and abs(1.0 - unfolded_areas([s]).get(s, 0.0) / areas[f - 1]) <= max(target, abs(before)))
+
         say(f"refine {f}")
-        use_per_circle(s, counts.get(f, opts["face_per_circle"].get(f, opts["per_circle"])))
-        failed = attempt_again([s], adapt)[s]
-        new = None if failed else face_quality(s)
-        if new is not None and better(new, old):
-            after = 1.0 - unfolded_areas([s]).get(s, 0.0) / areas[f - 1]
-            if abs(after) <= max(target, abs(before)):
-                ctx.outcomes[s] = dataclasses.replace(outcome, strategy=adapt.name, triangles=new[2])
-                say(f"refined {f}")
-                continue
-        write_interior(s, kept, kept.x, kept.tri, kept.movable, kept.uv)
+        if mesh_again(s, adapt, counts.get(f, opts["face_per_circle"].get(f, opts["per_circle"])), improved):
+            triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
+            ctx.outcomes[s] = dataclasses.replace(outcome, strategy=adapt.name, triangles=triangles)
         say(f"refined {f}")

@@ -28,22 +28,20 @@ def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
     short and Delaunay's 4.1e-3, and meshed finer 2.2e-3 against 1.2e-3."""
     import gmsh
 
-    from .facemesh import read_face, write_interior
     from .areas import unfolded_areas
     from .generate import STRATEGIES, FaceOutcome
-    from .interior import use_per_circle
-    from .remesh import attempt_again
+    from .remesh import mesh_again
 
     delaunay = next(st for st in STRATEGIES if st.name == DELAUNAY)
-    kept = read_face(s)
-    if kept is None:
+    other = measured
+
+    def closer() -> bool:
+        nonlocal other
+        other = deficit(unfolded_areas([s]).get(s, 0.0))
+        return abs(other) < abs(measured)
+
+    if not mesh_again(s, delaunay, per_circle, closer):
         return measured
-    use_per_circle(s, per_circle)
-    failed = attempt_again([s], delaunay)[s]
-    other = None if failed else deficit(unfolded_areas([s]).get(s, 0.0))
-    if other is not None and abs(other) < abs(measured):
-        outcomes[s] = FaceOutcome(face=outcomes[s].face, surface=s, strategy=delaunay.name,
-                                  triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
-        return other
-    write_interior(s, kept, kept.x, kept.tri, kept.movable, kept.uv)
-    return measured
+    outcomes[s] = FaceOutcome(face=outcomes[s].face, surface=s, strategy=delaunay.name,
+                              triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
+    return other

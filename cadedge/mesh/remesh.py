@@ -11,6 +11,7 @@ Only the faces' interiors change: their boundary curves keep their nodes, so nei
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -71,6 +72,24 @@ def attempt_again(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
     finally:
         gmsh.model.setVisibility(gmsh.model.getEntities(), 1)
         gmsh.option.setNumber("Mesh.MeshOnlyVisible", 0)
+
+
+def mesh_again(surface: int, strategy: Strategy, per_circle: float, keep: Callable[[], bool]) -> bool:
+    """Mesh gmsh ``surface`` again from scratch with ``strategy`` at ``per_circle`` (see
+    :func:`cadedge.mesh.interior.use_per_circle`) and keep the new mesh if it meshed and ``keep()`` (called
+    with it in place) says so; otherwise put the face's first mesh back. Returns whether the new mesh was
+    kept (False, nothing tried, for a face without a readable mesh). Only the face's interior changes."""
+    from .facemesh import read_face, write_interior
+    from .interior import use_per_circle
+
+    first = read_face(surface)
+    if first is None:
+        return False
+    use_per_circle(surface, per_circle)
+    if attempt_again([surface], strategy)[surface] is None and keep():
+        return True
+    write_interior(surface, first, first.x, first.tri, first.movable, first.uv)
+    return False
 
 
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
