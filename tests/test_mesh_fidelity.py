@@ -349,9 +349,9 @@ def test_loose_bspline_model_meshes_on_its_own_grids_with_good_angles():
 def _face_mesh(surface: int) -> list:
     """The triangles of one gmsh surface as corner coordinates, to compare meshes exactly (tags may
     differ)."""
-    from cadedge.mesh.worker import _corners
+    from cadedge.mesh.facemesh import element_corners
 
-    return _corners(2, surface).tolist()
+    return element_corners(2, surface).tolist()
 
 
 def test_a_floored_face_keeps_the_better_of_frontal_delaunay_and_delaunay():

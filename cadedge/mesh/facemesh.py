@@ -85,20 +85,32 @@ def write_interior(surface: int, face: FaceMesh, x: np.ndarray, tri: np.ndarray,
     gmsh.model.mesh.addElementsByType(surface, 2, [], tags[tri].ravel().tolist())
 
 
-def triangle_min_angles(surface: int) -> np.ndarray | None:
-    """The smallest angle (degrees) of each triangle of gmsh surface ``surface``, read without the rest of
-    :func:`read_face`; None if it has no triangles or they name nodes it does not hold."""
+def element_corners(dim: int, tag: int) -> np.ndarray:
+    """The linear elements of one gmsh entity as corner coordinates: a surface's triangles (``dim`` 2,
+    shape (m, 3, 3)) or a curve's segments (``dim`` 1, shape (k, 2, 3)); none when they reference a node
+    gmsh does not list on the entity or its boundary."""
     import gmsh
 
     from .generate import node_lookup
+
+    k = dim + 1
+    _, elements = gmsh.model.mesh.getElementsByType(dim, tag)  # element type 1: 2-node line, 2: 3-node triangle
+    if not len(elements):
+        return np.zeros((0, k, 3))
+    tags, coords, _ = gmsh.model.mesh.getNodes(dim, tag, includeBoundary=True)
+    lookup = node_lookup(tags)
+    elements = np.asarray(elements, dtype=np.int64)
+    if elements.max() >= len(lookup) or (lookup[elements] < 0).any():  # a node off the entity: not ours
+        return np.zeros((0, k, 3))
+    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[elements]].reshape(-1, k, 3)
+
+
+def triangle_min_angles(surface: int) -> np.ndarray | None:
+    """The smallest angle (degrees) of each triangle of gmsh surface ``surface``, from its corners
+    (:func:`element_corners`); None if it has no triangles or they name nodes it does not hold."""
     from .quality import min_angles
 
-    _, tri = gmsh.model.mesh.getElementsByType(2, surface)
-    tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
-    if not len(tri) or not len(tags):
+    corners = element_corners(2, surface)
+    if not len(corners):
         return None
-    lookup = node_lookup(tags)
-    tri = np.asarray(tri, dtype=np.int64)
-    if tri.max() >= len(lookup) or (lookup[tri] < 0).any():
-        return None
-    return min_angles(np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri].reshape(-1, 3))
+    return min_angles(corners.reshape(-1, 3), np.arange(3 * len(corners)).reshape(-1, 3))

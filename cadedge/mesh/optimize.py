@@ -368,7 +368,7 @@ def after_generate(ctx) -> None:
 
     import gmsh
 
-    from .worker import _corners
+    from .facemesh import element_corners
 
     opts = ctx.job.options.get("fidelity") or {}
     areas = np.asarray(opts.get("brep_areas", []), dtype=float)
@@ -405,7 +405,7 @@ def after_generate(ctx) -> None:
                            deadline=end, cpu_deadline=cpu + share * (cpu_end - cpu)):
                 kept.append(f)
                 ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
-                deliver(2, f, _corners(2, s))  # a child killed at the hard timeout hands this face over
+                deliver(2, f, element_corners(2, s))  # a child killed at the hard timeout hands this face over
         floor = min((_face_min_angle(s) for s, o in ctx.outcomes.items() if o.ok), default=180.0)
         todo = [s for s in tried if _face_min_angle(s) < min(floor + SWEEP_MARGIN, COLLAPSE_BELOW)]
     ctx.smoothed = sorted(set(kept))

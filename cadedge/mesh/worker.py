@@ -42,6 +42,7 @@ import numpy as np
 
 from ..childproc import die_with_parent
 from ..shapegrid import ShapeGrid
+from .facemesh import element_corners
 
 #: Address space a mesh child may use, as a share of physical memory: beyond it allocations fail inside
 #: the child (gmsh reports or crashes there) before the system's out-of-memory killer picks a process.
@@ -164,26 +165,6 @@ def _import(brep: bytes, notes: list[str]) -> tuple[str | None, str | None]:
     return None, partial
 
 
-def _corners(dim: int, tag: int) -> np.ndarray:
-    """The linear elements of one gmsh entity as corner coordinates: a surface's triangles (``dim`` 2,
-    shape (m, 3, 3)) or a curve's segments (``dim`` 1, shape (k, 2, 3)); none when they reference a node
-    gmsh does not list on the entity or its boundary."""
-    import gmsh
-
-    from .generate import node_lookup
-
-    k = dim + 1
-    _, elements = gmsh.model.mesh.getElementsByType(dim, tag)  # element type 1: 2-node line, 2: 3-node triangle
-    if not len(elements):
-        return np.zeros((0, k, 3))
-    tags, coords, _ = gmsh.model.mesh.getNodes(dim, tag, includeBoundary=True)
-    lookup = node_lookup(tags)
-    elements = np.asarray(elements, dtype=np.int64)
-    if elements.max() >= len(lookup) or (lookup[elements] < 0).any():  # a node off the entity: not ours
-        return np.zeros((0, k, 3))
-    return np.asarray(coords, dtype=float).reshape(-1, 3)[lookup[elements]].reshape(-1, k, 3)
-
-
 def _overlapping_faces(surfaces: list[int]) -> dict[int, float]:
     """Meshed surfaces whose inner triangle edges (not curve segments) are also edges of another surface's
     triangles: two faces with the same boundary loop (a lens) triangulated from their boundary nodes alone
@@ -284,12 +265,12 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         if deliver is not None and words[:1] == ["refined"]:
             for f in (int(w) for w in words[1:]):
                 if f in emap.faces:
-                    deliver(2, f, _corners(2, emap.faces[f]))  # the finer mesh
+                    deliver(2, f, element_corners(2, emap.faces[f]))  # the finer mesh
 
     def deliver_edges() -> None:
         if deliver is not None:
             for eid, m in sorted(emap.edges.items()):
-                deliver(1, eid, _corners(1, m.tag))
+                deliver(1, eid, element_corners(1, m.tag))
 
     with gmsh_session():
         say("import")
@@ -334,7 +315,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
             if reason is None and deliver is not None and face in emap.faces:
-                deliver(2, face, _corners(2, emap.faces[face]))
+                deliver(2, face, element_corners(2, emap.faces[face]))
 
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
@@ -357,7 +338,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         if deliver is not None:  # the hooks may have meshed faces again or moved their nodes
             for s, o in sorted(ctx.outcomes.items()):
                 if o.ok and s in face_of:
-                    deliver(2, face_of[s], _corners(2, s))
+                    deliver(2, face_of[s], element_corners(2, s))
         say("read")
         raw = ctx.raw = read_mesh(ctx.surfaces)
         meshed = [s for s, o in ctx.outcomes.items() if o.ok]
