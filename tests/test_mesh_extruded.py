@@ -13,13 +13,14 @@ gmsh = pytest.importorskip("gmsh")
 HEIGHT = 4.0
 
 
-def _valleyed_prism() -> tuple[int, list[int]]:
-    """In the current gmsh model: a periodic spline through 120 points of ``r = 10 + |cos 3t|**0.3`` (3
-    sharp valleys) extruded by :data:`HEIGHT`; returns its side surface and its spline curves."""
+def _valleyed_prism(depth: float = 1.0) -> tuple[int, list[int]]:
+    """In the current gmsh model: a periodic spline through 120 points of ``r = 10 + depth |cos 3t|**0.3``
+    (6 sharp valleys: V-shaped, their flanks about 85 degrees apart at depth 1, 33 at depth 3) extruded by
+    :data:`HEIGHT`; returns its side surface and its spline curves."""
     points = []
     for k in range(120):
         t = 2.0 * math.pi * k / 120
-        r = 10.0 + abs(math.cos(3.0 * t)) ** 0.3
+        r = 10.0 + depth * abs(math.cos(3.0 * t)) ** 0.3
         points.append(gmsh.model.occ.addPoint(r * math.cos(t), r * math.sin(t), 0.0))
     spline = gmsh.model.occ.addSpline(points + points[:1])
     base = gmsh.model.occ.addPlaneSurface([gmsh.model.occ.addCurveLoop([spline])])
@@ -70,6 +71,80 @@ def test_a_sharp_valleyed_extrusion_is_meshed_flat_within_its_chords():
         assert 0.999 * chords * HEIGHT < area < length * HEIGHT
 
 
+def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
+    """The deep prism's 6 valleys fold its section (it turns about 150 degrees within one triangle's
+    size): the flat mesh has a line of nodes along each (:func:`fold_lines`), pinned (not movable, their
+    edges kept by the optimiser); no triangle spans a fold. The shallow prism (valleys turning about 95
+    degrees) and a smooth section have none."""
+    from cadedge.mesh.extruded import CREASES, extrusion_of, folds, mesh_unrolled
+    from cadedge.mesh.facemesh import read_face
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    with gmsh_session():
+        side, _ = _valleyed_prism()
+        assert len(folds(extrusion_of(side), np.full(4096, 0.25))[0]) == 0
+    with gmsh_session():
+        side, _ = _valleyed_prism(depth=3.0)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+        gmsh.model.mesh.generate(1)
+        ext = extrusion_of(side)
+        at, window = folds(ext, np.full(len(ext.x), 0.25))
+        bottoms = np.asarray(gmsh.model.getValue(2, side, ext.params(at, np.interp(at, ext.x, ext.base)).ravel()))
+        assert window == 0.25 and len(at) == 6
+        assert np.abs(np.hypot(*bottoms.reshape(-1, 3)[:, :2].T) - 10.0).max() < 0.01  # r = 10: the valleys'
+        # bottoms
+        assert mesh_unrolled(side, 6) is None
+        column, t_folds = CREASES[side]
+        assert len(t_folds) == 6
+        mesh = read_face(side)
+        t = mesh.uv[:, column]
+        for t_fold in t_folds:
+            on = np.abs(t - t_fold) <= 1e-9
+            assert on.sum() >= HEIGHT / 0.25 - 1
+            assert mesh.pinned[on].all() and not mesh.movable[on].any()
+            corners = t[mesh.tri]  # NaN for the boundary's nodes, which are not pinned
+            known = ~np.isnan(corners).any(axis=1)
+            spans = (corners[known].min(axis=1) < t_fold - 1e-9) & (corners[known].max(axis=1) > t_fold + 1e-9)
+            assert not spans.any()
+        assert any(p in mesh.fixed and mesh.pinned[list(p)].all() for p in mesh.fixed)
+
+        smooth = ext.__class__(*[getattr(ext, f) for f in ("swap", "along", "rate", "v0", "t", "x", "base")],
+                               np.column_stack([-np.sin(ext.x / 10.0), np.cos(ext.x / 10.0), 0.0 * ext.x]),
+                               ext.closed)
+        assert len(folds(smooth, np.full(len(ext.x), 0.25))[0]) == 0
+
+
+def test_a_folds_spike_of_curvature_is_replaced_by_its_flanks():
+    """Within half the window of a fold, the curvature (or sizes) take the value at that span's ends, the
+    flanks' (the lower curvature, the larger size); elsewhere they stay."""
+    from cadedge.mesh.extruded import across_folds
+
+    x = np.linspace(0.0, 10.0, 101)
+    k = 0.1 + 0.01 * x
+    k[50] = 1e4
+    flat = across_folds(x, k, np.array([5.0]), 1.0, np.minimum)
+    assert flat.max() <= 0.2 and np.all(flat[44:56] == k[44])  # the span 4.5-5.5 and the sample before
+    assert np.array_equal(np.delete(flat, range(44, 56)), np.delete(k, range(44, 56)))
+    sizes = across_folds(x, 1.0 / k, np.array([5.0]), 1.0, np.maximum)
+    assert np.all(sizes[44:56] == 1.0 / k[44]) and sizes[56] == 1.0 / k[56]
+
+
+def test_a_folds_line_is_split_as_the_sizes_grow_from_its_ends():
+    """Split evenly at the flanks' size, a fold's line met boundary segments 400 times shorter at its ends
+    (0.1-degree fans there): its pieces start at its ends' sizes and grow by the job's rate, up to the
+    size."""
+    from cadedge.mesh.extruded import graded_points
+
+    p, q = np.array([3.0, 0.0]), np.array([3.0, 10.0])
+    between = graded_points(p, q, 0.01, 0.02, 1.0, 0.25)
+    y = np.concatenate([[0.0], between[:, 1], [10.0]])
+    pieces = np.diff(y)
+    assert np.allclose(between[:, 0], 3.0) and (pieces > 0).all()
+    assert pieces[0] < 0.03 and pieces[-1] < 0.05 and pieces.max() <= 1.05
+    assert (pieces[:-1] / pieces[1:])[: len(pieces) // 3].max() < 1.0  # growing from the first end
+    assert len(graded_points(p, q, 1.0, 1.0, 1.0, 0.25)) == 9  # 10 pieces of the size
+
+
 def test_an_extrusions_area_is_its_sections_length_times_its_height(tmp_path):
     """OCCT's surface integrations sample a face of extrusion as any surface (on a gear's sharp-valleyed
     side they were 7% and 13% over); :func:`extrusion_area` integrates it span by span of its section:
@@ -113,7 +188,7 @@ def test_the_size_field_of_a_long_thin_extrusion_keeps_few_squat_cells():
 
     x = np.linspace(0.0, 2.0 * math.pi, 54_816)
     along = np.array([0.0, 0.0, 1.0])
-    ext = Extrusion(False, along, along, 0.0, x, x, np.zeros_like(x), True)
+    ext = Extrusion(False, along, along, 0.0, x, x, np.zeros_like(x), np.zeros((len(x), 3)), True)
     assert list(_kept_samples(np.full(len(x), 0.17))) == [0, len(x) - 1]
     wavy = 0.2 + 0.1 * np.sin(3.0 * x) ** 2
     keep = _kept_samples(wavy)

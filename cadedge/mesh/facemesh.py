@@ -17,7 +17,8 @@ import numpy as np
 class FaceMesh:
     """A face's mesh as gmsh holds it: node tags and coordinates (boundary nodes included), triangles as
     rows of them, which nodes are interior (may move), the interior nodes' parameters (NaN rows for the
-    others), the triangles' element tags and the curve segments as sorted pairs of node rows."""
+    others), the triangles' element tags, the curve segments as sorted pairs of node rows (and the edges
+    along folds, :func:`crease_nodes`), and the interior nodes pinned on those folds (not movable)."""
 
     tags: np.ndarray
     x: np.ndarray
@@ -26,6 +27,7 @@ class FaceMesh:
     uv: np.ndarray
     el_tags: np.ndarray
     fixed: set[tuple[int, int]]
+    pinned: np.ndarray
 
 
 def read_face(surface: int) -> FaceMesh | None:
@@ -58,15 +60,39 @@ def read_face(surface: int) -> FaceMesh | None:
     uv = np.full((len(tags), 2), np.nan)
     if len(inner) and len(inner_uv) == 2 * len(inner):
         uv[lookup[inner]] = np.asarray(inner_uv, dtype=float).reshape(-1, 2)
-    return FaceMesh(tags, np.asarray(coords, dtype=float).reshape(-1, 3), lookup[tri_tags].reshape(-1, 3),
-                    movable, uv, np.asarray(el_tags, dtype=np.int64), fixed)
+    tri = lookup[tri_tags].reshape(-1, 3)
+    pinned, creases = crease_nodes(surface, uv, tri)
+    movable &= ~pinned
+    fixed.update(creases)
+    return FaceMesh(tags, np.asarray(coords, dtype=float).reshape(-1, 3), tri,
+                    movable, uv, np.asarray(el_tags, dtype=np.int64), fixed, pinned)
+
+
+def crease_nodes(surface: int, uv: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, set[tuple[int, int]]]:
+    """The nodes (a mask over the rows of ``uv``, the nodes' parameters) on the folds of gmsh surface
+    ``surface`` that :mod:`cadedge.mesh.extruded` meshed along (:data:`~cadedge.mesh.extruded.CREASES`),
+    and the edges of triangles ``tri`` between two of them on one fold (sorted pairs of rows). They stay
+    as meshed: a node moved off a fold, or an edge swapped across one, puts a triangle across it again."""
+    from .extruded import CREASES
+
+    pinned = np.zeros(len(uv), dtype=bool)
+    if surface not in CREASES:
+        return pinned, set()
+    column, at = CREASES[surface]
+    fold = np.full(len(uv), -1, dtype=np.int64)
+    for k, t in enumerate(at):
+        on = np.abs(uv[:, column] - t) <= 1e-9 * max(1.0, abs(t))
+        fold[on], pinned[on] = k, True
+    edges = np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    along = (fold[edges[:, 0]] >= 0) & (fold[edges[:, 0]] == fold[edges[:, 1]])
+    return pinned, {(int(p), int(q)) for p, q in edges[along]}
 
 
 def write_interior(surface: int, face: FaceMesh, x: np.ndarray, tri: np.ndarray, movable: np.ndarray,
                    uv: np.ndarray) -> None:
     """Replace the interior of gmsh surface ``surface`` (read as ``face``) by nodes ``x`` (``face``'s rows
     first, new rows appended), the triangles ``tri`` and the parameters ``uv`` of the nodes still
-    ``movable`` and used; the curves' nodes stay as they are.
+    ``movable`` (or pinned on a fold) and used; the curves' nodes stay as they are.
 
     The interior nodes and the triangles get tags gmsh assigns, never ones chosen here: gmsh's own
     numbering does not count tags given to it, so a node added under its old tag (a face's mesh put back)
@@ -75,7 +101,9 @@ def write_interior(surface: int, face: FaceMesh, x: np.ndarray, tri: np.ndarray,
     (sharp_blade, where a blade face's Delaunay mesh came back broken and was meshed anew)."""
     import gmsh
 
-    rows = np.flatnonzero(movable & np.bincount(tri.ravel(), minlength=len(x)).astype(bool))
+    own = np.array(movable, dtype=bool)
+    own[:len(face.pinned)] |= face.pinned
+    rows = np.flatnonzero(own & np.bincount(tri.ravel(), minlength=len(x)).astype(bool))
     gmsh.model.mesh.clear([(2, surface)])
     params = [] if np.isnan(uv[rows]).any() else uv[rows].ravel().tolist()
     gmsh.model.mesh.addNodes(2, surface, [], x[rows].ravel().tolist(), params)

@@ -51,13 +51,15 @@ def boundary_sizes(plane: np.ndarray, segments: list[tuple[int, int]]) -> np.nda
 
 
 def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndarray, algorithm: int,
-               sizing: Callable[[], None], options: dict[str, float]) -> tuple[np.ndarray, np.ndarray] | str:
+               sizing: Callable[[], None], options: dict[str, float],
+               inner: list[tuple[int, int, np.ndarray]] = ()) -> tuple[np.ndarray, np.ndarray] | str:
     """Mesh the plane region bounded by ``segments`` (pairs of rows of ``plane`` (n, 2), closing into
     loops: the outer one and holes) with gmsh's 2-D ``algorithm``, each segment kept whole and each point
-    sized ``near``. In a gmsh model of its own: ``options`` (gmsh option -> value) are set for it and
-    ``sizing()`` is called with it current to set its size field or callback; the caller's model and
-    options are restored after. Returns the points (N, 2), the boundary's ``n`` first then gmsh's new
-    ones, and the triangles (m, 3) as rows of them; or why not."""
+    sized ``near``; the lines ``inner`` (two rows and the points (k, 2) between them, inside the region)
+    are embedded in it, split at those points, so that no triangle crosses them. In a gmsh model of its own: ``options``
+    (gmsh option -> value) are set for it and ``sizing()`` is called with it current to set its size
+    field or callback; the caller's model and options are restored after. Returns the points (N, 2), the
+    boundary's ``n`` first then gmsh's new ones, and the triangles (m, 3) as rows of them; or why not."""
     import gmsh
 
     from .planar import polygon_area
@@ -80,10 +82,16 @@ def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndar
         outer = int(np.argmax(np.abs(areas)))
         curve_loops = [gmsh.model.geo.addCurveLoop([lines[i] if i >= 0 else -lines[-i - 1] for i in chains[k]])
                        for k in [outer] + [k for k in range(len(chains)) if k != outer]]
-        gmsh.model.geo.addPlaneSurface(curve_loops)
-        gmsh.model.geo.synchronize()
-        for line in lines:
+        surface = gmsh.model.geo.addPlaneSurface(curve_loops)
+        embedded = []
+        for a, b, between in inner:  # split here, not by the size field: gmsh integrates it along the line,
+            chain = [points[a], *(gmsh.model.geo.addPoint(px, py, 0.0) for px, py in between), points[b]]
+            embedded += [gmsh.model.geo.addLine(p, q) for p, q in zip(chain[:-1], chain[1:])]  # slowly on a
+        gmsh.model.geo.synchronize()  # fine view
+        for line in lines + embedded:
             gmsh.model.mesh.setTransfiniteCurve(line, 2)
+        if embedded:
+            gmsh.model.mesh.embed(1, embedded, 2, surface)
         sizing()
         try:
             gmsh.model.mesh.generate(2)

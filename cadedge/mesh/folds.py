@@ -151,5 +151,6 @@ def count_folded(surface: int) -> int:
     if mesh is None:
         return 0
     up = surface_normals(surface, mesh.x, mesh.uv, mesh.tags)
+    up[mesh.pinned] = 0.0  # on a fold: its normal belongs to neither flank
     ref = reference_normals(up, mesh.tri, orientation(up, mesh.tri, mesh.x))
     return int(folded(mesh.x, mesh.tri, ref).sum())

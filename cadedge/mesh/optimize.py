@@ -216,6 +216,7 @@ def _start(surface: int, mesh) -> _Face:
     :class:`~cadedge.mesh.facemesh.FaceMesh`), no node moved yet; its nodes' surface normals left out
     (no fold guarded against or undone) where more than :data:`FOLD_TRUST` of its triangles are folded."""
     up = surface_normals(surface, mesh.x, mesh.uv, mesh.tags)
+    up[mesh.pinned] = 0.0  # on a fold (:func:`~cadedge.mesh.facemesh.crease_nodes`): neither flank's normal
     if folded(mesh.x, mesh.tri, reference_normals(up, mesh.tri, orientation(up, mesh.tri, mesh.x))).mean() > FOLD_TRUST:
         up = None
     return _Face(mesh.x, mesh.tri, mesh.movable, mesh.uv, np.zeros(len(mesh.tags), dtype=bool), up)
