@@ -368,6 +368,27 @@ def sliver_hole() -> object:
     return plate.cut(slot).cut(pin).val().wrapped
 
 
+def star_prism() -> object:
+    """A five-pointed star 6 mm high: a periodic spline through 100 points, its radius linear in the angle
+    between 20 at the tips and 8 at the valleys, so its side folds at all ten (faces of linear extrusion
+    laid flat along their folds' lines)."""
+    points = []
+    for i in range(100):
+        t = 2.0 * math.pi * i / 100
+        r = 20.0 - 12.0 * (1.0 - abs(1.0 - 2.0 * (i % 20) / 20))
+        points.append((r * math.cos(t), r * math.sin(t)))
+    return cq.Workplane("XY").spline(points, periodic=True).close().extrude(6.0).val().wrapped
+
+
+def notched_block() -> object:
+    """A 20 x 10 block 8 mm deep whose top is a spline through a 3.5 mm deep V notch 1 mm wide: the one
+    fold of an open section (its top face, an extrusion, was 1.3e-2 short at ALD 1e-3 when its triangles
+    spanned the notch)."""
+    top = [(10, 5), (6, 5.5), (2, 5.2), (0.5, 4.0), (0, 1.5), (-0.5, 4.0), (-2, 5.2), (-6, 5.5), (-10, 5)]
+    wire = cq.Workplane("XY").moveTo(-10, -5).lineTo(10, -5).lineTo(10, 5).spline(top[1:], includeCurrent=True)
+    return wire.close().extrude(8.0).val().wrapped
+
+
 def faceted() -> object:
     """A sphere fused with a cylinder, triangulated and sewn back as 228 planar triangle faces (a STEP
     made from an STL mesh): many small faces, thin triangles forced by the facets."""
@@ -541,7 +562,7 @@ MODELS: dict[str, Callable[[], object]] = {
     "gear": gear, "bottle": bottle, "cut_torus": cut_torus, "ellipsoid": ellipsoid, "cone_apex": cone_apex,
     "mug": mug, "pocket_box": pocket_box, "thin_shell": thin_shell, "washer_thin": washer_thin,
     "sphere_pinhole": sphere_pinhole, "bracket_micro": bracket_micro, "bracket_huge": bracket_huge,
-    "bracket_far": bracket_far,
+    "bracket_far": bracket_far, "star_prism": star_prism, "notched_block": notched_block,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}

@@ -27,9 +27,13 @@ from ..shapegrid import ShapeGrid
 
 @contextlib.contextmanager
 def gmsh_session() -> Iterator[None]:
-    """Initialise gmsh quietly with its logger on; always finalise. gmsh is a process-wide singleton."""
+    """Initialise gmsh quietly with its logger on; always finalise. gmsh is a process-wide singleton. The
+    folds of an earlier session's surfaces (:data:`cadedge.mesh.extruded.CREASES`) are forgotten."""
+    from .extruded import CREASES
+
     if gmsh.isInitialized():
         raise MeshError("gmsh is already initialised in this process; cadedge meshes one model at a time")
+    CREASES.clear()
     gmsh.initialize(readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
