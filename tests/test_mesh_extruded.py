@@ -72,11 +72,12 @@ def test_a_sharp_valleyed_extrusion_is_meshed_flat_within_its_chords():
 
 
 def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
-    """The deep prism's 6 valleys fold its section (it turns about 150 degrees within one triangle's
-    size): the flat mesh has a line of nodes along each (:func:`fold_lines`), pinned (not movable, their
-    edges kept by the optimiser); no triangle spans a fold. The shallow prism (valleys turning about 95
-    degrees) and a smooth section have none."""
-    from cadedge.mesh.extruded import CREASES, extrusion_of, folds, mesh_unrolled
+    """The deep prism's 6 valleys fold its section (it turns about 150 degrees within a sixth of a
+    triangle's size, here 1): the flat mesh has a line of nodes along each (:func:`fold_lines`), pinned (not
+    movable, their edges kept by the optimiser); no triangle spans a fold. The shallow prism (valleys
+    turning about 95 degrees), a smooth section and a U-turn of radius 0.3 among sizes of 1 have none;
+    the U-turn is a fold among sizes of 6, unless what its flanks would lose is over the budget."""
+    from cadedge.mesh.extruded import CREASES, extrusion_of, fold_loss, folds, mesh_unrolled
     from cadedge.mesh.facemesh import read_face
     from cadedge.mesh.gmsh_model import gmsh_session
 
@@ -85,12 +86,12 @@ def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
         assert len(folds(extrusion_of(side), np.full(4096, 0.25))[0]) == 0
     with gmsh_session():
         side, _ = _valleyed_prism(depth=3.0)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 1.0)
         gmsh.model.mesh.generate(1)
         ext = extrusion_of(side)
-        at, window = folds(ext, np.full(len(ext.x), 0.25))
+        at, window = folds(ext, np.full(len(ext.x), 1.0))
         bottoms = np.asarray(gmsh.model.getValue(2, side, ext.params(at, np.interp(at, ext.x, ext.base)).ravel()))
-        assert window == 0.25 and len(at) == 6
+        assert window == 1.0 and len(at) == 6
         assert np.abs(np.hypot(*bottoms.reshape(-1, 3)[:, :2].T) - 10.0).max() < 0.01  # r = 10: the valleys'
         # bottoms
         assert mesh_unrolled(side, 6) is None
@@ -100,7 +101,7 @@ def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
         t = mesh.uv[:, column]
         for t_fold in t_folds:
             on = np.abs(t - t_fold) <= 1e-9
-            assert on.sum() >= HEIGHT / 0.25 - 1
+            assert on.sum() >= HEIGHT - 1
             assert mesh.pinned[on].all() and not mesh.movable[on].any()
             corners = t[mesh.tri]  # NaN for the boundary's nodes, which are not pinned
             known = ~np.isnan(corners).any(axis=1)
@@ -112,6 +113,15 @@ def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
                                np.column_stack([-np.sin(ext.x / 10.0), np.cos(ext.x / 10.0), 0.0 * ext.x]),
                                ext.closed)
         assert len(folds(smooth, np.full(len(ext.x), 0.25))[0]) == 0
+        x = np.linspace(0.0, 10.0, 4001)
+        turn = np.pi * np.clip((x - 5.0) / (np.pi * 0.3) + 0.5, 0.0, 1.0)  # a half circle of radius 0.3
+        u_turn = ext.__class__(False, ext.along, ext.rate, 0.0, x, x, x,
+                               np.column_stack([np.cos(turn), np.sin(turn), 0.0 * x]), False)
+        assert len(folds(u_turn, np.full(len(x), 1.0))[0]) == 0
+        assert len(folds(u_turn, np.full(len(x), 6.0))[0]) == 1
+        # what its flanks would lose beside a line, a quarter circle of radius 0.3 each: (pi/2 - sqrt 2) 0.3
+        assert fold_loss(u_turn, 5.0, 3.0) == pytest.approx(2 * (0.5 * np.pi - np.sqrt(2)) * 0.3, rel=0.2)
+        assert len(folds(u_turn, np.full(len(x), 6.0), budget=0.05)[0]) == 0
 
 
 def test_a_folds_spike_of_curvature_is_replaced_by_its_flanks():

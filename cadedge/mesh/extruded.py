@@ -50,12 +50,18 @@ CELL_ASPECT = 8.0
 FIELD_CELLS = 100_000
 
 
-#: The section folds where its heading turns by at least this many degrees within one of the face's
-#: typical sizes (the median of its sizes along ``x``): cyclo_gear's 30 valleys, V-shaped spline points
-#: 27 degrees apart with a bottom rounded far finer than the triangles. A triangle across such a fold
-#: has its corners on both flanks and loses most of its width; a line of nodes along the extrusion at
-#: the fold (:func:`fold_lines`) keeps every triangle on one flank.
+#: The section folds where its heading turns by at least :data:`FOLD_TURN` degrees within
+#: :data:`FOLD_SPAN` of the face's typical size (the median of its sizes along ``x``): cyclo_gear's 30
+#: valleys, V-shaped spline points 27 degrees apart, turn that much within 0.011-0.044 mm, against
+#: sizes of 0.1-0.4 mm. A triangle across such a fold has its corners on both flanks and loses most of
+#: its width; a line of nodes along the extrusion at the fold (:func:`fold_lines`) keeps every triangle
+#: on one flank. A rounded turn wider than that is left to the curvature sizes, and so is one whose
+#: flanks would lose too much beside the line (:data:`FOLD_LOSS`).
 FOLD_TURN = 120.0
+FOLD_SPAN = 0.25
+#: The share of the surface target (of the face's area) the flanks of its folds may lose beside their
+#: lines (see :func:`_fold_sizes`).
+FOLD_LOSS = 0.25
 #: gmsh surface -> (the column of its parameters that runs along its section, the section's parameters
 #: at the folds its mesh has nodes along): the nodes stay there (:func:`cadedge.mesh.facemesh.crease_nodes`).
 CREASES: dict[int, tuple[int, np.ndarray]] = {}
@@ -270,28 +276,50 @@ def mesh_unrolled(surface: int, algorithm: int) -> str | None:
     return None
 
 
-def folds(ext: Extrusion, table: np.ndarray) -> tuple[np.ndarray, float]:
-    """The arc lengths ``x`` where the section of ``ext`` folds (:data:`FOLD_TURN`), with its sizes
-    ``table`` at its samples, and the window the turn is measured over (the median size); one fold per
-    run of samples whose window turns that much, where the heading turns fastest. Windows crossing the
-    section's ends are not measured."""
+def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np.ndarray, float]:
+    """The arc lengths ``x`` where the section of ``ext`` folds (:data:`FOLD_TURN`, :data:`FOLD_SPAN`),
+    with its sizes ``table`` at its samples, and its typical size (the median), the window within which
+    its lines and the flanks' sizes are found; one fold per run of samples whose span turns that much,
+    where the heading turns fastest. Spans crossing the section's ends are not measured. The sharpest
+    folds are kept while what their flanks lose next to the lines (:func:`fold_loss`) stays within
+    ``budget`` (an area per unit of the extrusion's length)."""
     x, heading = ext.x, ext.heading
     w = float(np.median(table))
     if not (w > 0 and len(x) > 2):
         return np.zeros(0), w
-    lo = np.searchsorted(x, x - 0.5 * w)
-    hi = np.searchsorted(x, x + 0.5 * w, side="right") - 1
+    span = 0.5 * FOLD_SPAN * w
+    lo = np.searchsorted(x, x - span)
+    hi = np.searchsorted(x, x + span, side="right") - 1
     cos = np.einsum("ij,ij->i", heading[lo], heading[hi])
     known = (np.linalg.norm(heading[lo], axis=1) > 0) & (np.linalg.norm(heading[hi], axis=1) > 0)
-    sharp = known & (x - 0.5 * w >= x[0]) & (x + 0.5 * w <= x[-1]) & (cos <= np.cos(np.radians(FOLD_TURN)))
+    sharp = known & (x - span >= x[0]) & (x + span <= x[-1]) & (cos <= np.cos(np.radians(FOLD_TURN)))
     step = np.arccos(np.clip(np.einsum("ij,ij->i", heading[:-1], heading[1:]), -1.0, 1.0))
     rate = step / np.maximum(np.diff(x), 1e-300)
     edges = np.diff(np.concatenate([[0], sharp.astype(np.int8), [0]]))
-    found = []
+    found, losses = [], []
     for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
         i = start + int(np.argmax(rate[start:min(stop, len(rate))])) if start < len(rate) else start
-        found.append(0.5 * (x[i] + x[min(i + 1, len(x) - 1)]))
-    return np.asarray(found), w
+        xf = 0.5 * (x[i] + x[min(i + 1, len(x) - 1)])
+        found.append(xf)
+        losses.append(fold_loss(ext, xf, span))
+    order = np.argsort(losses, kind="stable")
+    kept = order[np.cumsum(np.asarray(losses)[order]) <= budget]
+    return np.asarray(found)[np.sort(kept)], w
+
+
+def fold_loss(ext: Extrusion, xf: float, span: float) -> float:
+    """What the flanks of the fold at ``xf`` lose next to its line, per unit of the extrusion's length:
+    the section turns :data:`FOLD_TURN` within a width ``W`` there (the narrowest centred window that
+    turns that much, at most ``2 span``), as a circle of radius ``R = W / FOLD_TURN`` (radians) would; a
+    triangle on each side spans the rest of that turn, a quarter circle at most, losing
+    ``(pi/2 - sqrt 2) R`` across it."""
+    x, heading = ext.x, ext.heading
+    half = np.geomspace(max(float(np.min(np.diff(x))), 1e-12 * span), span, 48)
+    lo = np.searchsorted(x, xf - half)
+    hi = np.minimum(np.searchsorted(x, xf + half, side="right") - 1, len(x) - 1)
+    turned = np.einsum("ij,ij->i", heading[lo], heading[hi]) <= np.cos(np.radians(FOLD_TURN))
+    width = 2.0 * float(half[np.argmax(turned)] if turned.any() else span)
+    return 2.0 * (0.5 * np.pi - np.sqrt(2.0)) * width / np.radians(FOLD_TURN)
 
 
 def across_folds(x: np.ndarray, values: np.ndarray, at: np.ndarray, window: float, pick) -> np.ndarray:
@@ -418,16 +446,31 @@ def _fold_sizes(surface: int, ext: Extrusion) -> tuple[np.ndarray, np.ndarray, f
     left in, it asked for triangles 20 times smaller at the fold and, weighed into the face's
     ``k**-1/2`` sizes, put the whole of cyclo_gear's side at the smallest size (471 022 triangles at
     1e-2, against 6 918 without it). The folds are found again on the sizes without them, whose typical
-    size is the flanks'."""
+    size is the flanks'. What the folds' flanks lose (:func:`fold_loss`) may be :data:`FOLD_LOSS` of the
+    job's surface target (without one, of the deficit the face's count per ``2 pi`` is designed for,
+    :func:`cadedge.mesh.fidelity.per_circle`): a stadium's ends of radius 0.3, found as folds, lost their
+    curvature sizes, 0.45% of the face's area, and were refined back at 3.3 times the triangles at
+    1e-3."""
+    import gmsh
+
+    from .fidelity import DEFAULT_C, INTERIOR_SHARE
+    from .interior import SIZES
+
+    target = SIZES.target
+    if target is None:
+        per_circle = SIZES.per_circle.get(surface, gmsh.option.getNumber("Mesh.MeshSizeFromCurvature"))
+        target = DEFAULT_C * (2.0 * np.pi / per_circle) ** 2 / INTERIOR_SHARE if per_circle > 0 else np.inf
+    budget = FOLD_LOSS * target * ext.length
     k = _curvatures(surface, ext)
-    table = _sizes(surface, ext, k)
-    at, window = folds(ext, table)
+    plain = _sizes(surface, ext, k)
+    at, window = folds(ext, plain, budget)
     for _ in range(2):
         if not len(at):
-            break
-        table = _sizes(surface, ext, across_folds(ext.x, k, at, window, np.minimum))
-        at, window = folds(ext, table)
-    return table, at, window
+            return plain, at, window
+        at, window = folds(ext, _sizes(surface, ext, across_folds(ext.x, k, at, window, np.minimum)), budget)
+    if not len(at):
+        return plain, at, window
+    return _sizes(surface, ext, across_folds(ext.x, k, at, window, np.minimum)), at, window
 
 
 def _job_grading() -> tuple[float, float, float] | None:

@@ -393,7 +393,8 @@ def before_generate(ctx) -> None:
         floors = size_floors({s: areas[f - 1] for f, s in ctx.emap.faces.items() if f in curved
                               and f <= len(areas)}, min_size)
         install([s for f, s in sorted(ctx.emap.faces.items()) if ctx.job.mode == "nodes"
-                 and f in curved and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE], floors)
+                 and f in curved and f <= len(kinds) and kinds[f - 1] not in CONSTANT_CURVATURE], floors,
+                opts["surface_ald"])
         ctx.floored = floors  # gmsh surface -> its size floor
         ctx.alone.update(ctx.emap.face_of_surface.get(s, s) for s in floors)  # may take gmsh long: alone, last
         planes = [s for f, s in ctx.emap.faces.items() if f not in curved]

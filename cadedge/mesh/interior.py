@@ -101,6 +101,7 @@ class InteriorSizes:
         self.faces: dict[int, _Face] = {}
         self.floors: dict[int, float] = {}
         self.per_circle: dict[int, float] = {}  # what :func:`use_per_circle` last set each surface to
+        self.target: float | None = None  # the job's surface target (|area deficit| per face), if any
 
     def sample(self, surface: int) -> bool:
         """Sample gmsh surface ``surface``'s curvature; False (left to gmsh) if it is flat or cannot be
@@ -205,15 +206,16 @@ def surface_samples(surface: int, n: int = SAMPLES) -> tuple[np.ndarray, np.ndar
     return x, k, da
 
 
-def install(surfaces: list[int], floors: dict[int, float] | None = None) -> list[int]:
+def install(surfaces: list[int], floors: dict[int, float] | None = None, target: float | None = None) -> list[int]:
     """Sample ``surfaces`` (gmsh tags of curved faces whose curvature varies), keep the smallest sizes
-    ``floors`` (surface -> size) and make :data:`SIZES` gmsh's size callback if either is needed; returns
-    the surfaces sampled."""
+    ``floors`` (surface -> size) and the job's surface ``target``, and make :data:`SIZES` gmsh's size
+    callback if either of the first two is needed; returns the surfaces sampled."""
     import gmsh
 
     SIZES.faces.clear()
     SIZES.per_circle.clear()
     SIZES.floors = dict(floors or {})
+    SIZES.target = target
     done = [s for s in surfaces if SIZES.sample(s)]
     if done or SIZES.floors:
         gmsh.model.mesh.setSizeCallback(SIZES)
