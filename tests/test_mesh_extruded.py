@@ -87,7 +87,9 @@ def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
     with gmsh_session():
         side, _ = _valleyed_prism(depth=3.0)
         gmsh.option.setNumber("Mesh.MeshSizeMax", 1.0)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)  # curves split finely at the valleys
         gmsh.model.mesh.generate(1)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
         ext = extrusion_of(side)
         at, window = folds(ext, np.full(len(ext.x), 1.0))
         bottoms = np.asarray(gmsh.model.getValue(2, side, ext.params(at, np.interp(at, ext.x, ext.base)).ravel()))

@@ -242,13 +242,21 @@ def mesh_unrolled(surface: int, algorithm: int) -> str | None:
     index = {key: i for i, key in enumerate(order)}
     rows = [(index[a], index[b]) for a, b in segments]
     plane = np.array([keys[k] for k in order], dtype=float)
-    table, at, window = _fold_sizes(surface, ext)
+    k, table, at, window = _fold_sizes(surface, ext)
+    lines = fold_lines(plane, rows, at, window)
+    lined = sorted({f for _, _, f in lines})
+    # a fold's curvature, a spike its line makes moot (no triangle spans it), gives way to its flanks':
+    # left in, it asked for triangles 20 times smaller there and, weighed into the face's k**-1/2 sizes,
+    # put the whole of cyclo_gear's side at the smallest size (471 022 triangles at 1e-2, against 6 918).
+    # Only folds with a line: triangles still span the others.
+    if lined:
+        table = _sizes(surface, ext, across_folds(ext.x, k, at[lined], window, np.minimum))
     grading = _job_grading()
     growth = grading[0] / grading[1] if grading is not None and grading[1] > 0 else GROWTH
     near = boundary_sizes(plane, rows)
     inner = [(lo, hi, graded_points(plane[lo], plane[hi], near[lo], near[hi],
                                     float(np.interp(plane[lo, 0], ext.x, table)), growth))
-             for lo, hi in fold_lines(plane, rows, at, window)]
+             for lo, hi, _ in lines]
     options = {"Mesh.MeshSizeFromCurvature": 0}
     if grading is not None:  # the job's graded sizes from the boundary, not gmsh's interpolation of them
         options |= {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0}
@@ -367,19 +375,20 @@ def _inside(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def fold_lines(plane: np.ndarray, segments: list[tuple[int, int]], at: np.ndarray,
-               window: float) -> list[tuple[int, int]]:
+               window: float) -> list[tuple[int, int, int]]:
     """Straight lines across the plane region bounded by ``segments`` (row pairs of ``plane``) at the
-    folds ``at`` (``x``, :func:`folds`): for each fold, the boundary nodes sharing the ``x`` nearest it
-    within half the ``window`` (a section's edges, split alike, put nodes at the same ``x``), joined in
-    pairs along ``y`` where the line between them lies inside the region and crosses no boundary
-    segment."""
+    folds ``at`` (``x``, :func:`folds`, with their ``window``), as (row, row, index of the fold): for
+    each fold, the boundary nodes sharing the ``x`` nearest it within its span (:data:`FOLD_SPAN` of the
+    window: a line farther off leaves triangles across the fold; a section's edges, split alike, put
+    nodes at the same ``x``), joined in pairs along ``y`` where the line between them lies inside the
+    region and crosses no boundary segment."""
     seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
     a, b = plane[seg[:, 0]], plane[seg[:, 1]]
     known = {tuple(sorted(pair)) for pair in seg.tolist()}
     tol = 1e-6 * window
-    lines: list[tuple[int, int]] = []
-    for xf in at:
-        near = np.flatnonzero(np.abs(plane[:, 0] - xf) <= 0.5 * window)
+    lines: list[tuple[int, int, int]] = []
+    for f, xf in enumerate(at):
+        near = np.flatnonzero(np.abs(plane[:, 0] - xf) <= 0.5 * FOLD_SPAN * window)
         same = np.zeros(0, dtype=np.int64)
         for i in near[np.argsort(np.abs(plane[near, 0] - xf))]:
             same = near[np.abs(plane[near, 0] - plane[i, 0]) <= tol]
@@ -391,7 +400,7 @@ def fold_lines(plane: np.ndarray, segments: list[tuple[int, int]], at: np.ndarra
             if (tuple(sorted((lo, hi))) in known or _crosses(p, q, a, b).any()
                     or not _inside(0.5 * (p + q), a, b)):
                 continue
-            lines.append((lo, hi))
+            lines.append((lo, hi, f))
     return lines
 
 
@@ -439,18 +448,15 @@ def _sizes(surface: int, ext: Extrusion, k: np.ndarray) -> np.ndarray:
     return np.maximum(sizes, SIZES.floors.get(surface, 0.0))
 
 
-def _fold_sizes(surface: int, ext: Extrusion) -> tuple[np.ndarray, np.ndarray, float]:
-    """The face's sizes at the section's samples (:func:`_sizes`) with its folds (:func:`folds`) taken
-    out, the folds and the window they were found with. A fold's curvature, a spike the fold's line makes
-    moot (the flanks meet there, no triangle spans it), is replaced by its flanks' (:func:`across_folds`):
-    left in, it asked for triangles 20 times smaller at the fold and, weighed into the face's
-    ``k**-1/2`` sizes, put the whole of cyclo_gear's side at the smallest size (471 022 triangles at
-    1e-2, against 6 918 without it). The folds are found again on the sizes without them, whose typical
-    size is the flanks'. What the folds' flanks lose (:func:`fold_loss`) may be :data:`FOLD_LOSS` of the
-    job's surface target (without one, of the deficit the face's count per ``2 pi`` is designed for,
-    :func:`cadedge.mesh.fidelity.per_circle`): a stadium's ends of radius 0.3, found as folds, lost their
-    curvature sizes, 0.45% of the face's area, and were refined back at 3.3 times the triangles at
-    1e-3."""
+def _fold_sizes(surface: int, ext: Extrusion) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The face's curvature at the section's samples (:func:`_curvatures`), its sizes (:func:`_sizes`),
+    its folds (:func:`folds`) and their window. The folds are found on the sizes, then again on the
+    sizes with their curvature taken out (:func:`across_folds`), whose typical size is the flanks'.
+    What their flanks lose beside their lines (:func:`fold_loss`) may be :data:`FOLD_LOSS` of the job's
+    surface target (without one, of the deficit the face's count per ``2 pi`` is designed for,
+    :func:`cadedge.mesh.fidelity.per_circle`): a stadium's ends of radius 0.3, taken as folds, lost
+    their curvature sizes, 0.45% of the face's area, and were refined back at 1.6 times the triangles
+    at 1e-3."""
     import gmsh
 
     from .fidelity import DEFAULT_C, INTERIOR_SHARE
@@ -466,11 +472,9 @@ def _fold_sizes(surface: int, ext: Extrusion) -> tuple[np.ndarray, np.ndarray, f
     at, window = folds(ext, plain, budget)
     for _ in range(2):
         if not len(at):
-            return plain, at, window
+            break
         at, window = folds(ext, _sizes(surface, ext, across_folds(ext.x, k, at, window, np.minimum)), budget)
-    if not len(at):
-        return plain, at, window
-    return _sizes(surface, ext, across_folds(ext.x, k, at, window, np.minimum)), at, window
+    return k, plain, at, window
 
 
 def _job_grading() -> tuple[float, float, float] | None:
