@@ -77,7 +77,8 @@ def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
     movable, their edges kept by the optimiser); no triangle spans a fold. The shallow prism (valleys
     turning about 95 degrees), a smooth section and a U-turn of radius 0.3 among sizes of 1 have none;
     the U-turn is a fold among sizes of 6, unless what its flanks would lose is over the budget."""
-    from cadedge.mesh.extruded import CREASES, extrusion_of, fold_loss, folds, mesh_unrolled
+    from cadedge.mesh.creases import CREASES, fold_loss, folds
+    from cadedge.mesh.extruded import extrusion_of, mesh_unrolled
     from cadedge.mesh.facemesh import read_face
     from cadedge.mesh.gmsh_model import gmsh_session
 
@@ -129,7 +130,7 @@ def test_a_folded_section_is_meshed_with_a_line_of_nodes_along_each_fold():
 def test_a_folds_spike_of_curvature_is_replaced_by_its_flanks():
     """Within half the window of a fold, the curvature (or sizes) take the value at that span's ends, the
     flanks' (the lower curvature, the larger size); elsewhere they stay."""
-    from cadedge.mesh.extruded import across_folds
+    from cadedge.mesh.creases import across_folds
 
     x = np.linspace(0.0, 10.0, 101)
     k = 0.1 + 0.01 * x
@@ -145,7 +146,7 @@ def test_a_folds_line_is_split_as_the_sizes_grow_from_its_ends():
     """Split evenly at the flanks' size, a fold's line met boundary segments 400 times shorter at its ends
     (0.1-degree fans there): its pieces start at its ends' sizes and grow by the job's rate, up to the
     size."""
-    from cadedge.mesh.extruded import graded_points
+    from cadedge.mesh.creases import graded_points
 
     p, q = np.array([3.0, 0.0]), np.array([3.0, 10.0])
     between = graded_points(p, q, 0.01, 0.02, 1.0, 0.25)

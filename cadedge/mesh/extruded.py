@@ -12,6 +12,8 @@ and at its length), the plane is meshed by gmsh (:func:`cadedge.mesh.flat.mesh_p
 as the face would be (:func:`_sizes`), and the new nodes are put back on the surface at the parameters of
 their ``x`` and ``y``: that gear's side meshes in about a second (34 000 triangles at 0.5 mm).
 
+Where the section folds, a line of nodes runs along the fold (:mod:`cadedge.mesh.creases`).
+
 The section's arc length is tabulated on :data:`TABLE` samples of ``u`` (the trapezoid rule on the
 surface's derivative across ``D``) and read back by linear interpolation; new nodes are evaluated on the
 surface itself, so they lie on it exactly, at most the table's error away from where the plane put them.
@@ -23,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .creases import CREASES, FOLD_LOSS, GROWTH, across_folds, fold_lines, folds, graded_points
 from .flat import add_triangles, boundary_sizes, mesh_plane
 
 #: gmsh's surface types that may be a linear extrusion (cylinders and planes are, but gmsh meshes them
@@ -48,26 +51,6 @@ SIZE_STEP = 0.02
 #: whole height, hung gmsh for over 60 s.
 CELL_ASPECT = 8.0
 FIELD_CELLS = 100_000
-
-
-#: The section folds where its heading turns by at least :data:`FOLD_TURN` degrees within
-#: :data:`FOLD_SPAN` of the face's typical size (the median of its sizes along ``x``): cyclo_gear's 30
-#: valleys, V-shaped spline points 27 degrees apart, turn that much within 0.011-0.044 mm, against
-#: sizes of 0.1-0.4 mm. A triangle across such a fold has its corners on both flanks and loses most of
-#: its width; a line of nodes along the extrusion at the fold (:func:`fold_lines`) keeps every triangle
-#: on one flank. A rounded turn wider than that is left to the curvature sizes, and so is one whose
-#: flanks would lose too much beside the line (:data:`FOLD_LOSS`).
-FOLD_TURN = 120.0
-FOLD_SPAN = 0.25
-#: The share of the surface target (of the face's area) the flanks of its folds may lose beside their
-#: lines (see :func:`_fold_sizes`).
-FOLD_LOSS = 0.25
-#: gmsh surface -> (the column of its parameters that runs along its section, the section's parameters
-#: at the folds its mesh has nodes along): the nodes stay there (:func:`cadedge.mesh.facemesh.crease_nodes`).
-CREASES: dict[int, tuple[int, np.ndarray]] = {}
-#: Growth of the sizes along a fold's line from the boundary segments at its ends, where the job has no
-#: ``Extend`` field to take it from (:func:`_job_grading`).
-GROWTH = 0.25
 
 
 @dataclass(frozen=True)
@@ -279,129 +262,9 @@ def mesh_unrolled(surface: int, algorithm: int) -> str | None:
     add_triangles(surface, tags, points, tri, params)
     CREASES.pop(surface, None)
     if inner:
-        lines = np.unique([plane[lo, 0] for lo, _, _ in inner])
-        CREASES[surface] = (1 if ext.swap else 0, np.interp(lines, ext.x, ext.t))
+        xs = np.unique([plane[lo, 0] for lo, _, _ in inner])
+        CREASES[surface] = (1 if ext.swap else 0, np.interp(xs, ext.x, ext.t))
     return None
-
-
-def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np.ndarray, float]:
-    """The arc lengths ``x`` where the section of ``ext`` folds (:data:`FOLD_TURN`, :data:`FOLD_SPAN`),
-    with its sizes ``table`` at its samples, and its typical size (the median), the window within which
-    its lines and the flanks' sizes are found; one fold per run of samples whose span turns that much,
-    where the heading turns fastest. Spans crossing the section's ends are not measured. The sharpest
-    folds are kept while what their flanks lose next to the lines (:func:`fold_loss`) stays within
-    ``budget`` (an area per unit of the extrusion's length)."""
-    x, heading = ext.x, ext.heading
-    w = float(np.median(table))
-    if not (w > 0 and len(x) > 2):
-        return np.zeros(0), w
-    span = 0.5 * FOLD_SPAN * w
-    lo = np.searchsorted(x, x - span)
-    hi = np.searchsorted(x, x + span, side="right") - 1
-    cos = np.einsum("ij,ij->i", heading[lo], heading[hi])
-    known = (np.linalg.norm(heading[lo], axis=1) > 0) & (np.linalg.norm(heading[hi], axis=1) > 0)
-    sharp = known & (x - span >= x[0]) & (x + span <= x[-1]) & (cos <= np.cos(np.radians(FOLD_TURN)))
-    step = np.arccos(np.clip(np.einsum("ij,ij->i", heading[:-1], heading[1:]), -1.0, 1.0))
-    rate = step / np.maximum(np.diff(x), 1e-300)
-    edges = np.diff(np.concatenate([[0], sharp.astype(np.int8), [0]]))
-    found, losses = [], []
-    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        i = start + int(np.argmax(rate[start:min(stop, len(rate))])) if start < len(rate) else start
-        xf = 0.5 * (x[i] + x[min(i + 1, len(x) - 1)])
-        found.append(xf)
-        losses.append(fold_loss(ext, xf, span))
-    order = np.argsort(losses, kind="stable")
-    kept = order[np.cumsum(np.asarray(losses)[order]) <= budget]
-    return np.asarray(found)[np.sort(kept)], w
-
-
-def fold_loss(ext: Extrusion, xf: float, span: float) -> float:
-    """What the flanks of the fold at ``xf`` lose next to its line, per unit of the extrusion's length:
-    the section turns :data:`FOLD_TURN` within a width ``W`` there (the narrowest centred window that
-    turns that much, at most ``2 span``), as a circle of radius ``R = W / FOLD_TURN`` (radians) would; a
-    triangle on each side spans the rest of that turn, a quarter circle at most, losing
-    ``(pi/2 - sqrt 2) R`` across it."""
-    x, heading = ext.x, ext.heading
-    half = np.geomspace(max(float(np.min(np.diff(x))), 1e-12 * span), span, 48)
-    lo = np.searchsorted(x, xf - half)
-    hi = np.minimum(np.searchsorted(x, xf + half, side="right") - 1, len(x) - 1)
-    turned = np.einsum("ij,ij->i", heading[lo], heading[hi]) <= np.cos(np.radians(FOLD_TURN))
-    width = 2.0 * float(half[np.argmax(turned)] if turned.any() else span)
-    return 2.0 * (0.5 * np.pi - np.sqrt(2.0)) * width / np.radians(FOLD_TURN)
-
-
-def across_folds(x: np.ndarray, values: np.ndarray, at: np.ndarray, window: float, pick) -> np.ndarray:
-    """``values`` at the section's samples ``x`` with each fold's (``at``, :func:`folds`) taken out:
-    within half the ``window`` of a fold, ``pick`` (``np.minimum`` or ``np.maximum``) of the values at
-    that span's ends."""
-    values = np.array(values, dtype=float)
-    for xf in at:
-        lo, hi = np.searchsorted(x, [xf - 0.5 * window, xf + 0.5 * window])
-        lo, hi = max(lo - 1, 0), min(hi, len(x) - 1)
-        values[lo:hi + 1] = pick(values[lo], values[hi])
-    return values
-
-
-def graded_points(p: np.ndarray, q: np.ndarray, size_p: float, size_q: float, size: float,
-                  growth: float) -> np.ndarray:
-    """Points (k, 2) splitting the segment ``p``-``q`` as the job's sizes would: ``size_p`` at ``p`` and
-    ``size_q`` at ``q`` (their boundary segments'), growing by ``growth`` per unit distance from them, at
-    most ``size``: the nodes are spread evenly in the integral of one over that size. A line split evenly
-    at the flanks' size met boundary segments 400 times shorter at its ends: 0.1-degree fans there."""
-    length = float(np.linalg.norm(q - p))
-    s = np.linspace(0.0, length, 1025)
-    h = np.minimum.reduce([np.full_like(s, size), size_p + growth * s, size_q + growth * (length - s)])
-    h = np.maximum(h, 1e-12 * max(length, 1.0))
-    count = np.concatenate([[0.0], np.cumsum(np.diff(s) / (0.5 * (h[1:] + h[:-1])))])
-    pieces = max(1, int(round(count[-1])))
-    at = np.interp(np.arange(1, pieces) * count[-1] / pieces, count, s)
-    return p + np.outer(at / max(length, 1e-300), q - p)
-
-
-def _crosses(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Whether the segment ``p``-``q`` properly crosses each segment ``a``-``b`` (rows)."""
-    def side(o, d, r):
-        return np.sign(d[..., 0] * (r[..., 1] - o[..., 1]) - d[..., 1] * (r[..., 0] - o[..., 0]))
-
-    return ((side(p, q - p, a) * side(p, q - p, b) < 0)
-            & (side(a, b - a, p) * side(a, b - a, q) < 0))
-
-
-def _inside(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether ``point`` is inside the region bounded by segments ``a``-``b`` (rows): even-odd rule."""
-    up = (a[:, 1] > point[1]) != (b[:, 1] > point[1])
-    t = (point[1] - a[up, 1]) / (b[up, 1] - a[up, 1])
-    return bool(np.count_nonzero(a[up, 0] + t * (b[up, 0] - a[up, 0]) > point[0]) % 2)
-
-
-def fold_lines(plane: np.ndarray, segments: list[tuple[int, int]], at: np.ndarray,
-               window: float) -> list[tuple[int, int, int]]:
-    """Straight lines across the plane region bounded by ``segments`` (row pairs of ``plane``) at the
-    folds ``at`` (``x``, :func:`folds`, with their ``window``), as (row, row, index of the fold): for
-    each fold, the boundary nodes sharing the ``x`` nearest it within its span (:data:`FOLD_SPAN` of the
-    window: a line farther off leaves triangles across the fold; a section's edges, split alike, put
-    nodes at the same ``x``), joined in pairs along ``y`` where the line between them lies inside the
-    region and crosses no boundary segment."""
-    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
-    a, b = plane[seg[:, 0]], plane[seg[:, 1]]
-    known = {tuple(sorted(pair)) for pair in seg.tolist()}
-    tol = 1e-6 * window
-    lines: list[tuple[int, int, int]] = []
-    for f, xf in enumerate(at):
-        near = np.flatnonzero(np.abs(plane[:, 0] - xf) <= 0.5 * FOLD_SPAN * window)
-        same = np.zeros(0, dtype=np.int64)
-        for i in near[np.argsort(np.abs(plane[near, 0] - xf))]:
-            same = near[np.abs(plane[near, 0] - plane[i, 0]) <= tol]
-            if len(same) >= 2:
-                break
-        same = same[np.argsort(plane[same, 1])]
-        for lo, hi in zip(same[:-1].tolist(), same[1:].tolist()):
-            p, q = plane[lo], plane[hi]
-            if (tuple(sorted((lo, hi))) in known or _crosses(p, q, a, b).any()
-                    or not _inside(0.5 * (p + q), a, b)):
-                continue
-            lines.append((lo, hi, f))
-    return lines
 
 
 def _boundary_points(curves: list, order: list) -> np.ndarray:
@@ -450,9 +313,10 @@ def _sizes(surface: int, ext: Extrusion, k: np.ndarray) -> np.ndarray:
 
 def _fold_sizes(surface: int, ext: Extrusion) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """The face's curvature at the section's samples (:func:`_curvatures`), its sizes (:func:`_sizes`),
-    its folds (:func:`folds`) and their window. The folds are found on the sizes, then again on the
-    sizes with their curvature taken out (:func:`across_folds`), whose typical size is the flanks'.
-    What their flanks lose beside their lines (:func:`fold_loss`) may be :data:`FOLD_LOSS` of the job's
+    its folds (:func:`cadedge.mesh.creases.folds`) and their window. The folds are found on the sizes,
+    then again on the sizes with their curvature taken out (:func:`~cadedge.mesh.creases.across_folds`),
+    whose typical size is the flanks'. What their flanks lose beside their lines
+    (:func:`~cadedge.mesh.creases.fold_loss`) may be :data:`~cadedge.mesh.creases.FOLD_LOSS` of the job's
     surface target (without one, of the deficit the face's count per ``2 pi`` is designed for,
     :func:`cadedge.mesh.fidelity.per_circle`): a stadium's ends of radius 0.3, taken as folds, lost
     their curvature sizes, 0.45% of the face's area, and were refined back at 1.6 times the triangles

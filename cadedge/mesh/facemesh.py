@@ -70,10 +70,10 @@ def read_face(surface: int) -> FaceMesh | None:
 
 def crease_nodes(surface: int, uv: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, set[tuple[int, int]]]:
     """The nodes (a mask over the rows of ``uv``, the nodes' parameters) on the folds of gmsh surface
-    ``surface`` that :mod:`cadedge.mesh.extruded` meshed along (:data:`~cadedge.mesh.extruded.CREASES`),
+    ``surface`` that :mod:`cadedge.mesh.extruded` meshed along (:data:`~cadedge.mesh.creases.CREASES`),
     and the edges of triangles ``tri`` between two of them on one fold (sorted pairs of rows). They stay
     as meshed: a node moved off a fold, or an edge swapped across one, puts a triangle across it again."""
-    from .extruded import CREASES
+    from .creases import CREASES
 
     pinned = np.zeros(len(uv), dtype=bool)
     if surface not in CREASES:

@@ -28,8 +28,8 @@ from ..shapegrid import ShapeGrid
 @contextlib.contextmanager
 def gmsh_session() -> Iterator[None]:
     """Initialise gmsh quietly with its logger on; always finalise. gmsh is a process-wide singleton. The
-    folds of an earlier session's surfaces (:data:`cadedge.mesh.extruded.CREASES`) are forgotten."""
-    from .extruded import CREASES
+    folds of an earlier session's surfaces (:data:`cadedge.mesh.creases.CREASES`) are forgotten."""
+    from .creases import CREASES
 
     if gmsh.isInitialized():
         raise MeshError("gmsh is already initialised in this process; cadedge meshes one model at a time")
