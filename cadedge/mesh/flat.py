@@ -56,10 +56,11 @@ def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndar
     """Mesh the plane region bounded by ``segments`` (pairs of rows of ``plane`` (n, 2), closing into
     loops: the outer one and holes) with gmsh's 2-D ``algorithm``, each segment kept whole and each point
     sized ``near``; the lines ``inner`` (two rows and the points (k, 2) between them, inside the region)
-    are embedded in it, split at those points, so that no triangle crosses them. In a gmsh model of its own: ``options``
-    (gmsh option -> value) are set for it and ``sizing()`` is called with it current to set its size
-    field or callback; the caller's model and options are restored after. Returns the points (N, 2), the
-    boundary's ``n`` first then gmsh's new ones, and the triangles (m, 3) as rows of them; or why not."""
+    are embedded in it, split at those points, so that no triangle crosses them. In a gmsh model of its
+    own: ``options`` (gmsh option -> value) are set for it and ``sizing()`` is called with it current to
+    set its size field or callback; the caller's model and options are restored after. Returns the points
+    (N, 2), the boundary's ``n`` first then gmsh's new ones, and the triangles (m, 3) as rows of them; or
+    why not."""
     import gmsh
 
     from .planar import polygon_area
@@ -83,11 +84,13 @@ def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndar
         curve_loops = [gmsh.model.geo.addCurveLoop([lines[i] if i >= 0 else -lines[-i - 1] for i in chains[k]])
                        for k in [outer] + [k for k in range(len(chains)) if k != outer]]
         surface = gmsh.model.geo.addPlaneSurface(curve_loops)
+        # the inner lines are split at the points given, not by the size field (gmsh integrates the field
+        # along a line to split it): so split, cyclo_gear's first lines ran over the 60 s attempt bound
         embedded = []
-        for a, b, between in inner:  # split here, not by the size field: gmsh integrates it along the line,
+        for a, b, between in inner:
             chain = [points[a], *(gmsh.model.geo.addPoint(px, py, 0.0) for px, py in between), points[b]]
-            embedded += [gmsh.model.geo.addLine(p, q) for p, q in zip(chain[:-1], chain[1:])]  # slowly on a
-        gmsh.model.geo.synchronize()  # fine view
+            embedded += [gmsh.model.geo.addLine(p, q) for p, q in zip(chain[:-1], chain[1:])]
+        gmsh.model.geo.synchronize()
         for line in lines + embedded:
             gmsh.model.mesh.setTransfiniteCurve(line, 2)
         if embedded:

@@ -28,12 +28,15 @@ from ..shapegrid import ShapeGrid
 @contextlib.contextmanager
 def gmsh_session() -> Iterator[None]:
     """Initialise gmsh quietly with its logger on; always finalise. gmsh is a process-wide singleton. The
-    folds of an earlier session's surfaces (:data:`cadedge.mesh.creases.CREASES`) are forgotten."""
+    folds of an earlier session's surfaces (:data:`cadedge.mesh.creases.CREASES`) and its surface target
+    (:data:`cadedge.mesh.interior.SIZES`) are forgotten."""
     from .creases import CREASES
+    from .interior import SIZES
 
     if gmsh.isInitialized():
         raise MeshError("gmsh is already initialised in this process; cadedge meshes one model at a time")
     CREASES.clear()
+    SIZES.target = None
     gmsh.initialize(readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)

@@ -206,7 +206,8 @@ def surface_samples(surface: int, n: int = SAMPLES) -> tuple[np.ndarray, np.ndar
     return x, k, da
 
 
-def install(surfaces: list[int], floors: dict[int, float] | None = None, target: float | None = None) -> list[int]:
+def install(surfaces: list[int], floors: dict[int, float] | None = None,
+            target: float | None = None) -> list[int]:
     """Sample ``surfaces`` (gmsh tags of curved faces whose curvature varies), keep the smallest sizes
     ``floors`` (surface -> size) and the job's surface ``target``, and make :data:`SIZES` gmsh's size
     callback if either of the first two is needed; returns the surfaces sampled."""
