@@ -50,11 +50,7 @@ def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np
     if not (w > 0 and len(x) > 2):
         return np.zeros(0), w
     span = 0.5 * FOLD_SPAN * w
-    lo = np.searchsorted(x, x - span)
-    hi = np.searchsorted(x, x + span, side="right") - 1
-    cos = np.einsum("ij,ij->i", heading[lo], heading[hi])
-    known = (np.linalg.norm(heading[lo], axis=1) > 0) & (np.linalg.norm(heading[hi], axis=1) > 0)
-    sharp = known & (x - span >= x[0]) & (x + span <= x[-1]) & (cos <= np.cos(np.radians(FOLD_TURN)))
+    sharp = (x - span >= x[0]) & (x + span <= x[-1]) & _turned(ext, x, span)
     step = np.arccos(np.clip(np.einsum("ij,ij->i", heading[:-1], heading[1:]), -1.0, 1.0))
     rate = step / np.maximum(np.diff(x), 1e-300)
     edges = np.diff(np.concatenate([[0], sharp.astype(np.int8), [0]]))
@@ -69,17 +65,22 @@ def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np
     return np.asarray(found)[np.sort(kept)], w
 
 
+def _turned(ext: Extrusion, centre, half) -> np.ndarray:
+    """Whether the section's heading turns by :data:`FOLD_TURN` or more from ``centre - half`` to
+    ``centre + half`` (arc lengths, broadcast together; samples without a heading never do)."""
+    lo = np.searchsorted(ext.x, centre - half)
+    hi = np.searchsorted(ext.x, centre + half, side="right") - 1
+    return np.einsum("ij,ij->i", ext.heading[lo], ext.heading[hi]) <= np.cos(np.radians(FOLD_TURN))
+
+
 def fold_loss(ext: Extrusion, xf: float, span: float) -> float:
     """What the flanks of the fold at ``xf`` lose next to its line, per unit of the extrusion's length:
     the section turns :data:`FOLD_TURN` within a width ``W`` there (the narrowest centred window that
     turns that much, at most ``2 span``), as a circle of radius ``R = W / FOLD_TURN`` (radians) would; a
     triangle on each side spans the rest of that turn, a quarter circle at most, losing
     ``(pi/2 - sqrt 2) R`` across it."""
-    x, heading = ext.x, ext.heading
-    half = np.geomspace(max(float(np.min(np.diff(x))), 1e-12 * span), span, 48)
-    lo = np.searchsorted(x, xf - half)
-    hi = np.minimum(np.searchsorted(x, xf + half, side="right") - 1, len(x) - 1)
-    turned = np.einsum("ij,ij->i", heading[lo], heading[hi]) <= np.cos(np.radians(FOLD_TURN))
+    half = np.geomspace(max(float(np.min(np.diff(ext.x))), 1e-12 * span), span, 48)
+    turned = _turned(ext, xf, half)
     width = 2.0 * float(half[np.argmax(turned)] if turned.any() else span)
     return 2.0 * (0.5 * np.pi - np.sqrt(2.0)) * width / np.radians(FOLD_TURN)
 
