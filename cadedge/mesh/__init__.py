@@ -185,12 +185,15 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
             grid = fit_to_sizes(grid, make_field)
         except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
             notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
+        from ..occt.cones import apex_cones
+        from .apex import grade_to_apexes
         from .grading import grade_faces
         from .widths import fit_to_widths
 
         cap = max_size or max_length or make_field(grid).max_size  # thin faces must not shrink the cap
         grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
         grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
+        grid = grade_to_apexes(grid, apex_cones(grid.shape))  # segments shrink into a narrow cone's tip
         max_size = cap
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
