@@ -227,7 +227,8 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     if res.error is not None:
         failures = [FaceFailure(face=f, surface=f, reason=res.error) for f in range(1, grid.faces + 1)]
     else:
-        failures = [FaceFailure(face=o.face, surface=o.surface, reason=o.reason()) for o in faces if not o.ok]
+        failures = _with_brep_checks(grid, [FaceFailure(face=o.face, surface=o.surface, reason=o.reason())
+                                            for o in faces if not o.ok])
     check = None
     if len(res.triangles):
         say("checking the mesh")
@@ -253,6 +254,20 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
                       faces=faces, unmatched_edges=list(res.unmatched_edges), own_mesh_edges=list(res.own_mesh_edges),
                       error=res.error, extras=res.extras,
                       details=list(res.details))
+
+
+def _with_brep_checks(grid: ShapeGrid, failures: list[FaceFailure]) -> list[FaceFailure]:
+    """``failures`` with the reason of each face that OCCT's own check finds invalid extended by what it
+    finds (:func:`cadedge.occt.validity.face_problems`): the fault is then the model's."""
+    import dataclasses
+
+    if not failures or grid.shape is None:
+        return failures
+    from ..occt.validity import face_problems
+
+    problems = face_problems(grid.shape, [f.face for f in failures])
+    return [dataclasses.replace(f, reason=f"{f.reason}; the B-rep face itself is invalid (OCCT's BRepCheck: "
+                                          f"{problems[f.face]})") if f.face in problems else f for f in failures]
 
 
 def _ids(ids: list[int], limit: int = 10) -> str:
