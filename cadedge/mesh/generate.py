@@ -118,22 +118,31 @@ class FaceOutcome:
 
 
 def surface_ok(surface: int) -> bool:
-    """Does the surface carry triangles whose boundary is exactly its (imposed or meshed) curve segments?"""
+    """Does the surface carry triangles whose boundary is exactly its (imposed or meshed) curve segments?
+
+    Edges are compared as integer keys ``a * big + b`` (``a < b`` node tags), with counts from one
+    ``np.unique`` each: a dictionary per edge took 3.9 of the 9.5 s its 462 calls cost on a plate with
+    225 holes at 1e-3."""
     _, tri_nodes = gmsh.model.mesh.getElementsByType(2, surface)
     if len(tri_nodes) == 0:
         return False
     tri = np.asarray(tri_nodes, dtype=np.int64).reshape(-1, 3)
     edges = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
-    uniq, counts = np.unique(edges, axis=0, return_counts=True)
-    expected: dict[tuple[int, int], int] = {}
-    for curve, uses in surface_curve_uses(surface).items():
+    segs, uses = [np.zeros((0, 2), dtype=np.int64)], [np.zeros(0)]
+    for curve, n in surface_curve_uses(surface).items():
         _, seg = gmsh.model.mesh.getElementsByType(1, curve)
-        for a, b in np.sort(np.asarray(seg, dtype=np.int64).reshape(-1, 2), axis=1):
-            expected[(int(a), int(b))] = expected.get((int(a), int(b)), 0) + uses
-    got = {(int(a), int(b)): int(c) for (a, b), c in zip(uniq, counts)}
-    if any(got.get(k, 0) != v for k, v in expected.items()):
+        segs.append(np.sort(np.asarray(seg, dtype=np.int64).reshape(-1, 2), axis=1))
+        uses.append(np.full(len(segs[-1]), float(n)))
+    seg = np.vstack(segs)
+    big = int(max(edges.max(), seg.max(initial=0))) + 1
+    got, counts = np.unique(edges[:, 0] * big + edges[:, 1], return_counts=True)
+    wanted, inverse = np.unique(seg[:, 0] * big + seg[:, 1], return_inverse=True)
+    expected = np.bincount(inverse.ravel(), weights=np.concatenate(uses), minlength=len(wanted))
+    at = np.minimum(np.searchsorted(got, wanted), max(len(got) - 1, 0))
+    found = np.where(got[at] == wanted, counts[at], 0)
+    if np.any(found != expected):
         return False
-    return all(c == 2 for k, c in got.items() if k not in expected)
+    return bool(np.all(counts[~np.isin(got, wanted)] == 2))
 
 
 def _reason(surface: int, log: list[str], exc: str | None, *, alone: bool = True) -> str:

@@ -182,19 +182,19 @@ def _overlapping_faces(surfaces: list[int]) -> dict[int, float]:
     _, seg = gmsh.model.mesh.getElementsByType(1)
     seg = np.sort(np.asarray(seg, dtype=np.int64).reshape(-1, 2), axis=1)
     on_curves = seg[:, 0] * big + seg[:, 1]
-    keys, owners, pairs = [], [], []
-    for s in surfaces:
+    keys, owners = [], []
+    for s in surfaces:  # each surface's edges once, as integer keys
         tri = np.asarray(gmsh.model.mesh.getElementsByType(2, s)[1], dtype=np.int64).reshape(-1, 3)
-        e = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
-        k = e[:, 0] * big + e[:, 1]
-        inner = ~np.isin(k, on_curves)
-        keys.append(k[inner])
-        pairs.append(e[inner])
-        owners.append(np.full(int(inner.sum()), s, dtype=np.int64))
+        e = np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1)
+        keys.append(np.unique(e[:, 0] * big + e[:, 1]))
+        owners.append(np.full(len(keys[-1]), s, dtype=np.int64))
     if not keys:
         return {}
-    k, own, pr = np.concatenate(keys), np.concatenate(owners), np.vstack(pairs)
-    uniq, inverse, counts = np.unique(k, return_inverse=True, return_counts=True)
+    k, own = np.concatenate(keys), np.concatenate(owners)
+    inner = ~np.isin(k, on_curves)  # one test for all surfaces: one per surface took 26 s on 227 faces
+    k, own = k[inner], own[inner]
+    pr = np.column_stack([k // big, k % big])
+    _, inverse, counts = np.unique(k, return_inverse=True, return_counts=True)
     shared = counts[inverse.ravel()] > 1
     out: dict[int, float] = {}
     lengths = np.linalg.norm(x[lookup[pr[shared, 0]]] - x[lookup[pr[shared, 1]]], axis=1)
