@@ -21,7 +21,7 @@ import dataclasses
 import numpy as np
 
 from ..shapegrid import ShapeGrid, with_edges
-from ..splitting import split_segments
+from ..splitting import fits_curve, split_segments
 from .developed import NARROW, WRAP
 from .proximity import _LazyCurves
 
@@ -40,7 +40,6 @@ def grade_to_apexes(grid: ShapeGrid, cones: dict[int, tuple[np.ndarray, float]],
     from OCP.Standard import Standard_Failure
 
     from ..errors import GeometryError
-    from ..splitting import fits_curve
 
     cones = {f: cone for f, cone in cones.items() if cone[1] < NARROW}
     if not cones:
