@@ -33,11 +33,22 @@ def i_beam() -> object:
     return beam.edges("|Z").fillet(0.4).val().wrapped
 
 
+def _plate(side: float, holes: int) -> object:
+    """A ``side`` x ``side`` x 3 plate with ``holes`` x ``holes`` holes of 3 mm diameter at a 6.5 mm pitch."""
+    grid = [((i - (holes - 1) / 2) * 6.5, (j - (holes - 1) / 2) * 6.5) for i in range(holes) for j in range(holes)]
+    plate = cq.Workplane("XY").box(side, side, 3.0)
+    return plate.faces(">Z").workplane().pushPoints(grid).hole(3.0).val().wrapped
+
+
 def perforated_plate() -> object:
     """A 200 x 200 x 3 plate with 30 x 30 holes of 3 mm diameter at a 6.5 mm pitch."""
-    grid = [((i - 14.5) * 6.5, (j - 14.5) * 6.5) for i in range(30) for j in range(30)]
-    plate = cq.Workplane("XY").box(200.0, 200.0, 3.0)
-    return plate.faces(">Z").workplane().pushPoints(grid).hole(3.0).val().wrapped
+    return _plate(200.0, 30)
+
+
+def plate_225() -> object:
+    """A 100 x 100 x 3 plate with 15 x 15 holes of 3 mm diameter at a 6.5 mm pitch: the perforated plate's
+    faces a quarter as many, meshed in full within the default --timeout at 1e-3."""
+    return _plate(100.0, 15)
 
 
 def heat_sink() -> object:
@@ -101,7 +112,7 @@ def hex_nut() -> object:
 
 
 MODELS: dict[str, Callable[[], object]] = {
-    "i_beam": i_beam, "perforated_plate": perforated_plate, "heat_sink": heat_sink,
+    "i_beam": i_beam, "perforated_plate": perforated_plate, "plate_225": plate_225, "heat_sink": heat_sink,
     "bolt_circle_fillets": bolt_circle_fillets, "cyclo_gear": cyclo_gear, "lobed_gear": lobed_gear,
     "hex_nut": hex_nut,
 }
