@@ -34,8 +34,8 @@ WORDS = {
 
 
 def _names(statuses) -> list[str]:
-    return [str(s).rsplit("_", 1)[-1] if "BRepCheck_" in str(s) else str(s)
-            for s in statuses if s != BRepCheck_NoError]
+    """The statuses' names without the ``BRepCheck_`` prefix, :data:`BRepCheck_NoError` left out."""
+    return [getattr(s, "name", str(s)).removeprefix("BRepCheck_") for s in statuses if s != BRepCheck_NoError]
 
 
 def face_problems(shape: TopoDS_Shape, faces: list[int]) -> dict[int, str]:
