@@ -9,12 +9,13 @@ wires, edges and vertices, so a large model pays only for the faces that failed.
 
 from __future__ import annotations
 
-from OCP.BRepCheck import BRepCheck_Analyzer, BRepCheck_NoError
+from OCP.BRepCheck import BRepCheck_Analyzer, BRepCheck_Face, BRepCheck_NoError, BRepCheck_Wire
 from OCP.Standard import Standard_Failure
-from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX, TopAbs_WIRE
+from OCP.TopAbs import TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
-from OCP.TopoDS import TopoDS_Shape
+from OCP.TopoDS import TopoDS_Edge, TopoDS_Shape
 
+from .compat import TopoDS
 from .topology import Topology
 
 #: BRepCheck's statuses in words; the others by their name without the ``BRepCheck_`` prefix.
@@ -22,25 +23,29 @@ WORDS = {
     "NotClosed": "a wire not closed",
     "SelfIntersectingWire": "a wire crossing itself",
     "IntersectingWires": "wires crossing each other",
-    "UnorientableShape": "not orientable",
-    "BadOrientationOfSubshape": "wires oriented against it",
-    "InvalidCurveOnSurface": "an edge off its surface",
-    "InvalidCurveOnClosedSurface": "an edge off its closed surface",
-    "InvalidSameParameterFlag": "an edge's curves out of step",
-    "InvalidToleranceValue": "a tolerance smaller than its parts'",
-    "EmptyWire": "an empty wire",
     "InvalidImbricationOfWires": "wires nested wrongly",
+    "BadOrientationOfSubshape": "wires oriented against it",
+    "BadOrientation": "a wire oriented against it",
+    "EmptyWire": "an empty wire",
 }
 
 
-def _names(statuses) -> list[str]:
-    """The statuses' names without the ``BRepCheck_`` prefix, :data:`BRepCheck_NoError` left out."""
-    return [getattr(s, "name", str(s)).removeprefix("BRepCheck_") for s in statuses if s != BRepCheck_NoError]
+def _wire_checks(face, wire) -> list:
+    """BRepCheck's statuses of ``wire`` on ``face``: closed in 3-D and on the face, oriented, not
+    crossing itself."""
+    check = BRepCheck_Wire(wire)
+    return [check.Closed(False), check.Closed2d(face, False), check.Orientation(face, False),
+            check.SelfIntersect(face, TopoDS_Edge(), TopoDS_Edge(), False)]
 
 
 def face_problems(shape: TopoDS_Shape, faces: list[int]) -> dict[int, str]:
-    """Face id -> what BRepCheck finds wrong with it, in words (``"a wire not closed, not orientable"``),
-    for those of ``faces`` (``TopExp::MapShapes`` order, 1-based) that fail the check."""
+    """Face id -> what BRepCheck finds wrong with it, in words (``"wires oriented against it, a wire
+    crossing itself"``), for those of ``faces`` (``TopExp::MapShapes`` order, 1-based) that fail the check.
+
+    ``BRepCheck_Analyzer`` says whether the face passes; what is wrong comes from the face's and its
+    wires' own checks (``BRepCheck_Face``, ``BRepCheck_Wire``), which return one status each: the
+    analyzer's lists of statuses cannot be read on OCP 8. A face whose faults lie in its edges or
+    vertices (curves off the surface, tolerances) is said to have those."""
     topo = Topology(shape)
     out = {}
     for fid in faces:
@@ -48,26 +53,18 @@ def face_problems(shape: TopoDS_Shape, faces: list[int]) -> dict[int, str]:
             continue
         face = topo.faces[fid - 1]
         try:
-            analyzer = BRepCheck_Analyzer(face)
-            if analyzer.IsValid():
+            if BRepCheck_Analyzer(face).IsValid():
                 continue
-            found = []
-            result = analyzer.Result(face)
-            if result is not None:
-                found += _names(result.Status())
-            for kind in (TopAbs_WIRE, TopAbs_EDGE, TopAbs_VERTEX):
-                explorer = TopExp_Explorer(face, kind)
-                while explorer.More():
-                    sub = analyzer.Result(explorer.Current())
-                    if sub is not None:
-                        sub.InitContextIterator()
-                        while sub.MoreShapeInContext():
-                            found += _names(sub.StatusOnShape())
-                            sub.NextShapeInContext()
-                    explorer.Next()
+            check = BRepCheck_Face(face)
+            found = [check.IntersectWires(False), check.ClassifyWires(False), check.OrientationOfWires(False)]
+            explorer = TopExp_Explorer(face, TopAbs_WIRE)
+            while explorer.More():
+                found += _wire_checks(face, TopoDS.Wire_s(explorer.Current()))
+                explorer.Next()
         except Standard_Failure as exc:
             out[fid] = f"the check itself failed ({exc})"
             continue
-        words = list(dict.fromkeys(WORDS.get(n, n) for n in found))
-        out[fid] = ", ".join(words) or "invalid"
+        names = [getattr(s, "name", str(s)).removeprefix("BRepCheck_") for s in found if s != BRepCheck_NoError]
+        words = list(dict.fromkeys(WORDS.get(n, n) for n in names))
+        out[fid] = ", ".join(words) or "faults in its edges or vertices"
     return out
