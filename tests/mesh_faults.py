@@ -110,3 +110,12 @@ def spin_first_face(ctx) -> None:
     if ctx.face == 1 and ctx.strategy == 0:
         while True:
             pass
+
+
+def busy_a_while(ctx) -> None:
+    """Compute for 3 s of CPU on the first attempt at ``FAULT_FACE``, then let it mesh (a slow face, not a
+    hung one)."""
+    if ctx.face == FAULT_FACE and ctx.strategy == 0:
+        end = time.process_time() + 3.0
+        while time.process_time() < end:
+            pass

@@ -49,6 +49,33 @@ def test_a_busy_hang_is_caught_by_cpu_time_and_the_face_meshes_with_one_size(cyl
     assert all(o.strategy == STRATEGIES[0].name for o in result.faces if o.face != FAULT_FACE)
 
 
+def test_an_attempt_on_faces_with_many_boundary_segments_gets_a_longer_bound():
+    from cadedge.mesh.isolate import MAX_BOUND_WEIGHT, SEGMENTS_PER_BOUND, attempt_bound
+
+    segments = {1: 300, 5: 74_464, 6: 336}
+    assert attempt_bound("batch 1 6", 60.0, segments) == 60.0
+    assert attempt_bound("batch 5 6", 60.0, segments) == pytest.approx(60.0 * 74_800 / SEGMENTS_PER_BOUND)
+    assert attempt_bound("face 5 0", 60.0, segments) == pytest.approx(60.0 * 74_464 / SEGMENTS_PER_BOUND)
+    assert attempt_bound("refine 5 5 5", 60.0, segments) == 60.0 * MAX_BOUND_WEIGHT
+    assert attempt_bound("face 6 3", 60.0, segments) == 60.0  # the strategy's index is not a face
+
+
+def test_a_slow_face_with_many_boundary_segments_is_not_stopped_as_hung(cylinder, monkeypatch):
+    """The same busy attempt (3 s of CPU against a 1.5 s bound) is stopped as hung on the cylinder as it
+    is, and meshes with the first strategy when its boundary counts as large (the bound's segments
+    lowered so the cylinder's faces get three times the bound)."""
+    from cadedge.mesh import isolate
+
+    hooks = {"before_face": ["mesh_faults:busy_a_while"]}
+    slow = next(o for o in mesh_shape(cylinder, hooks=hooks, timeout=120, face_timeout=1.5).faces
+                if o.face == FAULT_FACE)
+    assert "hung" in slow.attempts[0][1]
+    monkeypatch.setattr(isolate, "SEGMENTS_PER_BOUND", 1)
+    result = mesh_shape(cylinder, hooks=hooks, timeout=120, face_timeout=1.5)
+    _every_face(result)
+    assert all(o.strategy == STRATEGIES[0].name for o in result.faces)
+
+
 def test_one_curvature_size_follows_the_sampled_curvature():
     """On a sphere of radius 2 the size is 2 pi R / per_circle; on a plane there is none."""
     import gmsh

@@ -3,8 +3,9 @@
 The child (``python -m cadedge.mesh.worker``, in its own session so a terminal's Ctrl-C reaches only the
 caller) writes a progress line before each step and each face attempt. The watchdog here kills it when
 
-- one face attempt runs longer than ``face_timeout`` of the child's CPU time (or :data:`WALL_SLACK` times
-  it on the clock, for a child that hangs without computing): that (face, strategy) is marked as hung and
+- one face attempt runs longer than ``face_timeout`` of the child's CPU time (up to
+  :data:`MAX_BOUND_WEIGHT` times that for faces with many boundary segments, :func:`attempt_bound`; or
+  :data:`WALL_SLACK` times it on the clock, for a child that hangs without computing): that (face, strategy) is marked as hung and
   a new child runs the job again without it (the face goes on to the next strategy with other sizes: the
   other algorithms on the same sizes tend to hang as well, and finer sizes take longer still). CPU time,
   because on a loaded machine a face that takes 20 s alone takes several times that on the clock. A batch
@@ -75,6 +76,32 @@ _POLL = 0.05
 FOLDER_PREFIX = "cadedge-mesh-"
 #: Progress lines that mark work the watchdog bounds: one face attempt, a batch of them, a finer re-mesh.
 _ATTEMPT_LINES = ("face ", "batch ", "refine ")
+#: An attempt's bound grows with the boundary segments of the faces it meshes, past this many (gmsh's
+#: time grows with them: the 900-hole plate's faces with the holes have 74 464 each at 1e-3 and took
+#: 40-50 s of CPU against the default 60 s bound, and one was stopped as hung when run beside other
+#: work), to at most :data:`MAX_BOUND_WEIGHT` times ``face_timeout``.
+SEGMENTS_PER_BOUND = 40_000
+MAX_BOUND_WEIGHT = 3.0
+
+
+def face_segments(grid) -> dict[int, int]:
+    """Face id -> boundary segments: each edge's grid segments, once for every face it bounds."""
+    out: dict[int, int] = {}
+    for e in grid.edges:
+        if not e.degenerate:
+            for f in e.faces:
+                out[f] = out.get(f, 0) + max(len(e.points) - 1, 0)
+    return out
+
+
+def attempt_bound(line: str, face_timeout: float, segments: dict[int, int]) -> float:
+    """The bound on the attempt that progress ``line`` (``face F K``, ``batch F...``, ``refine F...``)
+    announces: ``face_timeout``, times the faces' boundary segments over :data:`SEGMENTS_PER_BOUND`
+    where that is more than 1, at most :data:`MAX_BOUND_WEIGHT` times."""
+    words = line.split()
+    faces = words[1:2] if words[:1] == ["face"] else words[1:]
+    n = sum(segments.get(int(w), 0) for w in faces if w.isdigit())
+    return face_timeout * min(max(1.0, n / SEGMENTS_PER_BOUND), MAX_BOUND_WEIGHT)
 
 
 @dataclass
@@ -168,7 +195,8 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                                  os.path.join(tmp, "faces")],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
                                 start_new_session=True)
-        last, since, cpu_since = "", time.monotonic(), 0.0
+        last, since, cpu_since, bound = "", time.monotonic(), 0.0, face_timeout
+        segments = face_segments(job.grid)
         tail = _Tail(progress_path)
         try:
             while True:
@@ -186,11 +214,12 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                 cpu = _cpu_seconds(proc.pid)
                 if line != last:
                     last, since, cpu_since = line, now, cpu or 0.0
+                    bound = attempt_bound(line, face_timeout, segments)
                 if now > deadline:
                     return _Run(None, "timeout", last, "")
                 busy = now - since if cpu is None else cpu - cpu_since
-                if line.startswith(_ATTEMPT_LINES) and (busy > face_timeout or now - since > WALL_SLACK * face_timeout):
-                    return _Run(None, "hung", last, f"hung: no result within {face_timeout:g} s")
+                if line.startswith(_ATTEMPT_LINES) and (busy > bound or now - since > WALL_SLACK * bound):
+                    return _Run(None, "hung", last, f"hung: no result within {bound:.3g} s")
                 if line.startswith(_ATTEMPT_LINES) and now > kill_at:
                     return _Run(None, "late", last, "not finished: out of time (timeout)")
         finally:
