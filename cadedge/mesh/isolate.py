@@ -5,9 +5,10 @@ caller) writes a progress line before each step and each face attempt. The watch
 
 - one face attempt runs longer than ``face_timeout`` of the child's CPU time (up to
   :data:`MAX_BOUND_WEIGHT` times that for faces with many boundary segments, :func:`attempt_bound`; or
-  :data:`WALL_SLACK` times it on the clock, for a child that hangs without computing): that (face, strategy) is marked as hung and
-  a new child runs the job again without it (the face goes on to the next strategy with other sizes: the
-  other algorithms on the same sizes tend to hang as well, and finer sizes take longer still). CPU time,
+  :data:`WALL_SLACK` times it on the clock, for a child that hangs without computing): that (face,
+  strategy) is marked as hung and a new child runs the job again without it (the face goes on to the
+  next strategy with other sizes: the other algorithms on the same sizes tend to hang as well, and finer
+  sizes take longer still). CPU time,
   because on a loaded machine a face that takes 20 s alone takes several times that on the clock. A batch
   of first attempts that hangs or crashes is done again face by face; faces meshed again finer for the
   surface target (``refine F1 F2 ...``) that hang or crash are kept as they were first meshed;

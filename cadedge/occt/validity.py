@@ -61,7 +61,7 @@ def face_problems(shape: TopoDS_Shape, faces: list[int]) -> dict[int, str]:
             while explorer.More():
                 found += _wire_checks(face, TopoDS.Wire_s(explorer.Current()))
                 explorer.Next()
-        except Standard_Failure as exc:
+        except (Standard_Failure, TypeError) as exc:  # OCCT's failure, or a binding that cannot convert
             out[fid] = f"the check itself failed ({exc})"
             continue
         names = [getattr(s, "name", str(s)).removeprefix("BRepCheck_") for s in found if s != BRepCheck_NoError]
