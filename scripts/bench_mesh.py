@@ -110,7 +110,7 @@ def _msh_faces(path: Path) -> dict:
     import numpy as np
 
     from cadedge.mesh.check import check_triangles
-    from cadedge.mesh.generate import read_mesh
+    from cadedge.mesh.readback import read_mesh
 
     gmsh.initialize(readConfigFiles=False)
     try:

@@ -88,7 +88,7 @@ def gmsh_run(path: Path, per_circle: float, max_size: float, keys: list | None =
     out of the worst face where the key says so."""
     import gmsh
 
-    from cadedge.mesh.generate import read_mesh
+    from cadedge.mesh.readback import read_mesh
 
     t0 = time.perf_counter()
     gmsh.initialize(readConfigFiles=False)

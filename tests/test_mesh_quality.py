@@ -355,7 +355,7 @@ def test_a_face_far_off_its_brep_area_may_move_by_a_share_of_its_own_deficit(gms
     own deficit lets the optimiser improve it."""
     gmsh, side = gmsh_cylinder
     from cadedge.mesh.optimize import _area, smooth_face
-    from cadedge.mesh.generate import node_lookup
+    from cadedge.mesh.readback import node_lookup
 
     tags, xyz, _ = gmsh.model.mesh.getNodes(2, side, includeBoundary=True)
     tri = node_lookup(tags)[np.asarray(gmsh.model.mesh.getElementsByType(2, side)[1])].reshape(-1, 3)

@@ -141,7 +141,7 @@ import json, sys
 import gmsh
 import numpy as np
 from cadedge.mesh.check import check_triangles
-from cadedge.mesh.generate import read_mesh
+from cadedge.mesh.readback import read_mesh
 
 gmsh.initialize(readConfigFiles=False)
 gmsh.option.setNumber("General.Terminal", 0)

@@ -47,7 +47,7 @@ def gmsh_surface_areas(surfaces: list[int]) -> dict[int, float]:
     """Summed triangle area of each gmsh surface of the current model."""
     import gmsh
 
-    from .generate import node_lookup
+    from .readback import node_lookup
 
     tags, coords, _ = gmsh.model.mesh.getNodes()
     if not len(tags):

@@ -35,7 +35,7 @@ def read_face(surface: int) -> FaceMesh | None:
     hold."""
     import gmsh
 
-    from .generate import node_lookup
+    from .readback import node_lookup
     from .gmsh_model import surface_curve_uses
 
     el_tags, tri_tags = gmsh.model.mesh.getElementsByType(2, surface)
@@ -119,7 +119,7 @@ def element_corners(dim: int, tag: int) -> np.ndarray:
     gmsh does not list on the entity or its boundary."""
     import gmsh
 
-    from .generate import node_lookup
+    from .readback import node_lookup
 
     k = dim + 1
     _, elements = gmsh.model.mesh.getElementsByType(dim, tag)  # element type 1: 2-node line, 2: 3-node triangle

@@ -108,7 +108,7 @@ def node_params(surface: int, x: np.ndarray, uv: np.ndarray, tags: np.ndarray | 
     edge = np.isnan(uv).any(axis=1)
     if edge.any() and tags is not None:
         from .gmsh_model import surface_curve_uses
-        from .generate import node_lookup
+        from .readback import node_lookup
 
         lookup = node_lookup(np.asarray(tags, dtype=np.int64))
         for curve in surface_curve_uses(surface):

@@ -79,7 +79,7 @@ class JobContext:
     emap: Any = None  # cadedge.mesh.gmsh_model.EntityMap
     surfaces: list[int] = field(default_factory=list)
     outcomes: dict[int, Any] = field(default_factory=dict)  # gmsh surface -> generate.FaceOutcome
-    raw: Any = None  # cadedge.mesh.generate.RawMesh
+    raw: Any = None  # cadedge.mesh.readback.RawMesh
     face: int = 0  # the face attempt under way (for "before_face" hooks)
     strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
@@ -171,7 +171,7 @@ def _overlapping_faces(surfaces: list[int]) -> dict[int, float]:
     give the same triangles twice. Returns each one with the shortest such edge's length."""
     import gmsh
 
-    from .generate import node_lookup
+    from .readback import node_lookup
 
     tags, coords, _ = gmsh.model.mesh.getNodes()
     if not len(tags):
@@ -251,9 +251,10 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     or replace its mesh). Later records of the same entity replace earlier ones."""
     import gmsh
 
-    from .generate import boundary_multiplicity, mesh_faces, read_mesh
+    from .generate import mesh_faces
     from .gmsh_model import gmsh_session, map_entities
     from .impose import impose_edge_grids
+    from .readback import boundary_multiplicity, read_mesh
     from .sizes import apply_spacing_sizes, configure_gmsh_sizes, curves_from_spacings
 
     notes: list[str] = []
