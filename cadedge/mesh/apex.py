@@ -16,13 +16,11 @@ hard models' tangent_union at 1e-2 43.0 -> 37.4 degrees, seams_and_poles at 1e-3
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from ..shapegrid import ShapeGrid, with_edges
-from ..splitting import fits_curve, split_segments
 from .developed import NARROW, WRAP
+from .grading import split_on_curve
 from .proximity import _LazyCurves
 
 #: A segment is cut into at most this many pieces: a cone a thousand times longer than wide would
@@ -37,10 +35,6 @@ def grade_to_apexes(grid: ShapeGrid, cones: dict[int, tuple[np.ndarray, float]],
     circumference over ``2 pi wrap`` (the sector's width over ``wrap``) at the segment's end nearer the
     apex, the segments touching the apex left whole. Pieces are of equal arc length on the OCCT curve;
     grid points are kept, so shared edges stay conforming."""
-    from OCP.Standard import Standard_Failure
-
-    from ..errors import GeometryError
-
     cones = {f: cone for f, cone in cones.items() if cone[1] < NARROW}
     if not cones:
         return grid
@@ -59,15 +53,7 @@ def grade_to_apexes(grid: ShapeGrid, cones: dict[int, tuple[np.ndarray, float]],
             tip = near <= max(e.tolerance, 1e-12 * float(rho.max()))  # a segment from the apex: the fan's
             need = np.ceil(e.segment_lengths / np.maximum(width, 1e-300))
             pieces = np.maximum(pieces, np.where(tip, 1, np.minimum(need, MAX_PIECES)).astype(int))
-        if not np.any(pieces > 1):
-            continue
-        try:
-            curve = curves[e.id]
-            if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
-                continue  # the grid's parameters are not this curve's: leave the edge alone
-            params, points = split_segments(e.params, e.points, pieces, curve.evaluate)
-        except (GeometryError, Standard_Failure):
-            continue
-        edges[i] = dataclasses.replace(e, params=params, points=points)
-        changed = True
+        split = split_on_curve(e, curves, pieces) if np.any(pieces > 1) else None
+        if split is not None:
+            edges[i], changed = split, True
     return with_edges(grid, edges) if changed else grid

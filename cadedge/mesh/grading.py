@@ -8,6 +8,8 @@ conforming).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 
@@ -25,13 +27,8 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
     than ``ratio`` times it are split into pieces of equal arc length on the OCCT curve (ends and grid points
     kept, so shared edges stay conforming). A few passes let the splits spread along the boundary.
     """
-    import dataclasses
-
-    from OCP.Standard import Standard_Failure
-
-    from ..errors import GeometryError, InputError
+    from ..errors import InputError
     from ..shapegrid import with_edges
-    from ..splitting import fits_curve, split_segments
     from .proximity import _LazyCurves
     from .sizes import SizeField
 
@@ -66,18 +63,30 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
             e = edges[i]
             if not np.any(k > 1) or not np.all(np.diff(e.params) > 0):
                 continue
-            try:
-                curve = curves[e.id]
-            except (GeometryError, Standard_Failure):
-                continue
-            if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
-                continue  # the grid's parameters are not this curve's: leave the edge alone
-            try:
-                params, points = split_segments(e.params, e.points, k, curve.evaluate)
-            except (GeometryError, Standard_Failure):
-                continue
-            edges[i] = dataclasses.replace(e, params=params, points=points)
-            changed = True
+            split = split_on_curve(e, curves, k)
+            if split is not None:
+                edges[i], changed = split, True
         if not changed:
             break
     return with_edges(grid, edges)
+
+
+def split_on_curve(e, curves, pieces: np.ndarray):
+    """Edge grid ``e`` with segment ``k`` cut into ``pieces[k]`` pieces of equal arc length on its OCCT
+    curve (``curves[e.id]``, grid points kept); None when the curve cannot be built or evaluated, or the
+    grid's parameters are not that curve's (the edge is then left alone)."""
+    import dataclasses
+
+    from OCP.Standard import Standard_Failure
+
+    from ..errors import GeometryError
+    from ..splitting import fits_curve, split_segments
+
+    try:
+        curve = curves[e.id]
+        if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
+            return None
+        params, points = split_segments(e.params, e.points, pieces, curve.evaluate)
+    except (GeometryError, Standard_Failure):
+        return None
+    return dataclasses.replace(e, params=params, points=points)
