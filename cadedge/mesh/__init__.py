@@ -193,7 +193,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         cap = max_size or max_length or make_field(grid).max_size  # thin faces must not shrink the cap
         grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
         grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
-        grid = grade_to_apexes(grid, apex_cones(grid.shape))  # segments shrink into a narrow cone's tip
+        cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
+        grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
         max_size = cap
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,

@@ -26,11 +26,16 @@ from .topology import Topology
 APEX_TOL = 1e-7
 
 
-def apex_cones(shape: TopoDS_Shape) -> dict[int, tuple[np.ndarray, float]]:
+def apex_cones(shape: TopoDS_Shape, faces: list[int] | None = None) -> dict[int, tuple[np.ndarray, float]]:
     """Face id (``TopExp::MapShapes`` order, 1-based) -> (apex point (3,), sine of the half-angle) for the
-    cone faces of ``shape`` with a vertex at their apex."""
+    cone faces of ``shape`` with a vertex at their apex, among ``faces`` (ids; default every face: a
+    caller that knows the surface types passes its cones, and none is looked at when it has none)."""
+    if faces is not None and not faces:
+        return {}
     out = {}
-    for i, face in enumerate(Topology(shape).faces, start=1):
+    all_faces = Topology(shape).faces
+    for i in (range(1, len(all_faces) + 1) if faces is None else faces):
+        face = all_faces[i - 1]
         try:
             surface = BRepAdaptor_Surface(face)
             if surface.GetType() != GeomAbs_Cone:
