@@ -9,7 +9,7 @@ falls). The pieces:
 - :func:`points_at_distances` places points on the curve at given distances from a segment end
   (vectorised bisection);
 - :func:`split_evenly` cuts segments into equal parameter steps, :func:`split_by_arc` into pieces of
-  equal arc length;
+  equal arc length, :func:`cut_by_arc` at given shares of their arc length;
 - :func:`limit_growth` (paper section 7) splits until neighbouring segments differ by at most a ratio:
   first along a graded size field (h(s) = min over segments of their length plus (g - 1) times the
   distance, by two sweeps), so sizes grow geometrically away from small segments; then any pair still
@@ -20,7 +20,8 @@ falls). The pieces:
   field grades an edge towards its vertices (vertex grading below the golden ratio).
 
 Callers: refine_curve and target mode (``max_growth`` within an edge), :mod:`cadedge.occt.vertexgrowth`
-(``max_growth`` across vertices) and :mod:`cadedge.mesh.proximity` (segments longer than the mesh size).
+(``max_growth`` across vertices), :mod:`cadedge.mesh.proximity` (segments longer than the mesh size) and
+the mesher's other boundary splits (:mod:`cadedge.mesh.widths`, :mod:`cadedge.mesh.grading`).
 """
 
 from __future__ import annotations
@@ -75,19 +76,28 @@ ARC_SAMPLES = 8
 def split_by_arc(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
                  evaluate: Evaluate) -> tuple[np.ndarray, np.ndarray]:
     """Parameters and points cutting segment ``k`` into ``pieces[k]`` pieces of equal arc length (the
-    interior cuts only, in order), the arc measured along :data:`ARC_SAMPLES` samples per piece.
+    interior cuts only, in order), the arc measured along :data:`ARC_SAMPLES` samples per piece
+    (:func:`cut_by_arc`).
 
     Equal parameter steps are not equal lengths where the curve's parameter speed varies: on
     mesh_T106_V3's B-spline profile a 2.4 mm segment cut in three gave a 0.2 mm piece, which the next
-    proximity pass took as the local size and split its neighbours down to 0.05 mm. The grid's own end
-    points stand for the samples at the segment's ends (a vertex may lie a tolerance off its curve).
+    proximity pass took as the local size and split its neighbours down to 0.05 mm.
     """
-    pieces = np.asarray(pieces, dtype=int)
-    split = np.flatnonzero(pieces > 1)
-    if not len(split):
+    return cut_by_arc(params, points, {k: np.arange(1, n) / n for k, n in enumerate(np.asarray(pieces, dtype=int))
+                                       if n > 1}, evaluate)
+
+
+def cut_by_arc(params: np.ndarray, points: np.ndarray, cuts: dict[int, np.ndarray],
+               evaluate: Evaluate) -> tuple[np.ndarray, np.ndarray]:
+    """Parameters and points cutting segment ``k`` at the shares ``cuts[k]`` (increasing, in (0, 1)) of its
+    arc length (the interior cuts only, in order), the arc measured along :data:`ARC_SAMPLES` samples per
+    piece. The grid's own end points stand for the samples at the segment's ends (a vertex may lie a
+    tolerance off its curve)."""
+    split = sorted(k for k, f in cuts.items() if len(f))
+    if not split:
         return np.zeros(0), np.zeros((0, points.shape[1]))
     intervals = np.ones(len(params) - 1, dtype=int)
-    intervals[split] = pieces[split] * ARC_SAMPLES
+    intervals[split] = [(len(cuts[k]) + 1) * ARC_SAMPLES for k in split]
     inner = split_evenly(params, intervals)  # the dense samples' parameters, segment after segment
     samples = evaluate(inner)
     new_u, start = [], 0
@@ -96,7 +106,7 @@ def split_by_arc(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
         u = np.concatenate([[params[k]], inner[start:start + m], [params[k + 1]]])
         arc = np.concatenate([[0.0], np.cumsum(row_norms(np.diff(
             np.vstack([points[k], samples[start:start + m], points[k + 1]]), axis=0)))])
-        new_u.append(np.interp(arc[-1] * np.arange(1, pieces[k]) / pieces[k], arc, u))
+        new_u.append(np.interp(arc[-1] * np.asarray(cuts[k], dtype=float), arc, u))
         start += m
     u = np.concatenate(new_u)
     return u, evaluate(u)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from cadedge.splitting import (fits_curve, insert_points, limit_growth, points_at_distances,
+from cadedge.splitting import (cut_by_arc, fits_curve, insert_points, limit_growth, points_at_distances,
                                split_by_arc, split_evenly, split_segments, worst_growth)
 
 
@@ -45,6 +45,16 @@ def test_split_by_arc_cuts_equal_lengths_where_the_parameter_speed_varies():
     assert np.allclose(steps, [0.1, 0.5, 0.625, 0.75, 0.875, 1.0])
     with pytest.raises(ValueError, match="spacing"):
         split_segments(u, p, np.array([1, 4]), _cubic, spacing="even")
+
+
+def test_cut_by_arc_cuts_at_shares_of_the_arc_length_segment_by_segment():
+    u, p = np.array([0.1, 0.5, 1.0]), _cubic([0.1, 0.5, 1.0])
+    new_u, new_p = cut_by_arc(u, p, {1: np.array([0.1, 0.3, 0.7]), 0: np.array([0.5])}, _cubic)
+    assert np.allclose(new_p, _cubic(new_u))
+    x = new_p[:, 0]  # the line's arc length is its x
+    assert x[0] == pytest.approx(0.001 + 0.5 * (0.125 - 0.001), rel=1e-3)
+    assert np.allclose((x[1:] - 0.125) / (1.0 - 0.125), [0.1, 0.3, 0.7], rtol=1e-3)
+    assert len(cut_by_arc(u, p, {1: np.zeros(0)}, _cubic)[0]) == 0
 
 
 def test_a_grid_fits_its_curve_only_where_its_end_parameters_give_its_end_points():

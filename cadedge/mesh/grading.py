@@ -73,20 +73,26 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
 
 def split_on_curve(e, curves, pieces: np.ndarray):
     """Edge grid ``e`` with segment ``k`` cut into ``pieces[k]`` pieces of equal arc length on its OCCT
-    curve (``curves[e.id]``, grid points kept); None when the curve cannot be built or evaluated, or the
-    grid's parameters are not that curve's (the edge is then left alone)."""
-    import dataclasses
+    curve (``curves[e.id]``, grid points kept); None as for :func:`cut_on_curve`."""
+    return cut_on_curve(e, curves, {k: np.arange(1, n) / n for k, n in enumerate(np.asarray(pieces, dtype=int))
+                                    if n > 1})
 
+
+def cut_on_curve(e, curves, cuts: dict[int, np.ndarray]):
+    """Edge grid ``e`` with segment ``k`` cut at the shares ``cuts[k]`` (increasing, in (0, 1)) of its arc
+    length on its OCCT curve (``curves[e.id]``, grid points kept); None when the curve cannot be built or
+    evaluated, or the grid's parameters are not that curve's (the edge is then left alone)."""
     from OCP.Standard import Standard_Failure
 
     from ..errors import GeometryError
-    from ..splitting import fits_curve, split_segments
+    from ..splitting import cut_by_arc, fits_curve, insert_points
 
     try:
         curve = curves[e.id]
         if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
             return None
-        params, points = split_segments(e.params, e.points, pieces, curve.evaluate)
+        u, p = cut_by_arc(e.params, e.points, cuts, curve.evaluate)
     except (GeometryError, Standard_Failure):
         return None
+    params, points = insert_points(e.params, e.points, u, p)
     return dataclasses.replace(e, params=params, points=points)
