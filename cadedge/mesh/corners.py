@@ -44,11 +44,11 @@ _LATTICE = np.array([w for w in np.ndindex(3, 3, 3, 3)], dtype=float) + 1.0
 _LATTICE /= _LATTICE.sum(axis=1, keepdims=True)
 
 
-def _folds(p: np.ndarray, up: np.ndarray) -> bool:
-    """Whether a triangle of the corners ``p`` (k, 3, 3) folds against its nodes' normals ``up``
-    (k, 3, 3)."""
-    rows = np.arange(3 * len(p)).reshape(-1, 3)
-    return bool(folded(p.reshape(-1, 3), rows, reference_normals(up.reshape(-1, 3), rows)).any())
+def _folds(p: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Per trial, whether one of its triangles of the corners ``p`` (trials, k, 3, 3) folds against its
+    nodes' normals ``up`` (trials, k, 3, 3)."""
+    rows = np.arange(3 * p.shape[0] * p.shape[1]).reshape(-1, 3)
+    return folded(p.reshape(-1, 3), rows, reference_normals(up.reshape(-1, 3), rows)).reshape(p.shape[:2]).any(axis=1)
 
 
 def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, fixed: set[tuple[int, int]],
@@ -117,17 +117,19 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
                 halves.append((np.where(r == b, -1, r), np.where(r == a, -1, r)))
             normals0 = _normal(x[[tri[t], tri[t], tri[u], tri[u]]])
             quads = np.array([h for pair_ in halves for h in pair_])
-            ups = None if normals is None else normals.at(uv)
-            for i, (pos, puv) in enumerate(zip(on, uv)):
-                p = np.where((quads == -1)[..., None], pos, x[np.maximum(quads, 0)])
-                if np.any(np.einsum("ij,ij->i", _normal(p), normals0) <= 0):
-                    continue
-                if ups is not None and _folds(p, np.where((quads == -1)[..., None], ups[i],
-                                                          normals.up[np.maximum(quads, 0)])):
-                    continue
-                q = float(min_angles(p.reshape(-1, 3), np.arange(12).reshape(-1, 3)).min())
-                if q > old + slack and (best is None or q > best[0]):
-                    best = (q, t, u, pos, puv, halves)
+            new = (quads == -1)[None, :, :, None]  # where the new node stands in the four triangles
+            p = np.where(new, on[:, None, None, :], x[np.maximum(quads, 0)][None])  # (trials, 4, 3, 3)
+            n = len(on)
+            ok = np.all(np.einsum("tij,ij->ti", _normal(p.reshape(-1, 3, 3)).reshape(n, 4, 3), normals0) > 0,
+                        axis=1)  # no triangle turned over
+            if normals is not None and ok.any():
+                ups = np.where(new, normals.at(uv)[:, None, None, :], normals.up[np.maximum(quads, 0)][None])
+                ok &= ~_folds(p, ups)
+            q = min_angles(p.reshape(-1, 3), np.arange(12 * n).reshape(-1, 3)).reshape(n, 4).min(axis=1)
+            q = np.where(ok, q, -np.inf)
+            i = int(np.argmax(q))
+            if q[i] > old + slack and (best is None or q[i] > best[0]):
+                best = (float(q[i]), t, u, on[i], uv[i], halves)
         if best is None:
             continue
         _, t, u, pos, puv, halves = best
