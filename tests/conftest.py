@@ -124,3 +124,37 @@ def gapped_box_step(tmp_path_factory) -> Path:
         writer.Transfer(sew.SewedShape(), STEPControl_AsIs)
         writer.Write(str(path))
     return path
+
+
+def stadium_cap(radius: float = 1.0, length: float = 20.0, n: int = 120):
+    """A planar face bounded by one periodic spline through ``n`` points of a stadium outline (straight
+    sides ``length`` long, round ends of ``radius``), and that curve; built with OCP's own
+    ``GeomAPI_Interpolate``, so on both OCP lines."""
+    import math
+
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
+    from OCP.GeomAPI import GeomAPI_Interpolate
+    from OCP.gp import gp_Pnt
+
+    from cadedge.occt.compat import TColgp_HArray1OfPnt
+
+    perimeter = 2 * length + 2 * math.pi * radius
+    pts = TColgp_HArray1OfPnt(1, n)
+    for k in range(n):
+        s = perimeter * k / n
+        if s < length:
+            x, y = -length / 2 + s, -radius
+        elif s < length + math.pi * radius:
+            a = -math.pi / 2 + (s - length) / radius
+            x, y = length / 2 + radius * math.cos(a), radius * math.sin(a)
+        elif s < 2 * length + math.pi * radius:
+            x, y = length / 2 - (s - length - math.pi * radius), radius
+        else:
+            a = math.pi / 2 + (s - 2 * length - math.pi * radius) / radius
+            x, y = -length / 2 + radius * math.cos(a), radius * math.sin(a)
+        pts.SetValue(k + 1, gp_Pnt(x, y, 0.0))
+    interp = GeomAPI_Interpolate(pts, True, 1e-9)
+    interp.Perform()
+    curve = interp.Curve()
+    edge = BRepBuilderAPI_MakeEdge(curve).Edge()
+    return BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(edge).Wire(), True).Face(), curve

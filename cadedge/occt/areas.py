@@ -12,6 +12,10 @@ slivers between the boundary chords and the face's pcurves. On those faces it is
 converged value on a coarse triangulation (0.02-0.34 s a face), and it is the area unless it falls far
 outside both OCCT values (then the nearer of them).
 
+A planar face bounded by curves other than lines, circles and ellipses is measured by its boundary
+instead (:func:`plane_area`): the area its edges' curves enclose in its plane, which its mesh's
+polygon tends to; OCCT's integrations were both 0.12% low on such a face read from a STEP file.
+
 A face whose boundary is open in its parameter space (its wires leave gaps between one edge's pcurve and
 the next, as loose tolerances allow: a sewn model, 917_fusee's faces with gaps up to 0.08 mm) has no
 area until the gaps are closed. OCCT's integrations (``F dv`` along the pcurves, ``F`` the area element
@@ -32,7 +36,8 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from OCP.BRepGProp import BRepGProp
 from OCP.BRepMesh import BRepMesh_IncrementalMesh
 from OCP.BRepTools import BRepTools
-from OCP.GeomAbs import GeomAbs_CN, GeomAbs_SurfaceOfExtrusion
+from OCP.GeomAbs import (GeomAbs_Circle, GeomAbs_CN, GeomAbs_Ellipse, GeomAbs_Line, GeomAbs_Plane,
+                         GeomAbs_SurfaceOfExtrusion)
 from OCP.GProp import GProp_GProps
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
 from OCP.Standard import Standard_Failure
@@ -41,6 +46,7 @@ from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
 
+from ..errors import GeometryError
 from .compat import TColStd_Array1OfReal, TopoDS
 from .topology import Topology, walked_wires
 
@@ -85,13 +91,16 @@ def face_areas(shape: TopoDS_Shape) -> np.ndarray:
 
 
 def face_area(face: TopoDS_Face) -> float:
-    """One face's area: a face of linear extrusion's by :func:`extrusion_area`; else OCCT's two
+    """One face's area: a face of linear extrusion's by :func:`extrusion_area`, a planar face with curved
+    edges other than circles and ellipses by :func:`plane_area`; else OCCT's two
     integrations (with the gaps of an open boundary closed, see :func:`closure`) where they agree, else
     the one the check confirms."""
     forward = TopoDS.Face_s(face.Oriented(TopAbs_FORWARD))
-    swept = extrusion_area(forward)
-    if swept is not None:
-        return swept
+    exact = extrusion_area(forward)
+    if exact is None:
+        exact = plane_area(forward)
+    if exact is not None:
+        return exact
     props = GProp_GProps()
     BRepGProp.SurfaceProperties_s(forward, props, AREA_EPS)
     adaptive = props.Mass()
@@ -192,6 +201,65 @@ def extrusion_area(face: TopoDS_Face) -> float | None:
     except Standard_Failure:
         return None
     return abs(total) if np.isfinite(total) else None
+
+
+#: Edge curves OCCT integrates a planar face's area along well; a planar face bounded by anything else
+#: (B-splines, offsets) is measured by :func:`plane_area`.
+_EXACT_EDGES = (GeomAbs_Line, GeomAbs_Circle, GeomAbs_Ellipse)
+#: :func:`plane_area`'s samples per edge at the first level, and the levels (samples doubled each time).
+PLANE_SAMPLES = 64
+PLANE_LEVELS = 10
+
+
+def plane_area(face: TopoDS_Face) -> float | None:
+    """The area a planar face's boundary encloses in its plane, for a FORWARD face on a plane with an
+    edge that is not a line, circle or ellipse (None for any other face, or if its wires cannot be walked
+    or an edge cannot be evaluated): the polygon of its edges' 3-D curves, each sampled at equal parameter
+    steps in walking order (gaps closed by chords), the samples doubled and the areas extrapolated
+    (Richardson, the polygon's error falling as the square of the step) until two agree within
+    ``AREA_EPS``. The curves are what the mesh's boundary nodes lie on, so this is the area its polygon
+    tends to.
+
+    OCCT's two integrations were both 0.12% low on the cap of a 20 mm stadium outline with 1 mm round
+    ends read from a STEP file, a periodic spline through 120 points (43.0896 against 43.1422 mm2): a mesh
+    within 8e-5 of the cap was measured 1.14e-3 over it."""
+    from .edgecurve import EdgeCurve
+    from .planes import plane_of
+
+    try:
+        if BRepAdaptor_Surface(face, False).GetType() != GeomAbs_Plane:
+            return None
+        walked, plane = walked_wires(face), plane_of(face)
+        if walked is None or plane is None:
+            return None
+        loops = [[(EdgeCurve(e), e.Orientation() == TopAbs_REVERSED) for e in edges if not BRep_Tool.Degenerated_s(e)]
+                 for edges in walked]
+        if all(c.kind in _EXACT_EDGES for loop in loops for c, _ in loop):
+            return None
+    except (GeometryError, Standard_Failure):
+        return None
+    origin, axes = plane[0], np.array(plane[1:])
+    areas: list[float] = []
+    for level in range(PLANE_LEVELS):
+        t = np.linspace(0.0, 1.0, (PLANE_SAMPLES << level) + 1)[:-1]
+        total = 0.0
+        for loop in loops:
+            points = []
+            for curve, reversed_ in loop:
+                a, b = curve.domain
+                try:
+                    points.append(curve.evaluate(b - t * (b - a) if reversed_ else a + t * (b - a)))
+                except GeometryError:
+                    return None
+            if points:
+                xy = (np.vstack(points) - origin) @ axes.T
+                total += 0.5 * float(np.dot(xy[:, 0], np.roll(xy[:, 1], -1)) - np.dot(xy[:, 1], np.roll(xy[:, 0], -1)))
+        areas.append(abs(total))
+        if len(areas) >= 3:
+            new, old = (4.0 * areas[-1] - areas[-2]) / 3.0, (4.0 * areas[-2] - areas[-3]) / 3.0
+            if abs(new - old) <= AREA_EPS * abs(new):
+                return new if np.isfinite(new) else None
+    return None
 
 
 def domain_area(face: TopoDS_Face, deflection: float) -> float | None:
