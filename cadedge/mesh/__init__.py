@@ -166,7 +166,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
-    from .fidelity import HOOKS, prepare
+    from .fidelity import HOOKS, fit_planes, prepare
 
     if surface_ald is not None and not surface_ald > 0:
         raise InputError(f"surface_ald must be a positive number, got {surface_ald!r}")
@@ -195,6 +195,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
         cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
         grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
+        grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
+                          kinds=fidelity["meshed_kinds"])  # faces' boundary polygons: checked again
         max_size = cap
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
