@@ -188,11 +188,13 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         from ..occt.cones import apex_cones
         from .apex import grade_to_apexes
         from .grading import grade_faces
+        from .wedges import grade_wedges
         from .widths import fit_to_widths
 
         cap = max_size or max_length or make_field(grid).max_size  # thin faces must not shrink the cap
         grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
         grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
+        grid = grade_wedges(grid)  # segments shrink into a face's narrow corners
         cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
         grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
         grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
