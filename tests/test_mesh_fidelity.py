@@ -13,19 +13,9 @@ cq = pytest.importorskip("cadquery")
 
 from cadedge.cli import main  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
-from cadedge.mesh.fidelity import (  # noqa: E402
-    AIM,
-    _fit_boundaries,
-    _plane_deficits,
-    _planes,
-    _sagittas,
-    brep_face_areas,
-    fit_boundaries,
-    meshed_kinds,
-    not_converging,
-    prepare,
-    surface_types,
-)
+from cadedge.mesh.boundary_fit import (_fit_boundaries, _plane_deficits, _planes, _sagittas,  # noqa: E402
+                                       fit_boundaries)
+from cadedge.mesh.fidelity import AIM, brep_face_areas, meshed_kinds, not_converging, prepare, surface_types  # noqa: E402
 from cadedge.mesh.quality import triangle_angles  # noqa: E402
 from cadedge.mesh.report import build_report, tolerance_bands  # noqa: E402
 
@@ -267,7 +257,6 @@ def test_a_ring_cap_is_split_for_its_net_deficit_not_its_gross_slivers():
     boundary fit credits that (checked on the exact polygon) instead of splitting both circles for the sum
     of their slivers, and every face still meets the target."""
     import cadedge
-    from cadedge.mesh.fidelity import _fit_boundaries
 
     shape = cq.Workplane().circle(20.0).circle(16.0).extrude(3.0).val()
     eps = 1e-2

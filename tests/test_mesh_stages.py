@@ -48,7 +48,7 @@ def test_a_straight_bspline_edge_is_split_like_a_line():
     from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
 
     import cadedge
-    from cadedge.mesh.fidelity import fit_boundaries
+    from cadedge.mesh.boundary_fit import fit_boundaries
 
     line = cq.Workplane().cylinder(10.0, 2.0).val().wrapped
     nurbs = BRepBuilderAPI_NurbsConvert(line).Shape()
@@ -74,7 +74,8 @@ def test_boundary_splits_stop_at_the_size_that_fills_the_face():
 
     import cadedge
     from cadedge.mesh.budget import filling_size
-    from cadedge.mesh.fidelity import brep_face_areas, fit_boundaries
+    from cadedge.mesh.boundary_fit import fit_boundaries
+    from cadedge.mesh.fidelity import brep_face_areas
 
     ellipse = BRepBuilderAPI_MakeEdge(gp_Elips(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 0.05)).Edge()
     cap = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(ellipse).Wire()).Face()

@@ -166,7 +166,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
-    from .fidelity import HOOKS, fit_planes, prepare
+    from .boundary_fit import fit_planes
+    from .fidelity import HOOKS, prepare
 
     if surface_ald is not None and not surface_ald > 0:
         raise InputError(f"surface_ald must be a positive number, got {surface_ald!r}")

@@ -4,7 +4,7 @@ Sizes that follow a face's curvature, or the spacing of a sharp ridge along its 
 triangles than gmsh makes within the time of one attempt (a blade with a 0.007 mm trailing edge: 0.006 mm
 sizes over 390 mm2). Wherever a size is set from curvature, it stops at :func:`filling_size`: the one-size
 strategy, the ``.geo`` export's per-face sizes, the interior floor of faces with sharp ridges, and the
-boundary splits of the surface target (:func:`cadedge.mesh.fidelity.fit_boundaries`).
+boundary splits of the surface target (:func:`cadedge.mesh.boundary_fit.fit_boundaries`).
 """
 
 from __future__ import annotations

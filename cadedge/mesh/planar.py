@@ -3,7 +3,7 @@
 Triangles filling a planar face without folding cover exactly the polygon of its boundary nodes (outer
 wire minus holes), so the face's area deficit is known before meshing. Summed with signs: a thin curved
 strip (periodic_u_cst face 2, 1 mm wide between two 210 mm B-spline edges) loses along its outer edge
-what it gains along its inner one, while the unsigned estimate of :func:`cadedge.mesh.fidelity.fit_boundaries`
+what it gains along its inner one, while the unsigned estimate of :func:`cadedge.mesh.boundary_fit.fit_boundaries`
 split both edges 14-fold for the strip's budget (13 -> 185 segments, deficit 2.5e-5 against 7e-3 allowed),
 and the fine boundary was carried into the two large faces beside it.
 """

@@ -1,0 +1,280 @@
+"""Boundary segments fitted to the faces' area target, before meshing (in the caller's process, OCCT).
+
+A face's triangles cannot be closer to its area than its boundary polygon lets them: a planar face's
+triangles cover exactly that polygon, and a curved face's triangles standing on long boundary segments
+miss the curvature across them. :func:`fit_boundaries` splits the edge grids' segments until each face's
+boundary suits its share of the target (:mod:`cadedge.mesh.fidelity`), :func:`fit_planes` checks the
+planar faces on their exact polygons and fits them again where the estimate fell short. Grid points are
+kept and nodes only added, so faces sharing an edge still share its nodes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .fidelity import AIM, INTERIOR_SHARE, brep_face_areas, meshed_kinds, per_circle
+
+#: A boundary segment is split when longer than this many times the curvature size of a face it bounds:
+#: gmsh does not refine triangles standing on a long boundary segment, so a fillet between two straight
+#: 40 mm edges is otherwise spanned by triangles across its whole arc (4% area lost).
+CURVATURE_RATIO = 2.0
+#: The same for straight edges (a line across a curved face, a cylinder's seam): their ALD leaves them one
+#: segment, and a cylinder's 6 mm seam segments beside 3 mm interior triangles gave 24-degree triangles
+#: (38 once split to the interior size, as gmsh alone gets). Curved edges keep 2: their ALD spacing is
+#: already near the size, and splitting circles too cost the bracket 30% more triangles.
+STRAIGHT_RATIO = 1.0
+#: An edge is straight when it is a line or its curve stays within this share of each segment's length
+#: of the chord (STEP files often carry lines as B-splines: LLNL boxed_sphere's 3.2 mm straight B-spline
+#: edges along its fillets kept one segment beside 0.12 mm triangles, 23.6 degrees).
+STRAIGHT_TOL = 1e-6
+
+
+def _face_probe(face):
+    """A callable (u) -> (normals (n, 3), largest |curvature| (n,)) along one edge on ``face``."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve2d, BRepAdaptor_Surface
+    from OCP.BRepLProp import BRepLProp_SLProps
+
+    surface = BRepAdaptor_Surface(face)
+    props = BRepLProp_SLProps(surface, 2, 1e-9)
+
+    def probe(edge, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        pcurve = BRepAdaptor_Curve2d(edge, face)
+        normals = np.zeros((len(u), 3))
+        curv = np.zeros(len(u))
+        for k, uk in enumerate(u.tolist()):
+            p = pcurve.Value(uk)
+            props.SetParameters(p.X(), p.Y())
+            if props.IsNormalDefined():
+                normals[k] = props.Normal().Coord()
+            if props.IsCurvatureDefined():
+                curv[k] = max(abs(props.MaxCurvature()), abs(props.MinCurvature()))
+        return normals, curv
+
+    return probe
+
+
+#: A planar face given a cancellation credit keeps its boundary segments within this many times its mean
+#: width ``2 area / perimeter``: periodic_u_cst's 1 mm strip, credited down to 4.4 mm segments, was filled
+#: with 11-degree triangles (6% of them under 20 degrees); the unsigned rule had split it finer than that.
+THIN_RATIO = 2.0
+#: Rounds of the planar faces' signed fit (see :func:`fit_boundaries`); each divides the cancellation
+#: credit of a face still over its budget by :data:`CREDIT_STEP`.
+PLANAR_ROUNDS, CREDIT_STEP = 4, 4.0
+
+
+def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = None,
+                   kinds: list[str] | None = None, ratio: float = CURVATURE_RATIO):
+    """A copy of ``grid`` whose edge segments suit the surface target of every face they bound (the rules:
+    :func:`_fit_boundaries`).
+
+    Planar faces are then checked exactly: their triangles will cover their boundary polygon, whose area
+    :func:`cadedge.mesh.planar.planar_polygon_areas` gives with signs, so a face whose slivers cancel (a
+    curved strip losing on one side what it gains on the other) needs far fewer splits than the unsigned
+    rule asks. Its budget is credited with the measured cancellation, ``sum |slivers| / |net deficit|``
+    (halved), and the fit is repeated; a face the credit puts over its budget gets a quarter of it
+    next round, and a credit of 1 or less is dropped (the unsigned rule). After :data:`PLANAR_ROUNDS`
+    rounds without every credited face within its budget, the fit with the credits left is kept. Planar
+    faces still over their budget then have their edges fitted again (:func:`fit_planes`)."""
+    areas = brep_face_areas(grid.shape) if brep_areas is None else np.asarray(brep_areas, dtype=float)
+    kinds = meshed_kinds(grid.shape) if kinds is None else kinds
+    planes = _planes(areas, kinds)
+    limit = AIM * surface_ald
+
+    def net(g) -> dict[int, float]:
+        return _plane_deficits(g, planes, areas)
+
+    def fit(g, credit: dict[int, float]):
+        return _fit_boundaries(g, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=credit)
+
+    fitted, gross = fit(grid, {})
+    if not planes:
+        return fitted
+    before = net(grid)
+    credit = {f: 0.5 * gross[f - 1] / max(d * areas[f - 1], 1e-300) for f, d in before.items()}
+    credit = {f: c for f, c in credit.items() if c > 1.0}
+    for _ in range(PLANAR_ROUNDS):
+        if not credit:
+            break
+        trial, _ = fit(grid, credit)
+        now = net(trial)
+        over = {f for f in credit if now.get(f, np.inf) > limit}
+        if not over:
+            fitted, credit = trial, {}
+            break
+        credit = {f: c / CREDIT_STEP if f in over else c for f, c in credit.items()}
+        credit = {f: c for f, c in credit.items() if c > 1.0}
+    if credit:
+        fitted = fit(grid, credit)[0]
+    return fit_planes(fitted, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio)
+
+
+def _planes(areas: np.ndarray, kinds: list[str]) -> list[int]:
+    """Ids of the faces meshed as planes with a positive B-rep area."""
+    return [i + 1 for i, k in enumerate(kinds) if k == "Plane" and areas[i] > 0]
+
+
+def _plane_deficits(grid, planes: list[int], areas: np.ndarray) -> dict[int, float]:
+    """Exact |area deficit| of each checkable planar face of ``planes``: its boundary polygon's area
+    (:func:`cadedge.mesh.planar.planar_polygon_areas`) against its B-rep area."""
+    from .planar import planar_polygon_areas
+
+    return {f: abs(1.0 - a / areas[f - 1]) for f, a in planar_polygon_areas(grid.shape, grid, planes).items()}
+
+
+#: Rounds of :func:`fit_planes`.
+REFIT_ROUNDS = 4
+
+
+def fit_planes(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[str],
+               ratio: float = CURVATURE_RATIO):
+    """``grid`` with the edges of planar faces whose boundary polygon is over :data:`AIM` times
+    ``surface_ald`` (measured exactly) fitted again by the unsigned rule of :func:`_fit_boundaries` on their
+    present segments, round after round while that at least halves one such face's deficit
+    (:data:`REFIT_ROUNDS` at most).
+
+    The rule estimates a segment's sliver from its sagitta and divides it by ``k**2`` when the segment is
+    cut in ``k``: on a segment that spans a bend (the 0.3 mm round end of a 20 mm stadium outline,
+    first 4 segments for 41 mm) most pieces fall on the straight part, and the flat cap stood at 5.5%
+    after the fit (1.49% once its thin sides were split for their width) against 0.7% aimed at. Splits
+    made after the fit move a polygon too: where a spline outline bulges in and out, splitting its convex
+    stretches for other reasons (thin sides, grading) leaves the concave ones' gain uncancelled (a stadium
+    with 1 mm round ends at 1e-3: -5.1e-4 after the fit, -1.14e-3 as meshed), so the mesher calls this
+    again once its boundary splits are done."""
+    areas = np.asarray(brep_areas, dtype=float)
+    planes = _planes(areas, kinds)
+    if not planes:
+        return grid
+    limit = AIM * surface_ald
+    for _ in range(REFIT_ROUNDS):
+        now = _plane_deficits(grid, planes, areas)
+        over = {f for f, d in now.items() if d > limit}
+        if not over:
+            break
+        trial, _ = _fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit={},
+                                   only=over)
+        after = _plane_deficits(trial, planes, areas)
+        if not any(after.get(f, np.inf) <= 0.5 * now[f] for f in over):
+            break
+        grid = trial
+    return grid
+
+
+def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[str], ratio: float,
+                    credit: dict[int, float], only: set[int] | None = None):
+    """A copy of ``grid`` whose edge segments suit the surface target of every face they bound (``only``:
+    the edges of those faces only), and the summed unsigned sliver estimate of each face's boundary before
+    the splits (index ``id - 1``; of the edges looked at).
+
+    Two reasons to split a segment (into equal parameter steps on its OCCT curve; grid points are kept,
+    nodes only added, so both faces of an edge still share its nodes). Equal parameter steps, unlike the
+    equal arc lengths of the later passes: wing_fuselage's fuselage meridians slow their parameter towards
+    the pointed tail, where the surface's curvature grows without bound, and there equal arc lengths left
+    10 mm segments beside the tip (faces 1 and 8 were then triangulated from their boundary nodes alone
+    and meshed again far finer: 78 206 triangles at ALD 1e-2 against 38 102). The pieces' sizes come from
+    this fit's own rules, so a short piece here is not copied along the boundary as a proximity pass
+    copies a size (see :func:`cadedge.splitting.split_by_arc`):
+
+    - its face is curved across it: longer than ``ratio`` times the face's curvature size there (see
+      :func:`per_circle`; :data:`STRAIGHT_RATIO` times on a straight edge, see :data:`STRAIGHT_TOL`),
+      into pieces no shorter than the size that fills the face with its triangle budget
+      (:func:`cadedge.mesh.budget.filling_size`: a 14 mm seam along a blade's sharp edge had been split
+      into 1 838 pieces of 0.008 mm, finer than the face's interior could follow);
+    - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
+      ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
+      loses nothing to the cylinder, all to a planar cap), summed over the face's boundary, must stay
+      within ``(1 - INTERIOR_SHARE) * surface_ald`` of its B-rep area (``AIM * surface_ald`` on a plane).
+      Splitting a segment in ``k`` divides its sliver by ``k**2``; each segment gets a share of the
+      budget by its length.
+    """
+    import dataclasses
+
+    from OCP.Standard import Standard_Failure
+
+    from ..errors import GeometryError
+    from ..occt.edgecurve import EdgeCurve
+    from ..occt.topology import Topology
+    from ..shapegrid import with_edges
+    from ..splitting import fits_curve, split_segments
+    from .budget import filling_size
+
+    topo = Topology(grid.shape)
+    areas = brep_areas
+    h_factor = np.array([2.0 * np.pi / per_circle(surface_ald, k) for k in kinds])  # size = h_factor / k
+    share = np.array([AIM if k == "Plane" else 1.0 - INTERIOR_SHARE for k in kinds])
+    filled = filling_size(areas)
+    budget = share * surface_ald * areas
+    for f, c in credit.items():
+        budget[f - 1] *= c
+    gross = np.zeros(len(areas))
+    perimeter = np.zeros(len(areas))
+    for e in grid.edges:
+        if not e.degenerate and len(e.points) >= 2:
+            for f in e.faces:
+                perimeter[f - 1] += e.segment_lengths.sum()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        width = np.where(perimeter > 0, 2.0 * areas / perimeter, np.inf)  # a strip's width, exactly
+    probes: dict[int, object] = {}
+    edges = list(grid.edges)
+    for i, e in enumerate(edges):
+        if e.degenerate or len(e.points) < 2 or not e.faces or not np.all(np.diff(e.params) > 0):
+            continue
+        if only is not None and not set(e.faces) & only:
+            continue
+        try:
+            curve = EdgeCurve(topo.edges[e.id - 1], e.id)
+            if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
+                continue  # the grid's parameters are not this curve's: leave the edge alone
+            mid_u = 0.5 * (e.params[:-1] + e.params[1:])
+            sagitta = _sagittas(e.params, e.points, curve.evaluate)
+            for f in e.faces:  # one probe per face (its adaptor bounds the face's pcurves: costly on many holes)
+                if f not in probes:
+                    probes[f] = _face_probe(topo.faces[f - 1])
+            probed = [(f, *probes[f](curve.edge, mid_u)) for f in e.faces]
+        except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
+            continue
+        chord = e.segment_lengths
+        straight = e.curve == "Line" or bool(np.all(np.linalg.norm(sagitta, axis=1) <= STRAIGHT_TOL * chord))
+        edge_ratio = min(ratio, STRAIGHT_RATIO) if straight else ratio
+        pieces = np.ones(len(chord), dtype=int)
+        for f, normals, curv in probed:
+            tangential = sagitta - np.sum(sagitta * normals, axis=1)[:, None] * normals
+            sliver = 2.0 / 3.0 * chord * np.linalg.norm(tangential, axis=1)
+            gross[f - 1] += sliver.sum()
+            allowed = budget[f - 1] * chord / max(perimeter[f - 1], 1e-300)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
+                k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
+                k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
+                k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
+            pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
+                                                      nan=1).astype(int))
+        if not np.any(pieces > 1):
+            continue
+        params, points = split_segments(e.params, e.points, pieces, curve.evaluate, spacing="parameter")
+        edges[i] = dataclasses.replace(e, params=params, points=points)
+    return with_edges(grid, edges), gross
+
+
+#: Where along each segment's parameter span :func:`_sagittas` looks for the curve's farthest point.
+SAGITTA_AT = (0.25, 0.5, 0.75)
+
+
+def _sagittas(params: np.ndarray, points: np.ndarray, evaluate) -> np.ndarray:
+    """Each segment's sagitta: the vector from its chord to the farthest of the curve's points at
+    :data:`SAGITTA_AT` of its parameter span, perpendicular to the chord, shape (segments, 3).
+
+    The curve's point at mid-parameter alone is not the arc's middle where the parameter speed varies:
+    on mesh_T106_V3's B-spline curves it lay up to 14 mm along the chord from the chord's midpoint,
+    which counted as a sliver of the face and split 40 mm segments of a nearly straight curve into 30-50
+    pieces. Only the distance across the chord is a sliver's height."""
+    a, b = points[:-1], points[1:]
+    chord = b - a
+    length = np.linalg.norm(chord, axis=1)
+    t = np.divide(chord, length[:, None], out=np.zeros_like(chord), where=length[:, None] > 0)
+    best = np.zeros_like(chord)
+    for f in SAGITTA_AT:
+        off = evaluate(params[:-1] + f * np.diff(params)) - a
+        across = off - np.sum(off * t, axis=1)[:, None] * t
+        farther = np.linalg.norm(across, axis=1) > np.linalg.norm(best, axis=1)
+        best[farther] = across[farther]
+    return best
