@@ -17,7 +17,7 @@ from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism, BRepPrimAPI_MakeRevol  # noqa
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Vec  # noqa: E402
 
 from cadedge import refine_shape  # noqa: E402
-from cadedge.mesh.wedges import (MAX_JUMP, TIP_RATIO, _from_vertex, _segment_distances, _tip,  # noqa: E402
+from cadedge.mesh.wedges import (MAX_JUMP, TIP_RATIO, _from_vertex, _segment_distances, tip_length,  # noqa: E402
                                  grade_wedges, narrow_corners)
 from cadedge.mesh.widths import TIP_SLACK, WIDTH_RATIO, match_corners  # noqa: E402
 
@@ -85,8 +85,8 @@ def test_corner_matching_never_halves_a_narrow_corners_tip_below_the_other_tip()
     matched = match_corners(grid)
     uneven = 0
     for c in narrow_corners(list(grid.edges)):
-        before = [_tip(grid.edges[k], s) for k, s in c.sides]
-        after = [_tip(matched.edges[k], s) for k, s in c.sides]
+        before = [tip_length(grid.edges[k], s) for k, s in c.sides]
+        after = [tip_length(matched.edges[k], s) for k, s in c.sides]
         assert min(after) >= (1.0 - TIP_SLACK) * min(before)
         uneven += 1.5 < max(before) / min(before) < 2.0 and max(after) == pytest.approx(max(before))
     assert uneven  # where plain matching would have halved the longer tip below the shorter

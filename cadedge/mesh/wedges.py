@@ -107,14 +107,14 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
     changed = False
     for c in corners:  # the tips first: the longer one cut at the shorter one's length
-        tips = [_tip(edges[k], s) for k, s in c.sides]
+        tips = [tip_length(edges[k], s) for k, s in c.sides]
         k, s = c.sides[int(np.argmax(tips))]
         if max(tips) > TIP_RATIO * min(tips) and not edges[k].tolerance > TOLERANCE_SHARE * min(tips):
             share = min(tips) / max(tips)
-            cut = cut_on_curve(edges[k], curves, {0 if s else len(edges[k].points) - 2: [share if s else 1 - share]})
+            cut = cut_on_curve(edges[k], curves, {tip_segment(edges[k], s): [share if s else 1 - share]})
             if cut is not None:
                 edges[k], changed = cut, True
-    tips = {(k, 0 if s else len(edges[k].points) - 2) for c in corners for k, s in c.sides}
+    tip_segments = {(k, tip_segment(edges[k], s)) for c in corners for k, s in c.sides}
     cuts: dict[int, dict[int, np.ndarray]] = {}  # edge index -> segment -> shares of it to cut at
     for c in corners:
         if _jump(*(_from_vertex(edges[k], s) for k, s in c.sides), ratio) > MAX_JUMP:
@@ -122,7 +122,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
         for (i, s), (j, t) in (c.sides, c.sides[::-1]):
             for k, shares in _graded_cuts(_from_vertex(edges[i], s), _from_vertex(edges[j], t), ratio).items():
                 seg, shares = (k, shares) if s else (len(edges[i].points) - 2 - k, 1.0 - shares[::-1])
-                if (i, seg) in tips:  # a short edge's far end: another narrow corner's tip stays whole
+                if (i, seg) in tip_segments:  # a short edge's far end: another narrow corner's tip stays whole
                     continue
                 if len(shares) > len(cuts.setdefault(i, {}).get(seg, ())):
                     cuts[i][seg] = shares
@@ -148,9 +148,14 @@ def _jump(one: np.ndarray, two: np.ndarray, ratio: float) -> float:
     return float(np.linalg.norm(one[1] - one[0])) / max(ratio * width, 1e-300)
 
 
-def _tip(e, at_start: bool) -> float:
+def tip_segment(e, at_start: bool) -> int:
+    """Index of the edge grid's segment at its start (``at_start``) or end."""
+    return 0 if at_start else len(e.points) - 2
+
+
+def tip_length(e, at_start: bool) -> float:
     """Length of the edge grid's segment at its start (``at_start``) or end."""
-    return float(np.linalg.norm(np.diff(_from_vertex(e, at_start)[:2], axis=0)))
+    return float(e.segment_lengths[tip_segment(e, at_start)])
 
 
 def _graded_cuts(mine: np.ndarray, other: np.ndarray, ratio: float) -> dict[int, np.ndarray]:

@@ -196,7 +196,7 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
     from OCP.Standard import Standard_Failure
 
     from ..errors import GeometryError
-    from .wedges import narrow_corners
+    from .wedges import narrow_corners, tip_length, tip_segment
 
     curves = curves if curves is not None else (grid.curves if grid.curves is not None else _LazyCurves(grid))
     edges = list(grid.edges)
@@ -204,8 +204,8 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
         tips: dict[tuple[int, int], float] = {}  # a narrow corner's tip -> the other tip's length there
         for c in narrow_corners(edges):
             for (i, at_start), (j, other) in (c.sides, c.sides[::-1]):
-                k = 0 if at_start else len(edges[i].points) - 2
-                tips[i, k] = min(tips.get((i, k), np.inf), edges[j].segment_lengths[0 if other else -1])
+                k = tip_segment(edges[i], at_start)
+                tips[i, k] = min(tips.get((i, k), np.inf), tip_length(edges[j], other))
         ends: dict[tuple[int, int], list[tuple[int, int]]] = {}
         for i, e in enumerate(edges):
             if e.degenerate or len(e.points) < 2 or len(e.vertices) < 2 or not np.all(np.diff(e.params) > 0):
