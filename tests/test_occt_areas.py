@@ -105,7 +105,7 @@ def test_a_spline_bounded_cap_is_measured_by_its_boundary(tmp_path):
     from OCP.BRepGProp import BRepGProp
     from OCP.GProp import GProp_GProps
 
-    from cadedge.occt.areas import CHECK_DEFLECTION
+    from cadedge.occt.areas import CHECK_DEFLECTION, settled_domain_area
     from cadedge.occt.edgecurve import EdgeCurve
 
     perimeter = 40.0 + 2 * math.pi  # 20 long, ends of radius 1
@@ -134,6 +134,8 @@ def test_a_spline_bounded_cap_is_measured_by_its_boundary(tmp_path):
         assert abs(props.Mass() / truth - 1.0) > 1e-3  # OCCT's fixed order: the integrations disagree
         check = domain_area(cap, CHECK_DEFLECTION * math.sqrt(truth))
         assert abs(check / truth - 1.0) > 5e-4  # what decided before
+        settled = settled_domain_area(cap, CHECK_DEFLECTION * math.sqrt(truth))
+        assert settled == pytest.approx(truth, rel=1e-5)  # the check at finer deflections, until two agree
 
 
 @pytest.mark.corpus
