@@ -19,6 +19,12 @@ def unique_sorted(values: np.ndarray) -> np.ndarray:
     return v[np.concatenate([[True], v[1:] != v[:-1]])] if len(v) else v
 
 
+def polygon_area(points_2d: np.ndarray) -> float:
+    """Signed shoelace area of a closed polygon given as (n, 2) points (last point joins the first)."""
+    x, y = points_2d[:, 0], points_2d[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
 def polyline_length(points: np.ndarray) -> float:
     """Length of the polyline through ``points`` (n, d)."""
     return float(np.sum(row_norms(np.diff(points, axis=0))))

@@ -83,8 +83,13 @@ def split_by_arc(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
     mesh_T106_V3's B-spline profile a 2.4 mm segment cut in three gave a 0.2 mm piece, which the next
     proximity pass took as the local size and split its neighbours down to 0.05 mm.
     """
-    return cut_by_arc(params, points, {k: np.arange(1, n) / n for k, n in enumerate(np.asarray(pieces, dtype=int))
-                                       if n > 1}, evaluate)
+    return cut_by_arc(params, points, equal_shares(pieces), evaluate)
+
+
+def equal_shares(pieces: np.ndarray) -> dict[int, np.ndarray]:
+    """The cuts of :func:`cut_by_arc` that make segment ``k`` ``pieces[k]`` equal pieces (segments of one
+    piece left out)."""
+    return {k: np.arange(1, n) / n for k, n in enumerate(np.asarray(pieces, dtype=int)) if n > 1}
 
 
 def cut_by_arc(params: np.ndarray, points: np.ndarray, cuts: dict[int, np.ndarray],

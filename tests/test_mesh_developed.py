@@ -67,7 +67,7 @@ def test_the_tip_is_meshed_in_rings_out_to_where_the_sector_is_wide_enough():
     goes on in bands of 6 triangles while the sector is narrower than TIP segments; the triangles tile the
     rings' polygon, none turns more than a third of the way round, and the boundary left for gmsh closes."""
     from cadedge.mesh.developed import TIP
-    from cadedge.mesh.planar import polygon_area
+    from cadedge.grid import polygon_area
 
     sector = 2.0 * np.pi / 40.0
     gaps = np.full(30, 0.066)

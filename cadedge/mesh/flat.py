@@ -63,7 +63,7 @@ def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndar
     why not."""
     import gmsh
 
-    from .planar import polygon_area
+    from ..grid import polygon_area
 
     chains = loops(segments)
     if not chains:

@@ -74,8 +74,9 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
 def split_on_curve(e, curves, pieces: np.ndarray):
     """Edge grid ``e`` with segment ``k`` cut into ``pieces[k]`` pieces of equal arc length on its OCCT
     curve (``curves[e.id]``, grid points kept); None as for :func:`cut_on_curve`."""
-    return cut_on_curve(e, curves, {k: np.arange(1, n) / n for k, n in enumerate(np.asarray(pieces, dtype=int))
-                                    if n > 1})
+    from ..splitting import equal_shares
+
+    return cut_on_curve(e, curves, equal_shares(pieces))
 
 
 def cut_on_curve(e, curves, cuts: dict[int, np.ndarray]):

@@ -12,11 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def polygon_area(points_2d: np.ndarray) -> float:
-    """Signed shoelace area of a closed polygon given as (n, 2) points (last point joins the first)."""
-    x, y = points_2d[:, 0], points_2d[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+from ..grid import polygon_area
 
 
 def planar_polygon_areas(shape: object, grid, faces: list[int]) -> dict[int, float]:

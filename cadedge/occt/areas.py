@@ -48,6 +48,7 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
 
 from ..errors import GeometryError
+from ..grid import polygon_area
 from .compat import TColStd_Array1OfReal, TopoDS
 from .topology import Topology, walked_wires
 
@@ -257,8 +258,7 @@ def plane_area(face: TopoDS_Face) -> float | None:
                 except GeometryError:
                     return None
             if points:
-                xy = (np.vstack(points) - origin) @ axes.T
-                total += 0.5 * float(np.dot(xy[:, 0], np.roll(xy[:, 1], -1)) - np.dot(xy[:, 1], np.roll(xy[:, 0], -1)))
+                total += polygon_area((np.vstack(points) - origin) @ axes.T)
         areas.append(abs(total))
         if len(areas) >= 3:
             new, old = (4.0 * areas[-1] - areas[-2]) / 3.0, (4.0 * areas[-2] - areas[-3]) / 3.0
