@@ -17,8 +17,8 @@ from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism, BRepPrimAPI_MakeRevol  # noqa
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Vec  # noqa: E402
 
 from cadedge import refine_shape  # noqa: E402
-from cadedge.mesh.wedges import (MAX_JUMP, TIP_RATIO, _from_vertex, _segment_distances, tip_length,  # noqa: E402
-                                 grade_wedges, narrow_corners)
+from cadedge.mesh.wedges import (MAX_JUMP, TIP_RATIO, _from_vertex, _jump, _segment_distances,  # noqa: E402
+                                 grade_wedges, narrow_corners, tip_length)
 from cadedge.mesh.widths import TIP_SLACK, WIDTH_RATIO, match_corners  # noqa: E402
 
 
@@ -78,6 +78,37 @@ def test_the_cusps_of_a_chamfer_are_found_and_graded_with_equal_tips_and_their_p
     assert again.segments <= graded.segments * 1.02
 
 
+def _jumps(grid):
+    return [_jump(*(_from_vertex(grid.edges[k], s) for k, s in c.sides), WIDTH_RATIO)
+            for c in narrow_corners(list(grid.edges))]
+
+
+def test_tips_too_short_to_grade_are_lengthened_by_dropping_only_the_points_the_fits_added():
+    """Cut as finely as the cone faces' area target cuts them at 1e-3, the tips stand beside graded pieces
+    over MAX_JUMP times shorter: such corners were left as they were. The points added since the edges
+    were refined may go, so the tips are lengthened until they are graded; the refined points stay."""
+    from cadedge.mesh.fidelity import brep_face_areas
+
+    refined = refine_shape(_chamfered_prism(), ald=1e-2)
+    fitted = _even(refined, 48)
+    assert min(_jumps(fitted)) > MAX_JUMP
+    ungraded = grade_wedges(fitted)
+    assert ungraded.segments <= fitted.segments + 12  # only the tips made equal
+    areas = brep_face_areas(refined.shape)
+    graded = grade_wedges(fitted, keep=refined, areas=areas, target=1e-2)
+    assert max(_jumps(graded)) <= MAX_JUMP
+    assert graded.segments > fitted.segments  # the sides graded after the tips
+    for kept, after in zip(refined.edges, graded.edges):
+        assert {tuple(p) for p in kept.points.round(12)} <= {tuple(p) for p in after.points.round(12)}
+    for c in narrow_corners(list(graded.edges)):
+        tips = [tip_length(graded.edges[k], s) for k, s in c.sides]
+        assert max(tips) <= TIP_RATIO * min(tips)
+        assert min(tips) > 2 * min(tip_length(fitted.edges[k], s) for k, s in c.sides)
+    # where the faces' area target leaves no room for the longer tips' chords, none is lengthened
+    tight = grade_wedges(fitted, keep=refined, areas=areas, target=1e-7)
+    assert tight.segments == ungraded.segments
+
+
 def test_corner_matching_never_halves_a_narrow_corners_tip_below_the_other_tip():
     """Halving the longer tip at a cusp (as at any other corner) made the triangle on both tips, which
     the cusp forces, narrower: 1.59 -> 1.25 degrees on an M10 nut at 1e-2."""
@@ -104,3 +135,18 @@ def test_a_chamfer_touching_its_flats_leaves_only_the_cusps_forced_triangles_thi
     assert report.below_20 < 0.01
     assert report.triangles * report.below_20 <= 2 * 12  # the tip's triangle, at most one more, per cusp
     assert report.worst_deficit <= 1e-2
+
+
+def test_at_1e_3_the_chamfers_cusps_have_their_tips_lengthened_and_graded():
+    """At 1e-3 the cone faces' area target cuts the cusps' sides so finely that their tips could not be
+    graded: 1.68% of the triangles were under 20 degrees (cadedge before the tips were lengthened), down
+    to 0.36 degrees."""
+    from cadedge.mesh import mesh_shape
+
+    result = mesh_shape(_chamfered_prism(), ald=1e-3)
+    assert result.ok, result.problems()
+    report = result.report
+    assert report.unforced_slivers == 0
+    assert report.triangles * report.below_20 <= 2 * 12
+    assert report.min_angle > 1.0
+    assert report.worst_deficit <= 1e-3

@@ -174,6 +174,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     if surface_ald is None:  # one knob: the edges' ALD (a ready grid's own) is the faces' area target too
         surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
     say("area target: measuring the B-rep faces and fitting their boundaries")
+    refined = grid
     grid, fidelity = prepare(grid, surface_ald)  # faces' area target: boundary fit, curvature sizes
     hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
     if mode == "sizes":  # failed faces get their curves meshed at other sizes before the surface target
@@ -195,7 +196,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         cap = max_size or max_length or make_field(grid).max_size  # thin faces must not shrink the cap
         grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
         grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
-        grid = grade_wedges(grid)  # segments shrink into a face's narrow corners
+        grid = grade_wedges(grid, keep=refined, areas=fidelity["brep_areas"],  # segments shrink into
+                            target=surface_ald)  # a face's narrow corners
         cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
         grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
         grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar

@@ -18,15 +18,20 @@ corner spans its two sides: the nut at 1e-2 had 6 triangles under 20 degrees at 
   the vertex, so the pieces do too.
 
 A corner is graded only where its tips are at most :data:`MAX_JUMP` times the first pieces beside them
-(the face on a tip's other side sees that jump). Grid points are kept and edge ends never move, so
-shared edges stay conforming. A face whose boundary doubles back on itself at a vertex (a slit: nearly
-360 degrees inside) looks the same from its edge grids and is graded too, which costs segments, not
-triangle quality.
+(the face on a tip's other side sees that jump). Where they are not (the nut at 1e-3: its cone faces'
+area target cut the cusps' sides into 0.09 pieces, 70 times the first graded piece), the points the
+boundary fits added near the corner are dropped and the tips cut where that jump is :data:`JUMP_AIM`:
+in a cusp the width grows as the square of the distance, so longer tips stand beside relatively longer
+pieces. What their chords cut off grows as the cube of their length, and each face's area may move by
+at most :data:`TIP_AREA_SHARE` of its target in all. The points of the edges as refined are kept and
+edge ends never move, so shared edges stay conforming and every edge keeps its arc-length deficit.
+A face whose boundary doubles back on itself at a vertex (a slit: nearly 360 degrees inside) looks the
+same from its edge grids and is graded too, which costs segments, not triangle quality.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
 
 import numpy as np
 
@@ -48,6 +53,15 @@ MAX_PIECES = 200
 #: beside them left that face triangles of 2.4 degrees (1.8 with gmsh's Delaunay); at 1e-2, 22 times,
 #: 20.3 degrees.
 MAX_JUMP = 24.0
+#: Tips lengthened to reach :data:`MAX_JUMP` (see :func:`_lengthen_tips`) aim at this jump, leaving room
+#: for the equal-tips cut.
+JUMP_AIM = 20.0
+#: ... or at up to this jump where the faces' area allows no longer tips (see :data:`TIP_AREA_SHARE`).
+LAST_AIM = 0.95 * MAX_JUMP
+#: Lengthened tips may move each face's area by at most this share of its target (the surface ALD times
+#: its B-rep area), all its corners' together: the chords of the longer tips cut off what the points
+#: dropped had followed.
+TIP_AREA_SHARE = 0.4
 #: Segments up to this share over the bound at their nearer end are left whole: the pieces are graded by
 #: the width all along them (see :func:`_graded_cuts`), so they stand up to a sixth over it there.
 SLACK = 1.25
@@ -55,7 +69,7 @@ SLACK = 1.25
 SAMPLES = 16
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class Corner:
     """A face's corner at a B-rep vertex: its two sides as (edge index, whether the edge starts there),
     and the angle in degrees between the sides' first segments."""
@@ -96,9 +110,16 @@ def narrow_corners(edges: list, *, below: float = WEDGE_DEG) -> list[Corner]:
     return out
 
 
-def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WIDTH_RATIO) -> ShapeGrid:
+def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WIDTH_RATIO,
+                 keep: ShapeGrid | None = None, areas: np.ndarray | None = None,
+                 target: float | None = None) -> ShapeGrid:
     """A copy of ``grid`` whose narrow corners (:func:`narrow_corners`) have tips of equal length and the
-    rest of their two sides cut to at most ``ratio`` times the wedge's width (see the module doc)."""
+    rest of their two sides cut to at most ``ratio`` times the wedge's width (see the module doc). Given
+    ``keep`` (the same edges as refined), the faces' B-rep ``areas`` (by face id - 1) and their area
+    ``target`` (the surface ALD), points of ``grid`` that ``keep`` does not hold (added since by the
+    boundary fits) may be dropped to lengthen the tips of a corner that would otherwise not be graded,
+    each face's area moving by at most :data:`TIP_AREA_SHARE` of its target in all (see
+    :func:`_lengthen_tips`)."""
     edges = list(grid.edges)
     corners = narrow_corners(edges, below=below)
     if not corners:
@@ -106,6 +127,10 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
     budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
     changed = False
+    if keep is not None and areas is not None and target is not None:
+        room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
+        for c in corners:
+            changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, room)
     for c in corners:  # the tips first: the longer one cut at the shorter one's length
         tips = [tip_length(edges[k], s) for k, s in c.sides]
         k, s = c.sides[int(np.argmax(tips))]
@@ -137,6 +162,105 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
         if cut is not None:
             edges[i], changed, added = cut, True, added + new
     return with_edges(grid, edges) if changed else grid
+
+
+def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, room: np.ndarray) -> bool:
+    """Drop the points near corner ``c`` that ``kept`` (the edges as refined) does not hold and cut both
+    tips at the length where they are :data:`JUMP_AIM` times the first graded piece beside them (up to
+    :data:`LAST_AIM` where the faces' area allows no more); True if ``edges`` changed. A corner whose jump
+    is within :data:`MAX_JUMP`, whose tips cannot get that long without dropping a kept point, or whose
+    tips' chords would move a face's area by more than its ``room`` (by face id - 1; what is used is taken
+    from it) is left alone. In a cusp the wedge's width grows as the square of the distance from the
+    vertex, so a longer tip stands beside pieces that are relatively longer, and its forced triangle is
+    wider; what the chords cut off grows as the cube of the tips' length."""
+    sides = [_from_vertex(edges[k], s) for k, s in c.sides]
+    if max(_jump(sides[0], sides[1], ratio), _jump(sides[1], sides[0], ratio)) <= MAX_JUMP:
+        return False
+    reach = []  # per side: distances of its points from the vertex, which may be dropped, the jumps
+    for (k, s), mine, other in zip(c.sides, sides, sides[::-1]):
+        e, ref = edges[k], kept[k]
+        if e.id != ref.id or len(mine) < 3:
+            return False
+        free = ~np.isin(e.params, ref.params)
+        free = free if s else free[::-1]
+        free[[0, -1]] = False
+        dist = np.linalg.norm(mine - mine[0], axis=1)  # the jump with the tip ending at each inner point:
+        jumps = dist[1:-1] / np.maximum(ratio * _segment_distances(mine[1:-1], other[:-1], other[1:]), 1e-300)
+        reach.append((dist, free, jumps))
+    aim = JUMP_AIM
+    while aim <= LAST_AIM:
+        need = max(_length_at(dist, jumps, aim) for dist, _, jumps in reach)
+        piece = need / aim  # the first graded piece beside the tips
+        if max(edges[k].tolerance for k, _ in c.sides) > TOLERANCE_SHARE * piece:
+            return False  # a loose edge is not graded (see proximity.py): no longer tips either
+        plans = [_tip_plan(dist, free, need, piece) for dist, free, _ in reach]
+        if any(p is None for p in plans):
+            return False  # a kept point inside the tips' new length
+        moved = _moved(edges, c, sides, [r[0] for r in reach], plans, len(room))
+        over = float(np.max(moved / np.maximum(room, 1e-300)))
+        if over <= 1.0:
+            break
+        aim *= 1.05 * over ** (1.0 / 3.0)  # the area cut off goes about as the cube of the tips' length
+    else:
+        return False
+    new = []
+    for (k, s), (drop, end), (dist, _, _) in zip(c.sides, plans, reach):
+        e = edges[k]
+        stay = ~(drop if s else drop[::-1])
+        e = dataclasses.replace(e, params=e.params[stay], points=e.points[stay])
+        beyond = dist[~drop & (dist > 0)][0]
+        if beyond > (1.0 + 1e-3) * end:
+            share = end / beyond
+            e = cut_on_curve(e, curves, {tip_segment(e, s): [share if s else 1.0 - share]})
+            if e is None:
+                return False
+        new.append(e)
+    for (k, _), e in zip(c.sides, new):
+        edges[k] = e
+    room -= moved
+    return True
+
+
+def _length_at(dist: np.ndarray, jumps: np.ndarray, aim: float) -> float:
+    """The tip's length at which its jump (``jumps`` with the tip ending at each inner point of a side whose
+    points lie ``dist`` from the vertex; falling along it) comes down to ``aim``; inf if it never does."""
+    ok = np.flatnonzero(jumps <= aim)
+    if not len(ok):
+        return np.inf
+    m = ok[0]  # between points m and m + 1
+    return float(dist[1] if m == 0 else np.interp(aim, [jumps[m], jumps[m - 1]], [dist[m + 1], dist[m]]))
+
+
+def _tip_plan(dist: np.ndarray, free: np.ndarray, need: float, piece: float) -> tuple[np.ndarray, float] | None:
+    """Which points of a side (``dist`` from the vertex; ``free`` may be dropped) to drop for a tip ``need``
+    long, and where the tip then ends: at ``need``, or at the first point kept if that lies within
+    ``piece`` beyond it (no piece shorter than the first graded one beside the tip). None if a kept point
+    lies inside ``need``."""
+    stop = float(dist[1:][~free[1:]][0])  # the first point kept (the edge's far end at the latest)
+    if stop < need * (1.0 - 1e-9):
+        return None
+    return (dist > 0) & (dist < min(stop, need + piece)), (stop if stop < need + piece else need)
+
+
+def _moved(edges: list, c: Corner, sides: list, dists: list, plans: list, faces: int) -> np.ndarray:
+    """How much each face's area (by face id - 1) moves when the points of corner ``c``'s sides are dropped
+    and its tips end as ``plans`` say (see :func:`_tip_plan`): the area between the new chord and the
+    points dropped on a side, for the face across it; one side's less the other's for the wedge itself."""
+    moved = np.zeros(faces)
+    slivers = []
+    for (k, _), mine, dist, (drop, end) in zip(c.sides, sides, dists, plans):
+        tip = np.array([np.interp(end, dist, mine[:, d]) for d in range(3)])
+        slivers.append(_vector_area(np.vstack([mine[(drop & (dist < end)) | (dist == 0)], tip])))
+        for f in edges[k].faces:
+            moved[f - 1] += 0.0 if f == c.face else float(np.linalg.norm(slivers[-1]))
+    moved[c.face - 1] += float(np.linalg.norm(slivers[0] - slivers[1]))
+    return moved
+
+
+def _vector_area(points: np.ndarray) -> np.ndarray:
+    """Vector area of the polygon closed by the polyline ``points`` (n, 3) and the chord joining its ends."""
+    rel = points - points[0]
+    return 0.5 * np.cross(rel[:-1], rel[1:]).sum(axis=0)
 
 
 def _jump(one: np.ndarray, two: np.ndarray, ratio: float) -> float:
