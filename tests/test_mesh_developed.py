@@ -170,3 +170,17 @@ def test_a_narrow_cone_meshes_within_the_target(tmp_path):
     assert not result.failures
     assert all(abs(f.area_deficit) <= 1e-2 for f in result.report.faces)
     assert result.report.folded == 0
+
+
+def test_a_hung_unrolled_meshadapt_leaves_the_unrolled_frontal_delaunay_to_try():
+    """Strategies on the same sizes are skipped once one hangs; in an unrolled sector MeshAdapt's time grows
+    faster than Frontal-Delaunay's, and a 1 x 200 cone at 1e-3 failed when the one hanging barred the
+    other (Frontal-Delaunay meshes it in 49 s)."""
+    from cadedge.mesh.generate import NARROW_CONE_ORDER, STRATEGIES
+
+    unrolled = [STRATEGIES[k] for k in NARROW_CONE_ORDER if STRATEGIES[k].unrolled == "cone"]
+    assert [s.algorithm for s in unrolled] == [1, 6]  # MeshAdapt first: fewer triangles where it is in time
+    assert unrolled[0].sizes != unrolled[1].sizes
+    gmsh_own = [STRATEGIES[k] for k in NARROW_CONE_ORDER if not STRATEGIES[k].unrolled]
+    assert len({s.sizes for s in gmsh_own if s.size_factor == 1.0 and not s.split and not s.own_curves
+                and not s.uniform}) == 1  # on the cone's own face one hang still bars the others
