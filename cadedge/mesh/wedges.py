@@ -18,9 +18,10 @@ corner spans its two sides: the nut at 1e-2 had 6 triangles under 20 degrees at 
   the vertex, so the pieces do too.
 
 A corner is graded only where its tips are at most :data:`MAX_JUMP` times the first pieces beside them
-(the face on a tip's other side sees that jump). Where they are not (the nut at 1e-3: its cone faces'
-area target cut the cusps' sides into 0.09 pieces, 70 times the first graded piece), the points the
-boundary fits added near the corner are dropped and the tips cut where that jump is :data:`JUMP_AIM`:
+(the face on a tip's other side sees that jump). Where the tips, made equal, are over :data:`JUMP_AIM`
+times those pieces (the nut at 1e-3: its cone faces' area target cut the cusps' sides into 0.09 pieces,
+70 times the first graded piece; at 1e-2, 22 times), the points the boundary fits added near the
+corner are dropped and the tips cut where that jump is :data:`JUMP_AIM`:
 in a cusp the width grows as the square of the distance, so longer tips stand beside relatively longer
 pieces. What their chords cut off grows as the cube of their length, and each face's area may move by
 at most :data:`TIP_AREA_SHARE` of its target in all. The points of the edges as refined are kept and
@@ -53,8 +54,8 @@ MAX_PIECES = 200
 #: beside them left that face triangles of 2.4 degrees (1.8 with gmsh's Delaunay); at 1e-2, 22 times,
 #: 20.3 degrees.
 MAX_JUMP = 24.0
-#: Tips lengthened to reach :data:`MAX_JUMP` (see :func:`_lengthen_tips`) aim at this jump, leaving room
-#: for the equal-tips cut.
+#: Tips over this jump are lengthened where they can be (see :func:`_lengthen_tips`), to this jump: the
+#: longer the tips the wider the triangle on both, and below :data:`MAX_JUMP` a corner is graded.
 JUMP_AIM = 20.0
 #: ... or at up to this jump where the faces' area allows no longer tips (see :data:`TIP_AREA_SHARE`).
 LAST_AIM = 0.95 * MAX_JUMP
@@ -127,10 +128,6 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
     budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
     changed = False
-    if keep is not None and areas is not None and target is not None:
-        room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
-        for c in corners:
-            changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, room)
     for c in corners:  # the tips first: the longer one cut at the shorter one's length
         tips = [tip_length(edges[k], s) for k, s in c.sides]
         k, s = c.sides[int(np.argmax(tips))]
@@ -139,6 +136,10 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
             cut = cut_on_curve(edges[k], curves, {tip_segment(edges[k], s): [share if s else 1 - share]})
             if cut is not None:
                 edges[k], changed = cut, True
+    if keep is not None and areas is not None and target is not None:  # then lengthened where too short
+        room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
+        for c in corners:
+            changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, room)
     tip_segments = {(k, tip_segment(edges[k], s)) for c in corners for k, s in c.sides}
     cuts: dict[int, dict[int, np.ndarray]] = {}  # edge index -> segment -> shares of it to cut at
     for c in corners:
@@ -167,15 +168,13 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
 def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, room: np.ndarray) -> bool:
     """Drop the points near corner ``c`` that ``kept`` (the edges as refined) does not hold and cut both
     tips at the length where they are :data:`JUMP_AIM` times the first graded piece beside them (up to
-    :data:`LAST_AIM` where the faces' area allows no more); True if ``edges`` changed. A corner whose jump
-    is within :data:`MAX_JUMP`, whose tips cannot get that long without dropping a kept point, or whose
+    :data:`LAST_AIM` where the faces' area allows no more); True if ``edges`` changed. A corner whose tips
+    are that long already (made equal), whose tips cannot get that long without dropping a kept point, or whose
     tips' chords would move a face's area by more than its ``room`` (by face id - 1; what is used is taken
     from it) is left alone. In a cusp the wedge's width grows as the square of the distance from the
     vertex, so a longer tip stands beside pieces that are relatively longer, and its forced triangle is
     wider; what the chords cut off grows as the cube of the tips' length."""
     sides = [_from_vertex(edges[k], s) for k, s in c.sides]
-    if max(_jump(sides[0], sides[1], ratio), _jump(sides[1], sides[0], ratio)) <= MAX_JUMP:
-        return False
     reach = []  # per side: distances of its points from the vertex, which may be dropped, the jumps
     for (k, s), mine, other in zip(c.sides, sides, sides[::-1]):
         e, ref = edges[k], kept[k]
@@ -190,6 +189,8 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, roo
     aim = JUMP_AIM
     while aim <= LAST_AIM:
         need = max(_length_at(dist, jumps, aim) for dist, _, jumps in reach)
+        if need <= min(dist[1] for dist, _, _ in reach) * (1.0 + 1e-9):
+            return False  # the tips, made equal, are long enough already
         piece = need / aim  # the first graded piece beside the tips
         if max(edges[k].tolerance for k, _ in c.sides) > TOLERANCE_SHARE * piece:
             return False  # a loose edge is not graded (see proximity.py): no longer tips either
@@ -223,12 +224,13 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, roo
 
 def _length_at(dist: np.ndarray, jumps: np.ndarray, aim: float) -> float:
     """The tip's length at which its jump (``jumps`` with the tip ending at each inner point of a side whose
-    points lie ``dist`` from the vertex; falling along it) comes down to ``aim``; inf if it never does."""
+    points lie ``dist`` from the vertex; falling along it) comes down to ``aim``: 0 if it is there at the
+    side's first point already, inf if it never is."""
     ok = np.flatnonzero(jumps <= aim)
     if not len(ok):
         return np.inf
     m = ok[0]  # between points m and m + 1
-    return float(dist[1] if m == 0 else np.interp(aim, [jumps[m], jumps[m - 1]], [dist[m + 1], dist[m]]))
+    return 0.0 if m == 0 else float(np.interp(aim, [jumps[m], jumps[m - 1]], [dist[m + 1], dist[m]]))
 
 
 def _tip_plan(dist: np.ndarray, free: np.ndarray, need: float, piece: float) -> tuple[np.ndarray, float] | None:
