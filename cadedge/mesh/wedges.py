@@ -118,8 +118,8 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     rest of their two sides cut to at most ``ratio`` times the wedge's width (see the module doc). Given
     ``keep`` (the same edges as refined), the faces' B-rep ``areas`` (by face id - 1) and their area
     ``target`` (the surface ALD), points of ``grid`` that ``keep`` does not hold (added since by the
-    boundary fits) may be dropped to lengthen the tips of a corner that would otherwise not be graded,
-    each face's area moving by at most :data:`TIP_AREA_SHARE` of its target in all (see
+    boundary fits) may be dropped to lengthen tips over :data:`JUMP_AIM` times the first graded piece
+    beside them, each face's area moving by at most :data:`TIP_AREA_SHARE` of its target in all (see
     :func:`_lengthen_tips`)."""
     edges = list(grid.edges)
     corners = narrow_corners(edges, below=below)
@@ -169,9 +169,9 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, roo
     """Drop the points near corner ``c`` that ``kept`` (the edges as refined) does not hold and cut both
     tips at the length where they are :data:`JUMP_AIM` times the first graded piece beside them (up to
     :data:`LAST_AIM` where the faces' area allows no more); True if ``edges`` changed. A corner whose tips
-    are that long already (made equal), whose tips cannot get that long without dropping a kept point, or whose
-    tips' chords would move a face's area by more than its ``room`` (by face id - 1; what is used is taken
-    from it) is left alone. In a cusp the wedge's width grows as the square of the distance from the
+    (made equal) are that long already, cannot get that long without dropping a kept point, or whose
+    chords would move a face's area by more than its ``room`` (by face id - 1; what is used is taken from
+    it) is left alone. In a cusp the wedge's width grows as the square of the distance from the
     vertex, so a longer tip stands beside pieces that are relatively longer, and its forced triangle is
     wider; what the chords cut off grows as the cube of the tips' length."""
     sides = [_from_vertex(edges[k], s) for k, s in c.sides]
