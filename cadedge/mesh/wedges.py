@@ -183,9 +183,7 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, roo
         free = ~np.isin(e.params, ref.params)
         free = free if s else free[::-1]
         free[[0, -1]] = False
-        dist = np.linalg.norm(mine - mine[0], axis=1)  # the jump with the tip ending at each inner point:
-        jumps = dist[1:-1] / np.maximum(ratio * _segment_distances(mine[1:-1], other[:-1], other[1:]), 1e-300)
-        reach.append((dist, free, jumps))
+        reach.append((np.linalg.norm(mine - mine[0], axis=1), free, _jumps(mine, other, ratio)))
     aim = JUMP_AIM
     while aim <= LAST_AIM:
         need = max(_length_at(dist, jumps, aim) for dist, _, jumps in reach)
@@ -265,13 +263,17 @@ def _vector_area(points: np.ndarray) -> np.ndarray:
     return 0.5 * np.cross(rel[:-1], rel[1:]).sum(axis=0)
 
 
+def _jumps(one: np.ndarray, two: np.ndarray, ratio: float) -> np.ndarray:
+    """For a tip of ``one`` (a corner's side ordered from the vertex; ``two`` the other) ending at each of
+    its inner points, how many times longer than the first graded piece after it the tip would be:
+    ``ratio`` times the wedge's width there."""
+    width = _segment_distances(one[1:-1], two[:-1], two[1:])
+    return np.linalg.norm(one[1:-1] - one[0], axis=1) / np.maximum(ratio * width, 1e-300)
+
+
 def _jump(one: np.ndarray, two: np.ndarray, ratio: float) -> float:
-    """How many times longer than the first graded piece after it the tip of ``one`` (a corner's side
-    ordered from the vertex; ``two`` the other) would be: ``ratio`` times the wedge's width at the tip's end."""
-    if len(one) < 3:
-        return 0.0
-    width = float(_segment_distances(one[1:2], two[:-1], two[1:])[0])
-    return float(np.linalg.norm(one[1] - one[0])) / max(ratio * width, 1e-300)
+    """The jump of ``one``'s tip as it is (see :func:`_jumps`)."""
+    return float(_jumps(one[:3], two, ratio)[0]) if len(one) >= 3 else 0.0
 
 
 def tip_segment(e, at_start: bool) -> int:
