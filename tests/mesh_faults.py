@@ -119,3 +119,17 @@ def busy_a_while(ctx) -> None:
         end = time.process_time() + 3.0
         while time.process_time() < end:
             pass
+
+
+def remesh_split(ctx) -> None:
+    """``after_generate``: mesh face ``FAULT_FACE`` again on its own by the first strategy that splits its
+    curves; its neighbours, outside that call's faces, are meshed again on the split curves."""
+    import gmsh
+
+    from cadedge.mesh.generate import STRATEGIES, mesh_faces
+
+    s = ctx.emap.faces[FAULT_FACE]
+    first = next(k for k, strategy in enumerate(STRATEGIES) if strategy.split)
+    gmsh.model.mesh.clear([(2, s)])
+    ctx.outcomes.update(mesh_faces([s], ctx.emap.face_of_surface,
+                                   skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}}))

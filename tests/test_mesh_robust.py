@@ -177,6 +177,17 @@ def test_fallback_strategies_keep_neighbours_conforming(cylinder, fallback):
         assert res.own_mesh_edges and not imposed.intersection(res.own_mesh_edges)
 
 
+def test_a_face_meshed_again_alone_by_a_splitting_strategy_has_its_neighbours_meshed_again():
+    """A hook meshes one face again on its own (as the surface target does) by a strategy that splits its
+    curves: the neighbours, meshed already but outside that call's faces, are meshed again on the split
+    curves (this raised a KeyError in the child before)."""
+    grid = cadedge.refine_shape(CYL, ald=ALD, max_growth=2.0)
+    result = mesh_shape(grid, hooks={"after_generate": ["mesh_faults:remesh_split"]})
+    _watertight_with_every_face(result)
+    face = next(o for o in result.faces if o.face == FAULT_FACE)
+    assert face.strategy == next(s.name for s in STRATEGIES if s.split)
+
+
 def test_check_names_faces_with_small_angles():
     nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [1.05, 0.5, 0]], dtype=float)
     tris = np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3]])

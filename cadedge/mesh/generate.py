@@ -486,6 +486,10 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     break
                 started(rec.face, k)
                 touched: list[int] = []
+                meshed: set[int] = set()  # faces outside ``surfaces`` meshed so far
+                if strategy.split or strategy.own_curves:
+                    meshed = {t for _, t in gmsh.model.getEntities(2) if t not in out
+                              and len(gmsh.model.mesh.getElementsByType(2, t)[0])}
                 if strategy.split:
                     curves = [c for c in surface_curve_uses(s) if c not in split_done]  # split once
                     split_done.update(curves)
@@ -497,9 +501,11 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 cleared([out[n].face for n in touched if n in out and out[n].ok])
                 for n in touched:  # their boundary changed: mesh them again
                     tried_first.discard(n)  # a face whose batch attempt failed starts again on the new boundary
-                    if n == s or (n in out and not out[n].ok):
-                        continue  # this face, or a failed or not yet tried one: its own turn comes
+                    if n == s or (n in out and not out[n].ok) or (n not in out and n not in meshed):
+                        continue  # this face, or a failed or not yet tried one: its own turn comes; or
+                        # a face outside ``surfaces`` with no mesh to redo (failed, or another process's)
                     out[n] = FaceOutcome(face=face_of.get(n, n), surface=n)
+                    order.setdefault(n, face_order(n))  # a neighbour outside ``surfaces``
                     tried_first.discard(n)
                     queue.append(n)
                 reason = _attempt(s, strategy)
