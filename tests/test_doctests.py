@@ -5,7 +5,8 @@ import importlib
 
 import pytest
 
-MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments"]
+MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments",
+           "cadedge.mesh.shards"]
 
 
 @pytest.mark.parametrize("name", MODULES)

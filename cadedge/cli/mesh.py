@@ -48,6 +48,8 @@ def register(subparsers: Any) -> None:
                                                    "largest edge spacing)")
     p.add_argument("--timeout", metavar="SECONDS", default=str(DEFAULT_TIMEOUT),
                    help=f"bound on gmsh's work (default {DEFAULT_TIMEOUT:g}); one face attempt gets a fifth of it")
+    p.add_argument("--workers", metavar="N", help="gmsh processes meshing a large model's faces at once (default: "
+                                                  "one per core; 1: all faces in one process)")
     p.add_argument("--surface-ald", metavar="S", help="every face's |area deficit| (1 - mesh area / B-rep area) "
                                                       "at most S (default: --ald)")
     p.add_argument("--report", metavar="JSON", help="write the per-face mesh report (surface type, triangles, "
@@ -98,6 +100,9 @@ def _run(args: argparse.Namespace) -> int:
     max_size = parse_number("--max-size", args.max_size, source, low=0.0)
     timeout = parse_number("--timeout", args.timeout, source, low=0.0)
     surface_ald = parse_number("--surface-ald", args.surface_ald, source, low=0.0)
+    workers = args.workers
+    if workers is not None and not (workers.strip().isdigit() and int(workers) >= 1):
+        raise InputError(f"{source}: --workers must be a whole number, 1 or more, got {workers!r}")
     out = Path(args.output)  # mesh_shape checks its suffix and folder before any work; these, too:
     for path in (args.output, args.report):
         if path:
@@ -111,6 +116,7 @@ def _run(args: argparse.Namespace) -> int:
             warnings.simplefilter("always", CadedgeWarning)  # others keep their filters
             result = mesh_shape(args.input, output=out, mode=args.mode, growth=growth, max_size=max_size,
                                 timeout=timeout, surface_ald=surface_ald,
+                                workers=None if workers is None else int(workers),
                                 allow_partial=args.allow_partial, progress=status, **opts)
     finally:
         status.close()

@@ -118,7 +118,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                max_size: float | None = None, timeout: float | None = None,
                face_timeout: float | None = None, hooks: dict[str, list[str]] | None = None,
                job_options: dict[str, Any] | None = None, surface_ald: float | None = None,
-               allow_partial: bool = False, progress: Callable[[str], None] | None = None) -> MeshResult:
+               allow_partial: bool = False, progress: Callable[[str], None] | None = None,
+               workers: int | None = None) -> MeshResult:
     """Mesh every face of ``source`` (STEP path, cadquery/build123d/OCP shape, or a ``ShapeGrid``).
 
     ``ald``, ``min_length``, ``max_length``, ``max_growth`` go to :func:`cadedge.refine_shape` (ignored for
@@ -132,7 +133,10 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     ``|deficit| <= surface_ald`` (default ``ald``; see :mod:`cadedge.mesh.fidelity`) and measured in
     ``result.report``. ``allow_partial`` goes to :func:`cadedge.refine_shape` (a file OCCT transfers only
     in part is an InputError without it). ``progress(text)``, if given, is called with what the job is doing
-    at each step (refining edges, each face meshed, ...; the CLI's status line), from this process. Raises
+    at each step (refining edges, each face meshed, ...; the CLI's status line), from this process. A large
+    job (at least :data:`~cadedge.mesh.shards.MIN_SEGMENTS` boundary segments, ``nodes`` mode) is meshed
+    in up to ``workers`` gmsh processes at once (default: the CPUs this process may use; 1 meshes in one),
+    each face in one of them (see :mod:`cadedge.mesh.shards`). Raises
     :class:`InputError` on bad arguments or input; faces gmsh fails on, crashes and timeouts are returned
     in ``failures`` / ``error``, never raised.
     """
@@ -141,6 +145,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     for name, value in (("timeout", timeout), ("face_timeout", face_timeout)):
         if value is not None and not value > 0:
             raise InputError(f"{name} must be a positive number of seconds, got {value!r}")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise InputError(f"workers must be a whole number of processes, 1 or more, got {workers!r}")
     out = Path(output) if output is not None else None
     if out is not None and out.suffix.lower() not in MESH_SUFFIXES + (".geo",):
         raise InputError(f"{out}: unsupported mesh output suffix {out.suffix!r} "
@@ -205,7 +211,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         max_size = cap
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
-                       job_options=job_options, say=say)
+                       job_options=job_options, say=say, workers=workers)
     result.notes[:0] = notes
     from .report import report_of
 
@@ -216,7 +222,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
 
 def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, *,
               timeout: float | None, face_timeout: float | None, hooks: dict[str, list[str]] | None,
-              job_options: dict[str, Any] | None, say: Callable[[str], None]) -> MeshResult:
+              job_options: dict[str, Any] | None, say: Callable[[str], None],
+              workers: int | None = None) -> MeshResult:
     """Mesh in a child process (:func:`~cadedge.mesh.isolate.run_isolated`), then check in this one."""
     import dataclasses
 
@@ -224,13 +231,14 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .generate import FaceFailure
     from .gmsh_model import shape_to_brep
     from .isolate import DEFAULT_TIMEOUT, run_isolated
+    from .shards import default_workers
     from .status import MeshStatus
     from .worker import MeshJob
 
     job = MeshJob(source=grid.source, brep=shape_to_brep(grid.shape), grid=dataclasses.replace(grid, shape=None, curves=None),
                   field=field_, mode=mode, hooks=dict(hooks or {}), options=dict(job_options or {}))
     res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout,
-                       progress=MeshStatus(say, faces=grid.faces))
+                       progress=MeshStatus(say, faces=grid.faces), workers=workers or default_workers())
     faces = list(res.faces)
     if res.error is not None:
         failures = [FaceFailure(face=f, surface=f, reason=res.error) for f in range(1, grid.faces + 1)]

@@ -270,7 +270,7 @@ def clear(dim_tags: list[tuple[int, int]]) -> None:
         gmsh.model.mesh.clear(dim_tags)
 
 
-def _curve_chain(curve: int) -> tuple[np.ndarray, np.ndarray]:
+def curve_chain(curve: int) -> tuple[np.ndarray, np.ndarray]:
     """Node tags of a curve's 1-D mesh from its first to its last node, and their gmsh parameters."""
     _, seg = gmsh.model.mesh.getElementsByType(1, curve)
     seg = np.asarray(seg, dtype=np.int64).reshape(-1, 2)
@@ -299,7 +299,7 @@ def split_curves(curves: list[int]) -> list[int]:
         _, seg = gmsh.model.mesh.getElementsByType(1, c)
         if len(seg) == 0:
             continue
-        chain, u = _curve_chain(c)
+        chain, u = curve_chain(c)
         if not np.all(np.isfinite(u)) or not np.all(np.diff(u) > 0):
             continue
         users = [int(s) for s in gmsh.model.getAdjacencies(1, c)[0]]

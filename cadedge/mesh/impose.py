@@ -28,8 +28,14 @@ class ImposedNodes:
     skipped: list[int]
 
 
-def impose_edge_grids(grid: ShapeGrid, emap: EntityMap) -> ImposedNodes:
-    """Add the grid nodes and line elements to the gmsh model; returns the node tags used."""
+def impose_edge_grids(grid: ShapeGrid, emap: EntityMap,
+                      adopt: dict[int, tuple[np.ndarray, np.ndarray]] | None = None) -> ImposedNodes:
+    """Add the grid nodes and line elements to the gmsh model; returns the node tags used.
+
+    ``adopt[eid] = (points, params)`` replaces edge ``eid``'s grid by a 1-D mesh another gmsh process
+    made of its curve (points from the edge's first vertex to its last, ends included, and their gmsh
+    parameters; see :func:`cadedge.mesh.worker.changed_edges`)."""
+    adopt = adopt or {}
     vertex_nodes: dict[int, int] = {}
     for v in grid.vertices:
         if v.id not in emap.vertices:
@@ -48,12 +54,12 @@ def impose_edge_grids(grid: ShapeGrid, emap: EntityMap) -> ImposedNodes:
             skipped.append(e.id)
             continue
         match = emap.edges[e.id]
-        inner = len(e.params) - 2
+        points, params = adopt.get(e.id, (np.asarray(e.points, dtype=float), match.params))
+        inner = len(points) - 2
         tags = np.arange(next_node, next_node + inner, dtype=np.int64)
         next_node += inner
         chain = np.concatenate([[vertex_nodes[e.vertices[0]]], tags, [vertex_nodes[e.vertices[1]]]])
         edge_nodes[e.id] = chain
-        params, points = match.params, np.asarray(e.points, dtype=float)
         if params[-1] < params[0]:  # gmsh's curve runs the other way: give gmsh its own order
             chain, params, points = chain[::-1], params[::-1], points[::-1]
         if inner:

@@ -29,6 +29,10 @@ the unfinished faces named, not with nothing; so does a job out of restarts. Fac
 delivered that the last one did not mesh again are added to its mesh. The face optimiser, which improves
 meshed faces, may go on past the soft deadline up to :data:`FINISH_SHARE`.
 
+A large job may be split (``workers``, :mod:`cadedge.mesh.shards`): its faces are meshed in several
+children at once, each under its own watchdog and restarts as above, all within the one ``timeout``;
+their meshes are joined by node coordinates and written with meshio.
+
 The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
 hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
 ``KeyboardInterrupt`` the child is killed before the interrupt goes on.
@@ -43,6 +47,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -183,7 +188,7 @@ def _learn(lines: list[str], skip: dict[int, dict[int, str]], known_ok: dict[int
 
 
 def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_timeout: float,
-               progress: Callable[[str], None] | None = None) -> _Run:
+               progress: Callable[[str], None] | None = None, stop: threading.Event | None = None) -> _Run:
     job_path, result_path, progress_path = (os.path.join(tmp, n) for n in ("job.pkl", "result.pkl", "progress"))
     for p in (result_path, progress_path):
         if os.path.exists(p):
@@ -210,6 +215,8 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                     for line in tail.new():
                         if progress is not None:
                             progress(line)
+                if stop is not None and stop.is_set():
+                    raise KeyboardInterrupt  # another thread was interrupted: the child is killed below
                 now = time.monotonic()
                 line = tail.last
                 cpu = _cpu_seconds(proc.pid)
@@ -238,88 +245,115 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
 
 
 def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = DEFAULT_TIMEOUT,
-                 face_timeout: float | None = None, progress: Callable[[str], None] | None = None) -> JobResult:
+                 face_timeout: float | None = None, progress: Callable[[str], None] | None = None,
+                 workers: int = 1) -> JobResult:
     """Run ``job`` in a child process (see the module doc); the mesh goes to ``output`` if anything meshed.
 
     ``face_timeout`` defaults to :data:`FACE_SHARE` of ``timeout``. ``progress(line)``, if given, gets every
     progress line of the children as it comes (see :mod:`cadedge.mesh.worker`), and ``restart EVENT``
     before a new child carries on (:class:`cadedge.mesh.status.MeshStatus` puts them in words).
     ``output`` is written atomically and only when the result has triangles; ``job.output`` is set here
-    to a file in a private folder.
+    to a file in a private folder. With ``workers`` over 1, a large ``nodes`` job's faces are meshed in
+    up to that many children at once, each under its own watchdog, and their meshes joined (see
+    :mod:`cadedge.mesh.shards`; the mesh is then written with meshio, as for a stopped job).
     """
+    from .shards import plan
+
     face_timeout = face_timeout or FACE_SHARE * timeout
     t0 = time.monotonic()
-    deadline = t0 + timeout
-    kill_at = t0 + KILL_SHARE * timeout
+    limits = _Limits(deadline=t0 + timeout, kill_at=t0 + KILL_SHARE * timeout, timeout=timeout,
+                     face_timeout=face_timeout)
     job.deadline = time.time() + SOFT_SHARE * timeout
     job.finish_by = time.time() + FINISH_SHARE * timeout
     job.attempt_bound = face_timeout
+    _remove_orphaned_folders()
+    shards = plan(job.grid, workers, face_segments(job.grid)) if job.mode == "nodes" and job.faces is None \
+        else [job.faces]
+    with tempfile.TemporaryDirectory(prefix=f"{FOLDER_PREFIX}{os.getpid()}-") as tmp:
+        if len(shards) > 1:
+            return _run_shards(job, shards, tmp, output, limits, progress)
+        return _supervise(job, tmp, output, limits, progress)
+
+
+@dataclass
+class _Limits:
+    """A job's time bounds: ``deadline`` and ``kill_at`` on ``time.monotonic()`` (see the module doc)."""
+
+    deadline: float
+    kill_at: float
+    timeout: float
+    face_timeout: float
+
+
+def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
+               progress: Callable[[str], None] | None, stop: threading.Event | None = None) -> JobResult:
+    """Run ``job`` in children in folder ``tmp`` until one finishes, the restarts run out or the time does
+    (see the module doc); ``stop``, once set, kills the child and raises KeyboardInterrupt here."""
+    deadline, kill_at, timeout, face_timeout = limits.deadline, limits.kill_at, limits.timeout, limits.face_timeout
     events: list[str] = []
     skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
     known_ok: dict[int, int] = dict(job.known_ok)
-    _remove_orphaned_folders()
-    with tempfile.TemporaryDirectory(prefix=f"{FOLDER_PREFIX}{os.getpid()}-") as tmp:
-        job.output = os.path.join(tmp, "mesh" + output.suffix.lower()) if output is not None else None
-        for _ in range(MAX_RESTARTS + 1):
-            job.skip, job.known_ok = skip, known_ok
-            if events and progress is not None:
-                progress(f"restart {events[-1]}")
-            run = _run_child(job, tmp, deadline, kill_at, face_timeout, progress)
-            if run.status == "ok":
-                result = run.result
-                result.notes = events + result.notes
-                fuller = _with_earlier_faces(result, os.path.join(tmp, "faces"), job, known_ok)
-                if fuller is not None:
-                    if output is not None:
-                        _write(fuller, output)
-                    return fuller.result
-                if output is not None and result.written and len(result.triangles):
-                    with atomic_path(output) as dst:
-                        shutil.copyfile(job.output, dst)
-                else:
-                    result.written = False
-                return result
-            if run.status in ("timeout", "late"):  # past KILL_SHARE a new child's first attempt is killed too
-                reason = f"no result within {timeout:g} s (--timeout)" if run.status == "timeout" else \
-                    f"out of time: meshing was stopped at {KILL_SHARE:.0%} of --timeout ({timeout:g} s)"
-                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-                return _deliver_or_fail(os.path.join(tmp, "faces"), job, known_ok, reason, events, output)
-            words = run.last.split()
-            if words[:1] == ["batch"] and len(words) == 2:  # a batch of one face: that face's first attempt
-                words = ["face", words[1], "0"]
-            if words[:1] == ["batch"] and len(words) > 1:
-                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-                faces = [int(w) for w in words[1:]]
-                job.no_batch |= set(faces)
-                events.append(f"faces {', '.join(words[1:])}: meshing them together in one gmsh call: "
-                              f"{run.detail}; they were meshed one by one in a new process")
-                continue
-            if words[:1] == ["refine"] and len(words) >= 2:  # one face, or several meshed again in one call
-                _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-                job.no_refine.update(int(w) for w in words[1:])
-                what = f"face {words[1]}: meshing it" if len(words) == 2 else \
-                    f"faces {', '.join(words[1:])}: meshing them together"
-                events.append(f"{what} again finer for the surface target {run.detail}; "
-                              f"{'it was' if len(words) == 2 else 'they were'} kept as first meshed")
-                continue
-            if words[:1] != ["face"] or len(words) != 3:
-                where = f" while gmsh was at step '{run.last}'" if run.last else ""
-                return _failed(f"{run.detail}{where}", events)
+    job.output = os.path.join(tmp, "mesh" + output.suffix.lower()) if output is not None else None
+    for _ in range(MAX_RESTARTS + 1):
+        job.skip, job.known_ok = skip, known_ok
+        if events and progress is not None:
+            progress(f"restart {events[-1]}")
+        run = _run_child(job, tmp, deadline, kill_at, face_timeout, progress, stop)
+        if run.status == "ok":
+            result = run.result
+            result.notes = events + result.notes
+            fuller = _with_earlier_faces(result, os.path.join(tmp, "faces"), job, known_ok)
+            if fuller is not None:
+                if output is not None:
+                    _write(fuller, output)
+                return fuller.result
+            if output is not None and result.written and len(result.triangles):
+                with atomic_path(output) as dst:
+                    shutil.copyfile(job.output, dst)
+            else:
+                result.written = False
+            return result
+        if run.status in ("timeout", "late"):  # past KILL_SHARE a new child's first attempt is killed too
+            reason = f"no result within {timeout:g} s (--timeout)" if run.status == "timeout" else \
+                f"out of time: meshing was stopped at {KILL_SHARE:.0%} of --timeout ({timeout:g} s)"
             _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
-            face, k = int(words[1]), int(words[2])
-            barred = skip.setdefault(face, {})
-            barred[k] = run.detail
-            if run.status == "hung":  # other algorithms on the same sizes tend to hang too: go to other sizes
-                kind = STRATEGIES[k].sizes
-                same = [j for j, s in enumerate(STRATEGIES) if j > k and s.sizes == kind]
-                barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
-                finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
-                         if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
-                barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
-            events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
-                          "process")
-        return _deliver_or_fail(os.path.join(tmp, "faces"), job, known_ok,
-                                f"gave up after {MAX_RESTARTS} restarts of the mesh process", events, output)
+            return _deliver_or_fail(os.path.join(tmp, "faces"), job, known_ok, reason, events, output)
+        words = run.last.split()
+        if words[:1] == ["batch"] and len(words) == 2:  # a batch of one face: that face's first attempt
+            words = ["face", words[1], "0"]
+        if words[:1] == ["batch"] and len(words) > 1:
+            _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+            faces = [int(w) for w in words[1:]]
+            job.no_batch |= set(faces)
+            events.append(f"faces {', '.join(words[1:])}: meshing them together in one gmsh call: "
+                          f"{run.detail}; they were meshed one by one in a new process")
+            continue
+        if words[:1] == ["refine"] and len(words) >= 2:  # one face, or several meshed again in one call
+            _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+            job.no_refine.update(int(w) for w in words[1:])
+            what = f"face {words[1]}: meshing it" if len(words) == 2 else \
+                f"faces {', '.join(words[1:])}: meshing them together"
+            events.append(f"{what} again finer for the surface target {run.detail}; "
+                          f"{'it was' if len(words) == 2 else 'they were'} kept as first meshed")
+            continue
+        if words[:1] != ["face"] or len(words) != 3:
+            where = f" while gmsh was at step '{run.last}'" if run.last else ""
+            return _failed(f"{run.detail}{where}", events)
+        _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
+        face, k = int(words[1]), int(words[2])
+        barred = skip.setdefault(face, {})
+        barred[k] = run.detail
+        if run.status == "hung":  # other algorithms on the same sizes tend to hang too: go to other sizes
+            kind = STRATEGIES[k].sizes
+            same = [j for j, s in enumerate(STRATEGIES) if j > k and s.sizes == kind]
+            barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
+            finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
+                     if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
+            barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
+        events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
+                      "process")
+    return _deliver_or_fail(os.path.join(tmp, "faces"), job, known_ok,
+                            f"gave up after {MAX_RESTARTS} restarts of the mesh process", events, output)
 
 
 def _deliver_or_fail(path: str, job: MeshJob, known_ok: dict[int, int], reason: str, events: list[str],
@@ -375,7 +409,7 @@ class _Delivered:
     line_edges: np.ndarray
 
 
-def _read_deliveries(path: str) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray]]:
+def read_deliveries(path: str) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray]]:
     """Faces' triangles and edges' segments from the child's delivery file (``worker.run_job``'s
     ``deliver``): the last record of an entity wins, a cleared face is dropped, a record cut off ends it."""
     faces: dict[int, np.ndarray] = {}
@@ -401,8 +435,9 @@ def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     and the delivered edge segments are the faces' boundary segments, so each edge's multiplicity for the
     check is known (how many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
     from .generate import FaceOutcome
+    from .shards import edge_uses
 
-    faces, edges = _read_deliveries(path)
+    faces, edges = read_deliveries(path)
     if not faces:
         return None
     order = sorted(faces)
@@ -419,18 +454,14 @@ def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     lines = index[3 * n_tri:].reshape(-1, 2).astype(np.int64)
     line_edges = np.concatenate([np.full(len(edges[e]), e, dtype=np.int64) for e in edge_order]) \
         if edge_order else np.zeros(0, dtype=np.int64)
-    by_id = {e.id: e for e in job.grid.edges}
-    uses = {}
-    for e in edge_order:
-        on = by_id[e].faces if e in by_id else []
-        uses[e] = 0 if len(on) == 1 else sum(1 for f in on if f in faces)
     result.edge_pairs = np.sort(lines, axis=1)
-    result.edge_uses = np.array([uses[e] for e in line_edges.tolist()], dtype=np.int64)
+    result.edge_uses = edge_uses(job.grid, line_edges, set(faces))
     names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
+    mine = sorted(job.faces) if job.faces is not None else range(1, job.grid.faces + 1)
     result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))
                     if f in faces else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
-                    for f in range(1, job.grid.faces + 1)]
-    missing = job.grid.faces - len(faces)
+                    for f in mine]
+    missing = len(mine) - len(faces)
     result.notes = events + [f"the mesh process was stopped ({reason}); the {len(faces)} faces it had meshed are "
                              "delivered as last meshed (re-meshed finer where that had finished), without the "
                              "face optimiser's last pass or gmsh's writer"
@@ -446,7 +477,7 @@ def _with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: di
     faces only, down to none."""
     if result.error is not None:
         return None
-    faces, _ = _read_deliveries(path)
+    faces, _ = read_deliveries(path)
     meshed = {o.face for o in result.faces if o.ok}
     extra = sorted(set(faces) - meshed)
     if not extra:
@@ -462,6 +493,70 @@ def _with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: di
         "did not mesh them again, so they are delivered as that process meshed them (the mesh written by "
         "meshio, not gmsh's writer)"]
     return _Delivered(merged, union.lines, union.line_edges)
+
+
+def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Path | None, limits: _Limits,
+                progress: Callable[[str], None] | None) -> JobResult:
+    """Mesh each shard of ``job``'s faces in its own child at once, each under :func:`_supervise`; mesh
+    again the faces on edges another shard changed (see :mod:`cadedge.mesh.shards`); join the meshes and
+    write them to ``output``."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from .shards import ADOPT_ROUNDS, Part, conflicts, drop_faces, join
+
+    lock, stop = threading.Lock(), threading.Event()
+
+    def say(line: str) -> None:
+        if progress is not None:
+            with lock:
+                progress(line)
+
+    def run(faces: frozenset[int], adopt: dict, folder: str) -> Part:
+        os.makedirs(folder)
+        sub = replace(job, faces=faces, adopt=adopt, skip={k: dict(v) for k, v in job.skip.items()},
+                      known_ok=dict(job.known_ok), no_batch=set(job.no_batch), no_refine=set(job.no_refine))
+        result = _supervise(sub, folder, None, limits, say, stop)
+        return Part(faces=faces, result=result, edges=read_deliveries(os.path.join(folder, "faces"))[1],
+                    adopted=frozenset(adopt))
+
+    pool = ThreadPoolExecutor(max_workers=len(shards))
+    try:
+        futures = [pool.submit(run, s, {}, os.path.join(tmp, f"shard{i}")) for i, s in enumerate(shards)]
+        parts = [f.result() for f in futures]
+    except BaseException:  # KeyboardInterrupt: every child is killed before it goes on
+        stop.set()
+        raise
+    finally:
+        pool.shutdown(wait=True)
+    notes = [f"meshed in {len(shards)} processes at once (faces split by boundary segments: "
+             f"{', '.join(str(len(s)) for s in shards)} faces)"]
+    adopted: dict = {}
+    for rounds in range(ADOPT_ROUNDS + 1):
+        adopt, redo, lost = conflicts(job.grid, parts)
+        why = "a neighbour meshed in another process changed an edge they share (its strategy split the " \
+              "edge or meshed it itself)"
+        if lost or (redo and rounds == ADOPT_ROUNDS):
+            gone = lost | (redo if rounds == ADOPT_ROUNDS else set())
+            for p in parts:
+                drop_faces(p, gone & p.faces, f"dropped: {why}, and meshing them again on it did not agree")
+            notes.append(f"faces {', '.join(map(str, sorted(gone)))}: dropped, {why} and they could not be "
+                         "meshed again on it")
+            redo -= gone
+        if not redo:
+            break
+        adopted.update(adopt)
+        for p in parts:
+            p.faces = p.faces - redo
+        ids = ("faces " if len(redo) > 1 else "face ") + ", ".join(map(str, sorted(redo)))
+        say(f"restart {ids}: meshed again in a new process, on edges {', '.join(map(str, sorted(adopt)))} "
+            "as a neighbour's strategy changed them")
+        notes.append(f"{ids}: {why}; meshed again on the changed edge")
+        parts.append(run(frozenset(redo), dict(adopted), os.path.join(tmp, f"again{rounds}")))
+    result, lines, line_edges = join(job.grid, parts)
+    result.notes = notes + result.notes
+    if output is not None and len(result.triangles):
+        _write(_Delivered(result, lines, line_edges), output)
+    return result
 
 
 def _write(delivered: _Delivered, output: Path) -> None:

@@ -6,10 +6,13 @@ hang or exhausted memory costs that child, never the caller. Steps, in order:
 
 1. import the BREP text (no healing; gmsh's wire fixing as a second try, see ``IMPORT_ATTEMPTS``);
 2. map gmsh's entities onto cadedge's ids (:func:`~cadedge.mesh.gmsh_model.map_entities`, never raises);
-3. ``nodes`` mode: impose the edge grids; ``sizes`` mode: sizes at the grids' parameters; gmsh's size
+3. ``nodes`` mode: impose the edge grids (or, for edges in ``job.adopt``, the 1-D mesh another process
+   made of them); ``sizes`` mode: sizes at the grids' parameters; gmsh's size
    field; **hooks "before_generate"**; curves gmsh still has to mesh (degenerate, unmatched, or all of
    them in ``sizes`` mode);
-4. every face on its own through the retry strategies (:func:`~cadedge.mesh.generate.mesh_faces`), with
+4. every face of the job (``job.faces``, all by default; a shard's in a split job, see
+   :mod:`cadedge.mesh.shards`, which also gets the edges a strategy changed, :func:`changed_edges`) on its
+   own through the retry strategies (:func:`~cadedge.mesh.generate.mesh_faces`), with
    a progress line (``face F K``, or ``batch F1 F2 ...`` before a batch of first attempts) and **hooks
    "before_face"** (``context.face``, ``context.strategy`` set) before each attempt (the parent's
    watchdog reads the line); **hooks "after_generate"** (a hook may clear faces and mesh them again with
@@ -69,6 +72,12 @@ class MeshJob:
     attempt_bound: float | None = None  # the watchdog's bound on one face attempt, CPU seconds (sizes batches)
     hooks: dict[str, list[str]] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)  # free-form settings for hooks
+    # the faces this job meshes (None: all); the other faces are imported but left alone, for another
+    # process to mesh (see cadedge.mesh.shards)
+    faces: frozenset[int] | None = None
+    # edge -> (points, gmsh parameters): a 1-D mesh another process made of its curve, imposed instead of
+    # the edge's grid (see changed_edges)
+    adopt: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
 
 @dataclass
@@ -116,6 +125,9 @@ class JobResult:
     extras: dict[str, Any] = field(default_factory=dict)
     error: str | None = None
     written: bool = False
+    # for a job of some faces only (job.faces): the edges whose imposed 1-D mesh a strategy replaced,
+    # as changed_edges gives them
+    changed_edges: dict[int, tuple[np.ndarray, np.ndarray] | None] = field(default_factory=dict)
 
 
 def empty_result(error: str) -> JobResult:
@@ -284,7 +296,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         unmatched = list(emap.unmatched_edges)
         imposed_edges: list[int] = []
         if job.mode == "nodes":
-            imposed = impose_edge_grids(job.grid, emap)
+            imposed = impose_edge_grids(job.grid, emap, job.adopt)
             imposed_edges = sorted(imposed.edge_nodes)
             unmatched = sorted(set(unmatched) | set(imposed.skipped))
             gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
@@ -301,7 +313,8 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         except Exception as exc:  # gmsh's bare Exception: the faces on the curves it missed fail below
             notes.append(f"gmsh's curve meshing reported: {exc}")
         deliver_edges()
-        ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)] if job.faces is None else \
+            [emap.faces[f] for f in sorted(job.faces) if f in emap.faces]  # the others: another process's
         face_of = emap.face_of_surface
         ctx.progress, ctx.deliver = say, deliver
 
@@ -328,7 +341,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
             from .generate import FaceOutcome
 
-            missing = sorted(set(range(1, job.grid.faces + 1)) - set(emap.faces))
+            missing = sorted(set(job.faces or range(1, job.grid.faces + 1)) - set(emap.faces))
             ctx.outcomes.update({-f: FaceOutcome(face=f, surface=0, attempts=[("gmsh import", partial)])
                                  for f in missing})
         edge_of = {m.tag: eid for eid, m in emap.edges.items()}
@@ -336,6 +349,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
         _recheck(ctx, notes)
+        changed = changed_edges(imposed.edge_nodes, emap) if job.faces is not None and job.mode == "nodes" else {}
         if deliver is not None:  # the hooks may have meshed faces again or moved their nodes
             for s, o in sorted(ctx.outcomes.items()):
                 if o.ok and s in face_of:
@@ -356,8 +370,36 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                      faces=sorted(ctx.outcomes.values(), key=lambda o: o.face), edge_pairs=pairs, edge_uses=uses,
                      imposed_edges=imposed_edges, unmatched_edges=unmatched, own_mesh_edges=own_edges, notes=notes,
                      details=list(emap.notes),
-                     extras=extras,
-                     written=written)
+                     extras=extras, written=written, changed_edges=changed)
+
+
+def changed_edges(imposed: dict[int, np.ndarray], emap: Any) -> dict[int, tuple[np.ndarray, np.ndarray] | None]:
+    """Edges whose curve no longer carries the chain of nodes ``imposed`` on it (edge -> node tags, from
+    its first vertex): a strategy split it or meshed it itself. Each with its nodes' points (from the edge's
+    first vertex to its last) and gmsh parameters, for :func:`~cadedge.mesh.impose.impose_edge_grids` in
+    the processes that mesh the edge's other faces; None where the new chain does not run from vertex to
+    vertex (it cannot be imposed there)."""
+    import gmsh
+
+    from .generate import curve_chain
+
+    out: dict[int, tuple[np.ndarray, np.ndarray] | None] = {}
+    for eid, was in imposed.items():
+        match = emap.edges[eid]
+        _, seg = gmsh.model.mesh.getElementsByType(1, match.tag)
+        seg = np.asarray(seg, dtype=np.int64)
+        if not len(seg) or (len(seg) == 2 * (len(was) - 1) and np.array_equal(np.unique(seg), np.unique(was))):
+            continue  # no mesh (its faces failed), or the imposed one
+        chain, u = curve_chain(match.tag)
+        if (u[-1] < u[0]) != (match.params[-1] < match.params[0]):  # the edge's direction, as imposed
+            chain, u = chain[::-1], u[::-1]
+        if chain[0] != was[0] or chain[-1] != was[-1] or not np.all(np.isfinite(u)):
+            out[eid] = None
+            continue
+        tags, coords, _ = gmsh.model.mesh.getNodes(1, match.tag, includeBoundary=True)
+        x_of = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords, dtype=float).reshape(-1, 3)))
+        out[eid] = (np.array([x_of[t] for t in chain.tolist()]), u)
+    return out
 
 
 def _limit_memory() -> None:

@@ -1,0 +1,237 @@
+"""Several gmsh processes at once: a mesh job's faces split into shards, and their meshes joined.
+
+Every face is meshed on its own boundary, and in ``nodes`` mode those boundaries are the imposed edge
+grids, the same in every process: a face meshed in one process conforms to its neighbour meshed in
+another, and the meshes join by exact node coordinates. :func:`plan` splits the faces into one shard per
+worker, balanced by boundary segments (what gmsh's time grows with, see
+:func:`cadedge.mesh.isolate.attempt_bound`); faces bounded by the same edges (two faces on one boundary
+loop) stay together, so the job's check for faces that repeat another's triangles still sees both.
+
+The one way shards can disagree: a face's fallback strategy splits its curves or meshes them itself
+(:data:`cadedge.mesh.generate.STRATEGIES`), which changes the edge under the neighbour meshed elsewhere.
+Each shard reports such edges (:func:`cadedge.mesh.worker.changed_edges`); :func:`conflicts` finds the
+neighbours meshed on the old edge, and they are meshed again in a new process with the new edge imposed
+(``MeshJob.adopt``), at most :data:`ADOPT_ROUNDS` times. Faces still on a disagreeing edge after that are
+dropped and named (:func:`drop_faces`): a mesh with a face missing is reported as such, a non-conforming
+one would not be.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .generate import FaceOutcome
+from .worker import JobResult, empty_result
+
+#: A job is split only when its faces have at least this many boundary segments in all: below it one
+#: process takes seconds and the others' start-up (importing the shape again) would cost more than
+#: they save.
+MIN_SEGMENTS = 20_000
+#: Rounds of meshing neighbours again on an edge another shard changed, at most.
+ADOPT_ROUNDS = 2
+
+
+def default_workers() -> int:
+    """Processes to mesh in at once by default: the CPUs this process may run on."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on this platform
+        return max(1, os.cpu_count() or 1)
+
+
+def face_edges(grid) -> dict[int, set[int]]:
+    """Face id -> the ids of its non-degenerate edges."""
+    out: dict[int, set[int]] = {f: set() for f in range(1, grid.faces + 1)}
+    for e in grid.edges:
+        if not e.degenerate:
+            for f in e.faces:
+                out.setdefault(f, set()).add(e.id)
+    return out
+
+
+def plan(grid, workers: int, segments: dict[int, int]) -> list[frozenset[int]]:
+    """The faces of ``grid`` in at most ``workers`` shards of about equal boundary ``segments`` (face ->
+    count); one shard with every face when ``workers`` is 1 or the job is small (:data:`MIN_SEGMENTS`).
+
+    Four faces in a row (edge 1 between faces 1 and 2, ...), then faces 1 and 2 bounded by edge 1 alone:
+
+    >>> from types import SimpleNamespace as E
+    >>> def edge(i, faces):  # an edge with no points between its ends
+    ...     return E(id=i, degenerate=False, faces=faces, points=np.zeros((2, 3)))
+    >>> row = E(faces=4, vertices=[], edges=[edge(i, [i, i + 1]) for i in (1, 2, 3)])
+    >>> plan(row, 2, {1: 30_000, 2: 30_000, 3: 10_000, 4: 5_000})
+    [frozenset({1, 3}), frozenset({2, 4})]
+    >>> lens = E(faces=4, vertices=[], edges=[edge(1, [1, 2]), edge(2, [3, 4])])
+    >>> plan(lens, 2, {1: 30_000, 2: 30_000, 3: 10_000, 4: 5_000})
+    [frozenset({1, 2}), frozenset({3, 4})]
+    >>> plan(row, 2, {1: 3, 2: 3, 3: 1, 4: 1})
+    [frozenset({1, 2, 3, 4})]
+    """
+    every = frozenset(range(1, grid.faces + 1))
+    if workers < 2 or grid.faces < 2 or sum(segments.values()) < MIN_SEGMENTS or coincident(grid):
+        return [every]
+    units: dict[frozenset[int], list[int]] = {}
+    for f, edges in sorted(face_edges(grid).items()):
+        units.setdefault(frozenset(edges) or frozenset({-f}), []).append(f)
+    weight = {key: sum(segments.get(f, 0) + 1 for f in faces) for key, faces in units.items()}
+    shards: list[list[int]] = [[] for _ in range(min(workers, len(units)))]
+    loads = [0] * len(shards)
+    for key in sorted(units, key=lambda k: (-weight[k], min(units[k]))):  # heaviest first, to the lightest
+        i = loads.index(min(loads))
+        shards[i] += units[key]
+        loads[i] += weight[key]
+    return [frozenset(s) for s in shards if s]
+
+
+def coincident(grid) -> bool:
+    """Whether two of the grid's vertices and edge points are at the same coordinates (a non-manifold
+    model's faces each on their own copy of an edge): the parts' meshes could not be joined by
+    coordinates, so such a job is meshed in one process."""
+    points = [np.asarray(v.point, dtype=float).reshape(1, 3) for v in grid.vertices]
+    points += [np.asarray(e.points, dtype=float)[1:-1] for e in grid.edges if not e.degenerate]
+    keys = _keys(np.concatenate(points)) if points else np.zeros(0)
+    return len(np.unique(keys)) < len(keys)
+
+
+@dataclass
+class Part:
+    """One process's share of a job: the faces it stands for, its result, and its edges' segments as it
+    delivered them (edge -> (k, 2, 3) corners; see :func:`cadedge.mesh.isolate.read_deliveries`)."""
+
+    faces: frozenset[int]
+    result: JobResult
+    edges: dict[int, np.ndarray] = field(default_factory=dict)
+    adopted: frozenset[int] = frozenset()  # edges this part's job imposed from another part
+
+    def meshed(self) -> set[int]:
+        return {o.face for o in self.result.faces if o.ok and o.face in self.faces}
+
+
+def conflicts(grid, parts: list[Part]) -> tuple[dict[int, tuple[np.ndarray, np.ndarray]], set[int], set[int]]:
+    """Where the parts disagree on an edge: ``(adopt, redo, lost)``. An edge that one part changed and
+    another part's meshed face still has as it was: that face is in ``redo``, to be meshed again with
+    ``adopt[edge]`` (the changing part's nodes) imposed; where that cannot be (two parts changed the same
+    edge, or the new chain cannot be imposed), the faces of the other parts on it are in ``lost``."""
+    on_edge = {e.id: list(e.faces) for e in grid.edges}
+    adopt: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    changed_by: dict[int, int] = {}
+    redo: set[int] = set()
+    lost: set[int] = set()
+    for i, part in enumerate(parts):
+        for eid, chain in part.result.changed_edges.items():
+            others = {f for j, p in enumerate(parts) if j != i for f in p.meshed()
+                      if f in on_edge.get(eid, ()) and eid not in p.adopted}
+            if not others:
+                continue
+            if chain is None or eid in changed_by:
+                lost |= others
+                continue
+            changed_by[eid] = i
+            adopt[eid] = chain
+            redo |= others
+    return adopt, redo - lost, lost
+
+
+def drop_faces(part: Part, faces: set[int], reason: str) -> None:
+    """Take ``faces`` out of ``part``'s mesh: their triangles go, their outcomes fail with ``reason``."""
+    r = part.result
+    keep = ~np.isin(r.triangle_faces, sorted(faces))
+    r.triangles, r.triangle_faces = r.triangles[keep], r.triangle_faces[keep]
+    r.faces = [FaceOutcome(face=o.face, surface=o.surface, attempts=[("joining the shards", reason)] + o.attempts)
+               if o.face in faces else o for o in r.faces]
+
+
+def edge_uses(grid, edge_ids: np.ndarray, meshed: set[int]) -> np.ndarray:
+    """How many triangles each segment of the edges ``edge_ids`` should have: how many meshed faces its
+    edge bounds; 0 (free boundary or seam, both fine) for an edge of a single face."""
+    by_id = {e.id: e for e in grid.edges}
+    uses = {}
+    for e in np.unique(edge_ids).tolist():
+        on = by_id[e].faces if e in by_id else []
+        uses[e] = 0 if len(on) == 1 else sum(1 for f in on if f in meshed)
+    return np.array([uses[e] for e in edge_ids.tolist()], dtype=np.int64)
+
+
+def _keys(x: np.ndarray) -> np.ndarray:
+    """Rows of a float array as bytes, for merging nodes by exact coordinates (-0.0 folded into 0.0)."""
+    x = np.ascontiguousarray(np.asarray(x, dtype=np.float64) + 0.0)
+    return x.view(np.dtype((np.void, 8 * x.shape[1]))).ravel()
+
+
+def merge_extras(values: list[Any]) -> Any:
+    """One hook's extras from several parts as one: dicts merged key by key, lists and tuples joined
+    (sorted when they hold numbers only), arrays concatenated; any other value is the first part's.
+
+    >>> merge_extras([{"split": [4], "floored": {2: 0.1}, "per_circle": 40.0}, {"split": [1], "floored": {}}])
+    {'split': [1, 4], 'floored': {2: 0.1}, 'per_circle': 40.0}
+    """
+    if all(isinstance(v, dict) for v in values):
+        keys = dict.fromkeys(k for v in values for k in v)
+        return {k: merge_extras([v[k] for v in values if k in v]) for k in keys}
+    if all(isinstance(v, (list, tuple)) for v in values):
+        joined = [x for v in values for x in v]
+        return sorted(joined) if all(isinstance(x, (int, float)) for x in joined) else joined
+    if all(isinstance(v, np.ndarray) for v in values):
+        return np.concatenate(values)
+    return values[0]
+
+
+def join(grid, parts: list[Part]) -> tuple[JobResult, np.ndarray, np.ndarray]:
+    """The parts' meshes as one result, nodes merged by exact coordinates, and the edges' segments for
+    the writer: ``(result, lines (k, 2) node indices, line_edges (k,) edge ids)``. An edge's segments are
+    those of the last part that changed or adopted it, else the first part's."""
+    errors = [p.result.error for p in parts if p.result.error is not None]
+    if len(errors) == len(parts):
+        result = empty_result(errors[0])
+        result.notes = list(dict.fromkeys(n for p in parts for n in p.result.notes))
+        return result, np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int64)
+    edges: dict[int, np.ndarray] = {}
+    for p in parts:
+        for eid, corners in p.edges.items():
+            if eid not in edges or eid in p.result.changed_edges or eid in p.adopted:
+                edges[eid] = corners
+    blocks, tris, tri_faces, offset = [], [], [], 0
+    for p in parts:
+        r = p.result
+        sel = np.isin(r.triangle_faces, sorted(p.faces))
+        blocks.append(r.nodes)
+        tris.append(r.triangles[sel] + offset)
+        tri_faces.append(r.triangle_faces[sel])
+        offset += len(r.nodes)
+    edge_order = sorted(edges)
+    blocks += [edges[e].reshape(-1, 3) for e in edge_order]
+    _, first, inverse = np.unique(_keys(np.concatenate(blocks)), return_index=True, return_inverse=True)
+    everything = np.concatenate(blocks)
+    inverse = inverse.ravel()
+    result = empty_result("")
+    result.error = None
+    result.nodes = everything[first]
+    result.triangles = inverse[np.concatenate(tris)].astype(np.int64)
+    result.triangle_faces = np.concatenate(tri_faces).astype(np.int64)
+    lines = inverse[offset:].reshape(-1, 2).astype(np.int64)
+    line_edges = np.concatenate([np.full(len(edges[e]), e, dtype=np.int64) for e in edge_order]) \
+        if edge_order else np.zeros(0, dtype=np.int64)
+    outcomes: dict[int, FaceOutcome] = {}
+    for p in parts:
+        if p.result.error is not None:
+            outcomes.update({f: FaceOutcome(face=f, surface=f, attempts=[("meshing", p.result.error)])
+                             for f in p.faces})
+        else:
+            outcomes.update({o.face: o for o in p.result.faces if o.face in p.faces})
+    result.faces = [outcomes.get(f, FaceOutcome(face=f, surface=f)) for f in range(1, grid.faces + 1)]
+    meshed = {o.face for o in result.faces if o.ok}
+    result.edge_pairs = np.sort(lines, axis=1)
+    result.edge_uses = edge_uses(grid, line_edges, meshed)
+    ok = [p.result for p in parts if p.result.error is None]
+    result.own_mesh_edges = sorted({e for r in ok for e in r.own_mesh_edges})
+    result.imposed_edges = sorted({e for r in ok for e in r.imposed_edges} - set(result.own_mesh_edges))
+    result.unmatched_edges = sorted({e for r in ok for e in r.unmatched_edges})
+    result.notes = list(dict.fromkeys(n for p in parts for n in p.result.notes))
+    result.details = list(dict.fromkeys(d for r in ok for d in r.details))
+    names = dict.fromkeys(k for r in ok for k in r.extras)
+    result.extras = {k: merge_extras([r.extras[k] for r in ok if k in r.extras]) for k in names}
+    return result, lines, line_edges

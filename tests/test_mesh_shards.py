@@ -1,0 +1,137 @@
+"""A mesh job's faces in several gmsh processes at once (cadedge.mesh.shards): the joined mesh conforms."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+pytest.importorskip("gmsh")
+meshio = pytest.importorskip("meshio")
+
+import cadedge  # noqa: E402
+from cadedge.cli import main  # noqa: E402
+from cadedge.errors import InputError  # noqa: E402
+from cadedge.mesh import mesh_shape, shards  # noqa: E402
+from cadedge.mesh.check import check_triangles  # noqa: E402
+from cadedge.mesh.generate import STRATEGIES, FaceOutcome  # noqa: E402
+from cadedge.mesh.worker import JobResult, MeshJob, empty_result  # noqa: E402
+
+from conftest import FIXTURES  # noqa: E402
+
+FAULT_FACE = 2  # tests/mesh_faults.py
+
+
+@pytest.fixture
+def split_small_jobs(monkeypatch):
+    """Split every job, however small: the fixtures are far below MIN_SEGMENTS."""
+    monkeypatch.setattr(shards, "MIN_SEGMENTS", 0)
+
+
+@pytest.fixture(scope="module")
+def cylinder() -> cadedge.ShapeGrid:
+    return cadedge.refine_shape(FIXTURES / "cylinder.step", ald=1e-2, max_growth=2.0)
+
+
+def test_a_split_job_meshes_every_face_once_and_conforms(split_small_jobs, tmp_path):
+    """The bracket in two processes: every face meshed, watertight, every grid node a mesh node, the same
+    faces and about the same triangles as in one process, and the .msh keeps the B-rep ids."""
+    out = tmp_path / "b.msh"
+    one = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, workers=1)
+    two = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, workers=2, output=out)
+    assert not any("processes at once" in n for n in one.notes)
+    assert any("meshed in 2 processes at once" in n for n in two.notes)
+    for result in (one, two):
+        assert result.ok, result.problems(verbose=True)
+        assert result.check.missing_grid_nodes == 0 and all(s.watertight for s in result.check.shells)
+    assert set(np.unique(two.triangle_faces)) == set(range(1, two.grid.faces + 1))
+    assert abs(len(two.triangles) - len(one.triangles)) <= 0.02 * len(one.triangles)
+    assert abs(two.report.worst_deficit) <= 1e-2 and not two.report.over_target
+    mesh = meshio.read(out)
+    assert {f"face {f}" for f in range(1, two.grid.faces + 1)} <= set(mesh.field_data)
+    tags = np.concatenate([t for (c, t) in zip(mesh.cells, mesh.cell_data["gmsh:physical"]) if c.type == "triangle"])
+    assert sorted(np.unique(tags)) == list(range(1, two.grid.faces + 1))
+
+
+@pytest.mark.parametrize("fallback", ["split", "own_curves"])
+def test_a_neighbour_is_meshed_again_on_an_edge_another_process_changed(split_small_jobs, cylinder, fallback,
+                                                                        tmp_path):
+    """The cylinder's cap (face 2) in one process meshed only by a strategy that splits its curve or
+    meshes it itself; the side, in the other process, was meshed on the imposed grid: it is meshed again
+    on the cap's new curve, and the joined mesh conforms."""
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.isolate import run_isolated
+    from cadedge.mesh.sizes import SizeField
+
+    first = next(k for k, s in enumerate(STRATEGIES) if getattr(s, fallback))
+    skip = {FAULT_FACE: {k: "barred by the test" for k in range(first)}}
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape),
+                  grid=dataclasses.replace(cylinder, shape=None, curves=None), field=SizeField(cylinder), mode="nodes",
+                  skip=skip)
+    out = tmp_path / "c.msh"
+    res = run_isolated(job, output=out, workers=2)
+    assert all(o.ok for o in res.faces), res.faces
+    assert next(o for o in res.faces if o.face == FAULT_FACE).strategy == STRATEGIES[first].name
+    assert any("meshed again on the changed edge" in n for n in res.notes), res.notes
+    multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
+    check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
+                            edge_multiplicity=multiplicity)
+    assert check.ok and all(s.watertight for s in check.shells)
+    if fallback == "split":  # the cap's curve is not its grid any more, on both sides
+        assert len(res.edge_pairs) > sum(e.segments for e in cylinder.edges if not e.degenerate)
+    else:
+        assert res.own_mesh_edges
+    mesh = meshio.read(out)
+    assert {"face 1", "face 2", "face 3"} <= set(mesh.field_data)
+
+
+def _part(faces, meshed, changed=None, adopted=()):
+    result = empty_result("")
+    result.error = None
+    result.faces = [FaceOutcome(face=f, surface=f, strategy="MeshAdapt" if f in meshed else None) for f in faces]
+    result.changed_edges = changed or {}
+    return shards.Part(faces=frozenset(faces), result=result, adopted=frozenset(adopted))
+
+
+def test_conflicts_name_the_faces_to_mesh_again_and_those_that_cannot_be():
+    from types import SimpleNamespace as E
+
+    grid = E(faces=4, edges=[E(id=1, degenerate=False, faces=[1, 2]), E(id=2, degenerate=False, faces=[3, 4]),
+                             E(id=3, degenerate=False, faces=[1, 3])])
+    chain = (np.zeros((3, 3)), np.arange(3.0))
+    a, b = _part([1, 3], {1, 3}, {1: chain}), _part([2, 4], {2, 4})
+    adopt, redo, lost = shards.conflicts(grid, [a, b])
+    assert list(adopt) == [1] and redo == {2} and not lost
+    again = _part([2], {2}, adopted=[1])  # face 2 meshed again on edge 1: nothing left to do
+    b.faces = frozenset({4})
+    assert shards.conflicts(grid, [a, b, again]) == ({}, set(), set())
+    # a chain that cannot be imposed, and an edge changed on both sides: the other side's faces are lost
+    a, b = _part([1, 3], {1, 3}, {1: None}), _part([2, 4], {2, 4}, {2: chain})
+    adopt, redo, lost = shards.conflicts(grid, [a, b])
+    assert lost == {2} and redo == {3} and list(adopt) == [2]
+    shards.drop_faces(b, {2}, "dropped")
+    assert not next(o for o in b.result.faces if o.face == 2).ok
+
+
+def test_extras_of_the_parts_are_merged():
+    parts = []
+    for faces, split in (([1], [1]), ([2], [])):
+        part = _part(faces, set(faces))
+        part.result.nodes = np.zeros((0, 3))
+        part.result.extras = {"cadedge.mesh.fidelity:after_mesh": {"split": split, "stuck": [], "floored": {}}}
+        parts.append(part)
+    grid = type("G", (), {"faces": 2, "edges": []})()
+    result, _, _ = shards.join(grid, parts)
+    assert result.extras["cadedge.mesh.fidelity:after_mesh"]["split"] == [1]
+    assert [o.ok for o in result.faces] == [True, True]
+    assert isinstance(result, JobResult)
+
+
+def test_workers_must_be_a_whole_number_of_processes(tmp_path, capsys):
+    with pytest.raises(InputError, match="workers"):
+        mesh_shape(FIXTURES / "cylinder.step", workers=0)
+    code = main(["mesh", str(FIXTURES / "cylinder.step"), "-o", str(tmp_path / "c.msh"), "--workers", "two"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--workers must be a whole number" in err[0]
+    assert not (tmp_path / "c.msh").exists()
