@@ -16,3 +16,8 @@ def curve_segments(ctx) -> dict:
 def smoothed(ctx) -> list[int]:
     """``after_mesh`` hook: the faces the face optimiser changed (``cadedge.mesh.optimize``)."""
     return list(getattr(ctx, "smoothed", []))
+
+
+def share(ctx) -> list[float]:
+    """``after_mesh`` hook: the job's share of the whole job's faces (``MeshJob.share``; under 1 in a shard)."""
+    return [ctx.job.share]

@@ -427,7 +427,7 @@ def _adapt_context(side: int, brep_area: float, target: float):
     options = {"fidelity": {"surface_ald": target, "brep_areas": np.array([brep_area]), "per_circle": 20.0,
                             "face_per_circle": {1: 20.0}}}  # 0.31 on the radius-1 cylinder
     lines: list[str] = []
-    ctx = SimpleNamespace(job=SimpleNamespace(options=options, no_refine=set(), deadline=None),
+    ctx = SimpleNamespace(job=SimpleNamespace(options=options, no_refine=set(), deadline=None, share=1.0),
                           emap=SimpleNamespace(face_of_surface={side: 1}), progress=lines.append,
                           outcomes={side: FaceOutcome(face=1, surface=side, strategy="Frontal-Delaunay")},
                           cpu_started=time.process_time(), fidelity={})

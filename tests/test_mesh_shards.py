@@ -39,13 +39,16 @@ def test_a_split_job_meshes_every_face_once_and_conforms(split_small_jobs, tmp_p
     faces and about the same triangles as in one process, and the .msh keeps the B-rep ids."""
     out = tmp_path / "b.msh"
     one = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, workers=1)
-    two = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, workers=2, output=out)
+    two = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, workers=2, output=out,
+                     hooks={"after_mesh": ["mesh_probes:share"]})
     assert not any("processes at once" in n for n in one.notes)
     assert any("meshed in 2 processes at once" in n for n in two.notes)
     for result in (one, two):
         assert result.ok, result.problems(verbose=True)
         assert result.check.missing_grid_nodes == 0 and all(s.watertight for s in result.check.shells)
     assert set(np.unique(two.triangle_faces)) == set(range(1, two.grid.faces + 1))
+    shares = two.extras["mesh_probes:share"]  # each child's share of the minimum time budgets
+    assert len(shares) == 2 and all(0 < s < 1 for s in shares) and sum(shares) == pytest.approx(1.0)
     assert abs(len(two.triangles) - len(one.triangles)) <= 0.02 * len(one.triangles)
     assert abs(two.report.worst_deficit) <= 1e-2 and not two.report.over_target
     mesh = meshio.read(out)

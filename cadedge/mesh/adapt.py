@@ -41,7 +41,8 @@ GAIN_DEG = 1.0
 #: MeshAdapt's mesh may have at most this many times the triangles of the face's first mesh.
 GROWTH = 1.5
 #: The retries stop once they have taken this share of the CPU time the job took before them, at least
-#: :data:`MIN_BUDGET` seconds (the poorest faces go first). MeshAdapt can be slow on B-spline faces:
+#: :data:`MIN_BUDGET` seconds (times the job's share, ``MeshJob.share``, for a split job's shard; the
+#: poorest faces go first). MeshAdapt can be slow on B-spline faces:
 #: wing_fuselage's fuselage face at 1e-3 (3 753 triangles) took it 61 s.
 BUDGET_SHARE = 0.5
 MIN_BUDGET = 10.0
@@ -103,7 +104,7 @@ def after_generate(ctx) -> None:
                 and 1 <= f <= len(areas) and areas[f - 1] > 0 and (q := face_quality(s)) is not None and poor(q)):
             quality[s] = q
     cpu = time.process_time()
-    cpu_end = cpu + max(MIN_BUDGET, BUDGET_SHARE * (cpu - ctx.cpu_started))
+    cpu_end = cpu + max(MIN_BUDGET * ctx.job.share, BUDGET_SHARE * (cpu - ctx.cpu_started))
     for s in sorted(quality, key=lambda s: (-quality[s][1], s)):  # the poorest first
         if time.process_time() > cpu_end or (ctx.job.deadline is not None and time.time() > ctx.job.deadline):
             break

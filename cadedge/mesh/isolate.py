@@ -511,10 +511,15 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
             with lock:
                 progress(line)
 
+    segments = face_segments(job.grid)
+    total = sum(segments.get(f, 0) + 1 for f in range(1, job.grid.faces + 1))
+
     def run(faces: frozenset[int], adopt: dict, folder: str) -> Part:
         os.makedirs(folder)
+        share = sum(segments.get(f, 0) + 1 for f in faces) / total
         sub = replace(job, faces=faces, adopt=adopt, skip={k: dict(v) for k, v in job.skip.items()},
-                      known_ok=dict(job.known_ok), no_batch=set(job.no_batch), no_refine=set(job.no_refine))
+                      known_ok=dict(job.known_ok), no_batch=set(job.no_batch), no_refine=set(job.no_refine),
+                      share=share)
         result = _supervise(sub, folder, None, limits, say, stop)
         return Part(faces=faces, result=result, edges=read_deliveries(os.path.join(folder, "faces"))[1],
                     adopted=frozenset(adopt))

@@ -83,7 +83,8 @@ STUCK_OWN = 0.01
 #: triangles' edges collapse, when a pass over the whole face is not kept (``smooth_face``'s retry).
 FOCUS = 3.0
 #: The optimiser's time budget: this share of the CPU time the job took before it (reading the shape,
-#: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds (CPU time: a loaded machine slows the
+#: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds (times ``MeshJob.share`` in a split job's
+#: shard, so that the shards together get what one job would; CPU time: a loaded machine slows the
 #: optimiser as much as what came before it), and never past the job's ``finish_by`` on the clock
 #: (:data:`~cadedge.mesh.isolate.FINISH_SHARE` of the timeout; past the soft deadline too, which only
 #: stops meshing: under load mesh_T106_V3's meshing used the soft deadline and every face kept gmsh's
@@ -378,7 +379,8 @@ def after_generate(ctx) -> None:
     stuck = set((getattr(ctx, "fidelity", None) or {}).get("stuck", []))
     kept: list[int] = []
     cpu = time.process_time()
-    cpu_end = cpu + max(MIN_BUDGET, BUDGET_SHARE * (cpu - ctx.cpu_started))  # the job's CPU time so far
+    cpu_end = cpu + max(MIN_BUDGET * ctx.job.share,  # a shard's share of it (cadedge.mesh.shards)
+                        BUDGET_SHARE * (cpu - ctx.cpu_started))  # the job's CPU time so far
     end = ctx.job.finish_by  # on the clock; the soft deadline (ctx.job.deadline) bounds meshing, not this
     deliver = ctx.deliver or (lambda dim, tag, corners: None)
     say = ctx.progress or (lambda line: None)

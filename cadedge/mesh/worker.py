@@ -78,6 +78,9 @@ class MeshJob:
     # edge -> (points, gmsh parameters): a 1-D mesh another process made of its curve, imposed instead of
     # the edge's grid (see changed_edges)
     adopt: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    # this job's share of the whole job's faces (by boundary segments; a shard's is under 1): the steps'
+    # minimum time budgets, meant for the whole job, are scaled by it
+    share: float = 1.0
 
 
 @dataclass
