@@ -109,7 +109,11 @@ def test_conflicts_name_the_faces_to_mesh_again_and_those_that_cannot_be():
     again = _part([2], {2}, adopted=[1])  # face 2 meshed again on edge 1: nothing left to do
     b.faces = frozenset({4})
     assert shards.conflicts(grid, [a, b, again]) == ({}, set(), set())
-    # a chain that cannot be imposed, and an edge changed on both sides: the other side's faces are lost
+    # an edge changed on both sides: the first side's chain is imposed on the other's faces
+    a, b = _part([1, 3], {1, 3}, {1: chain}), _part([2, 4], {2, 4}, {1: (np.ones((5, 3)), np.arange(5.0))})
+    adopt, redo, lost = shards.conflicts(grid, [a, b])
+    assert adopt[1] is chain and redo == {2} and not lost
+    # a chain that cannot be imposed: the other side's faces on it are lost
     a, b = _part([1, 3], {1, 3}, {1: None}), _part([2, 4], {2, 4}, {2: chain})
     adopt, redo, lost = shards.conflicts(grid, [a, b])
     assert lost == {2} and redo == {3} and list(adopt) == [2]

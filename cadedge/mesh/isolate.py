@@ -536,26 +536,24 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
     notes = [f"meshed in {len(shards)} processes at once (faces split by boundary segments: "
              f"{', '.join(str(len(s)) for s in shards)} faces)"]
     adopted: dict = {}
+    why = "a neighbour meshed in another process changed an edge they share (its strategy split the edge or " \
+          "meshed it itself)"
     for rounds in range(ADOPT_ROUNDS + 1):
         adopt, redo, lost = conflicts(job.grid, parts)
-        why = "a neighbour meshed in another process changed an edge they share (its strategy split the " \
-              "edge or meshed it itself)"
         if lost or (redo and rounds == ADOPT_ROUNDS):
             gone = lost | (redo if rounds == ADOPT_ROUNDS else set())
             for p in parts:
-                drop_faces(p, gone & p.faces, f"dropped: {why}, and meshing them again on it did not agree")
-            notes.append(f"faces {', '.join(map(str, sorted(gone)))}: dropped, {why} and they could not be "
-                         "meshed again on it")
+                drop_faces(p, gone & p.faces, f"dropped: {why}, and it could not be meshed again on it")
+            notes.append(f"{_faces_text(gone)}: dropped, {why}, and they could not be meshed again on it")
             redo -= gone
         if not redo:
             break
         adopted.update(adopt)
         for p in parts:
             p.faces = p.faces - redo
-        ids = ("faces " if len(redo) > 1 else "face ") + ", ".join(map(str, sorted(redo)))
-        say(f"restart {ids}: meshed again in a new process, on edges {', '.join(map(str, sorted(adopt)))} "
-            "as a neighbour's strategy changed them")
-        notes.append(f"{ids}: {why}; meshed again on the changed edge")
+        say(f"restart {_faces_text(redo)}: meshed again in a new process, on edges "
+            f"{', '.join(map(str, sorted(adopt)))} as a neighbour's strategy changed them")
+        notes.append(f"{_faces_text(redo)}: {why}; meshed again on the changed edge")
         parts.append(run(frozenset(redo), dict(adopted), os.path.join(tmp, f"again{rounds}")))
     result, lines, line_edges = join(job.grid, parts)
     result.notes = notes + result.notes
@@ -564,8 +562,13 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
     return result
 
 
+def _faces_text(faces: set[int]) -> str:
+    """``face 3`` or ``faces 3, 7``."""
+    return ("faces " if len(faces) > 1 else "face ") + ", ".join(map(str, sorted(faces)))
+
+
 def _write(delivered: _Delivered, output: Path) -> None:
-    """Write a delivered result with meshio (gmsh did not finish): in a ``.msh`` (format 2.2) the triangles
+    """Write a delivered or joined result with meshio (no gmsh writer had the whole mesh): in a ``.msh`` (format 2.2) the triangles
     and edge segments carry the physical groups gmsh's writer would give (``face <id>``, ``edge <id>``,
     tagged with the B-rep ids, see :mod:`cadedge.mesh.groups`); ``.stl`` and ``.vtk`` get the triangles."""
     import meshio

@@ -113,9 +113,9 @@ class Part:
 
 def conflicts(grid, parts: list[Part]) -> tuple[dict[int, tuple[np.ndarray, np.ndarray]], set[int], set[int]]:
     """Where the parts disagree on an edge: ``(adopt, redo, lost)``. An edge that one part changed and
-    another part's meshed face still has as it was: that face is in ``redo``, to be meshed again with
-    ``adopt[edge]`` (the changing part's nodes) imposed; where that cannot be (two parts changed the same
-    edge, or the new chain cannot be imposed), the faces of the other parts on it are in ``lost``."""
+    another part's meshed face has otherwise (as imposed, or changed its own way): that face is in
+    ``redo``, to be meshed again with ``adopt[edge]`` (the first changing part's nodes) imposed; where the
+    new chain cannot be imposed, the other parts' faces on it are in ``lost``."""
     on_edge = {e.id: list(e.faces) for e in grid.edges}
     adopt: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     changed_by: dict[int, int] = {}
@@ -127,7 +127,9 @@ def conflicts(grid, parts: list[Part]) -> tuple[dict[int, tuple[np.ndarray, np.n
                       if f in on_edge.get(eid, ()) and eid not in p.adopted}
             if not others:
                 continue
-            if chain is None or eid in changed_by:
+            if eid in changed_by:  # changed here too: this part's faces on it are in redo already
+                continue
+            if chain is None:
                 lost |= others
                 continue
             changed_by[eid] = i
