@@ -89,6 +89,18 @@ def test_a_neighbour_is_meshed_again_on_an_edge_another_process_changed(split_sm
     assert {"face 1", "face 2", "face 3"} <= set(mesh.field_data)
 
 
+def test_a_split_job_past_its_timeout_joins_what_every_child_delivered(split_small_jobs, cylinder, tmp_path):
+    """Both children hang once their faces are meshed: at the timeout each hands over its faces, named in
+    a note of its own, and the joined mesh is whole and written."""
+    out = tmp_path / "c.msh"
+    result = mesh_shape(cylinder, workers=2, timeout=10, output=out,
+                        hooks={"after_generate": ["mesh_faults:hang_after_meshing"]})
+    assert result.ok and all(s.watertight for s in result.check.shells)
+    stopped = [n for n in result.notes if "was stopped" in n]
+    assert len(stopped) == 2 and all(n.startswith("the mesh process of face") for n in stopped)
+    assert out.exists() and len(meshio.read(out).cells_dict["triangle"]) == len(result.triangles)
+
+
 def _part(faces, meshed, changed=None, adopted=()):
     result = empty_result("")
     result.error = None

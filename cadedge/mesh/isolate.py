@@ -462,7 +462,8 @@ def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
                     if f in faces else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
                     for f in mine]
     missing = len(mine) - len(faces)
-    result.notes = events + [f"the mesh process was stopped ({reason}); the {len(faces)} faces it had meshed are "
+    which = "the mesh process" if job.faces is None else f"the mesh process of {_faces_text(set(job.faces))}"
+    result.notes = events + [f"{which} was stopped ({reason}); the {len(faces)} faces it had meshed are "
                              "delivered as last meshed (re-meshed finer where that had finished), without the "
                              "face optimiser's last pass or gmsh's writer"
                              + (f"; {missing} faces are missing" if missing else "")]
@@ -562,9 +563,11 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
     return result
 
 
-def _faces_text(faces: set[int]) -> str:
-    """``face 3`` or ``faces 3, 7``."""
-    return ("faces " if len(faces) > 1 else "face ") + ", ".join(map(str, sorted(faces)))
+def _faces_text(faces: set[int], limit: int = 8) -> str:
+    """``face 3``, ``faces 3, 7`` or ``faces 1, 2, ... (12 in all)`` (at most ``limit`` named)."""
+    ids = sorted(faces)
+    shown = ", ".join(map(str, ids[:limit])) + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
+    return ("faces " if len(ids) > 1 else "face ") + shown
 
 
 def _write(delivered: _Delivered, output: Path) -> None:
