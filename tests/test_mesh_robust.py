@@ -358,7 +358,7 @@ def test_faces_an_earlier_child_delivered_are_kept_when_the_last_one_did_not_mes
     import pickle
 
     from cadedge.mesh.gmsh_model import shape_to_brep
-    from cadedge.mesh.isolate import _with_earlier_faces
+    from cadedge.mesh.delivered import with_earlier_faces
     from cadedge.mesh.sizes import SizeField
     from cadedge.mesh.worker import MeshJob, run_job
 
@@ -375,12 +375,12 @@ def test_faces_an_earlier_child_delivered_are_kept_when_the_last_one_did_not_mes
     full = run_job(job(), deliver=deliver)  # the first child: every face meshed and delivered
     last = run_job(job(known_ok={2: 0}, deadline=time.time() - 1), deliver=deliver)  # face 2 only
     assert [o.face for o in last.faces if o.ok] == [2]
-    merged = _with_earlier_faces(last, str(path), job(), {2: 0}).result
+    merged = with_earlier_faces(last, str(path), job(), {2: 0}).result
     assert [o.face for o in merged.faces if o.ok] == [1, 2, 3]
     assert set(np.unique(merged.triangle_faces)) == {1, 2, 3}
     assert len(merged.triangles) == len(full.triangles) and len(merged.nodes) == len(np.unique(full.nodes, axis=0))
     assert any("faces 1, 3: meshed by an earlier mesh process" in n for n in merged.notes)
-    assert _with_earlier_faces(full, str(path), job(), {}) is None  # nothing to add
+    assert with_earlier_faces(full, str(path), job(), {}) is None  # nothing to add
 
 
 def test_the_optimiser_runs_past_the_soft_deadline_until_finish_by(cylinder):

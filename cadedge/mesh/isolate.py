@@ -53,10 +53,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numpy as np
-
 from ..atomic import atomic_path
 from ..childproc import child_env
+from .delivered import Delivered, delivered, read_deliveries, with_earlier_faces, write_meshio
 from .generate import STRATEGIES
 from .worker import JobResult, MeshJob, empty_result
 
@@ -302,10 +301,10 @@ def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
         if run.status == "ok":
             result = run.result
             result.notes = events + result.notes
-            fuller = _with_earlier_faces(result, os.path.join(tmp, "faces"), job, known_ok)
+            fuller = with_earlier_faces(result, os.path.join(tmp, "faces"), job, known_ok)
             if fuller is not None:
                 if output is not None:
-                    _write(fuller, output)
+                    write_meshio(fuller, output)
                 return fuller.result
             if output is not None and result.written and len(result.triangles):
                 with atomic_path(output) as dst:
@@ -360,12 +359,12 @@ def _deliver_or_fail(path: str, job: MeshJob, known_ok: dict[int, int], reason: 
                      output: Path | None) -> JobResult:
     """The job ends without a finished child: the faces the children delivered (written to ``output``),
     the others failing with ``reason``; with none delivered the job fails with it."""
-    delivered = _delivered(path, job, known_ok, reason, events)
-    if delivered is None:
+    mesh = delivered(path, job, known_ok, reason, events)
+    if mesh is None:
         return _failed(reason, events)
     if output is not None:
-        _write(delivered, output)
-    return delivered.result
+        write_meshio(mesh, output)
+    return mesh.result
 
 
 def _remove_orphaned_folders() -> None:
@@ -399,103 +398,6 @@ def _alive(pid: int) -> bool:
     return True
 
 
-@dataclass
-class _Delivered:
-    """A killed child's mesh: the result, and its edges' segments for the writer (``lines`` (k, 2) node
-    indices, ``line_edges`` (k,) edge ids)."""
-
-    result: JobResult
-    lines: np.ndarray
-    line_edges: np.ndarray
-
-
-def read_deliveries(path: str) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray]]:
-    """Faces' triangles and edges' segments from the child's delivery file (``worker.run_job``'s
-    ``deliver``): the last record of an entity wins, a cleared face is dropped, a record cut off ends it."""
-    faces: dict[int, np.ndarray] = {}
-    edges: dict[int, np.ndarray] = {}
-    try:
-        with open(path, "rb") as f:
-            while True:
-                dim, tag, corners = pickle.load(f)
-                into = faces if dim == 2 else edges
-                if corners is None:
-                    into.pop(tag, None)
-                else:
-                    into[tag] = corners
-    except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError):  # the end, or a record cut off
-        pass
-    return {f: t for f, t in faces.items() if len(t)}, {e: c for e, c in edges.items() if len(c)}
-
-
-def _delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
-               events: list[str]) -> _Delivered | None:
-    """The faces the killed children delivered, as a result whose other faces fail with ``reason``; None
-    when no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes,
-    and the delivered edge segments are the faces' boundary segments, so each edge's multiplicity for the
-    check is known (how many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
-    from .generate import FaceOutcome
-    from .shards import edge_uses
-
-    faces, edges = read_deliveries(path)
-    if not faces:
-        return None
-    order = sorted(faces)
-    edge_order = sorted(edges)
-    corners = np.concatenate([faces[f].reshape(-1, 3) for f in order]
-                             + [edges[e].reshape(-1, 3) for e in edge_order])
-    nodes, index = np.unique(corners, axis=0, return_inverse=True)
-    index = index.ravel()
-    n_tri = sum(len(faces[f]) for f in order)
-    result = empty_result("")
-    result.error = None
-    result.nodes, result.triangles = nodes, index[:3 * n_tri].reshape(-1, 3).astype(np.int64)
-    result.triangle_faces = np.concatenate([np.full(len(faces[f]), f, dtype=np.int64) for f in order])
-    lines = index[3 * n_tri:].reshape(-1, 2).astype(np.int64)
-    line_edges = np.concatenate([np.full(len(edges[e]), e, dtype=np.int64) for e in edge_order]) \
-        if edge_order else np.zeros(0, dtype=np.int64)
-    result.edge_pairs = np.sort(lines, axis=1)
-    result.edge_uses = edge_uses(job.grid, line_edges, set(faces))
-    names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
-    mine = sorted(job.faces) if job.faces is not None else range(1, job.grid.faces + 1)
-    result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))
-                    if f in faces else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
-                    for f in mine]
-    missing = len(mine) - len(faces)
-    which = "the mesh process" if job.faces is None else f"the mesh process of {_faces_text(set(job.faces))}"
-    result.notes = events + [f"{which} was stopped ({reason}); the {len(faces)} faces it had meshed are "
-                             "delivered as last meshed (re-meshed finer where that had finished), without the "
-                             "face optimiser's last pass or gmsh's writer"
-                             + (f"; {missing} faces are missing" if missing else "")]
-    return _Delivered(result, lines, line_edges)
-
-
-def _with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dict[int, int]) -> _Delivered | None:
-    """``result``, from a child that finished, with the faces an earlier, stopped child delivered and this
-    one did not mesh (its replay of them was stopped in turn, or came after the soft deadline with their
-    strategy barred): the union of both, nodes merged by exact coordinates as for the hard timeout; None
-    when there is no such face. A restarted job that ran out of time used to end with the last child's
-    faces only, down to none."""
-    if result.error is not None:
-        return None
-    faces, _ = read_deliveries(path)
-    meshed = {o.face for o in result.faces if o.ok}
-    extra = sorted(set(faces) - meshed)
-    if not extra:
-        return None
-    union = _delivered(path, job, known_ok, "", [])
-    mine = {o.face: o for o in result.faces}
-    outcomes = [o if o.face in extra or o.face not in mine else mine[o.face] for o in union.result.faces]
-    merged = replace(result, nodes=union.result.nodes, triangles=union.result.triangles,
-                                 triangle_faces=union.result.triangle_faces, edge_pairs=union.result.edge_pairs,
-                                 edge_uses=union.result.edge_uses, faces=outcomes, written=False)
-    merged.notes = result.notes + [
-        f"faces {', '.join(map(str, extra))}: meshed by an earlier mesh process that was stopped; the last one "
-        "did not mesh them again, so they are delivered as that process meshed them (the mesh written by "
-        "meshio, not gmsh's writer)"]
-    return _Delivered(merged, union.lines, union.line_edges)
-
-
 def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Path | None, limits: _Limits,
                 progress: Callable[[str], None] | None) -> JobResult:
     """Mesh each shard of ``job``'s faces in its own child at once, each under :func:`_supervise`; mesh
@@ -503,7 +405,7 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
     write them to ``output``."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from .shards import ADOPT_ROUNDS, Part, conflicts, drop_faces, join
+    from .shards import ADOPT_ROUNDS, Part, conflicts, drop_faces, faces_text, join
 
     lock, stop = threading.Lock(), threading.Event()
 
@@ -545,56 +447,22 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
             gone = lost | (redo if rounds == ADOPT_ROUNDS else set())
             for p in parts:
                 drop_faces(p, gone & p.faces, f"dropped: {why}, and it could not be meshed again on it")
-            notes.append(f"{_faces_text(gone)}: dropped, {why}, and they could not be meshed again on it")
+            notes.append(f"{faces_text(gone)}: dropped, {why}, and they could not be meshed again on it")
             redo -= gone
         if not redo:
             break
         adopted.update(adopt)
         for p in parts:
             p.faces = p.faces - redo
-        say(f"restart {_faces_text(redo)}: meshed again in a new process, on edges "
+        say(f"restart {faces_text(redo)}: meshed again in a new process, on edges "
             f"{', '.join(map(str, sorted(adopt)))} as a neighbour's strategy changed them")
-        notes.append(f"{_faces_text(redo)}: {why}; meshed again on the changed edge")
+        notes.append(f"{faces_text(redo)}: {why}; meshed again on the changed edge")
         parts.append(run(frozenset(redo), dict(adopted), os.path.join(tmp, f"again{rounds}")))
     result, lines, line_edges = join(job.grid, parts)
     result.notes = notes + result.notes
     if output is not None and len(result.triangles):
-        _write(_Delivered(result, lines, line_edges), output)
+        write_meshio(Delivered(result, lines, line_edges), output)
     return result
-
-
-def _faces_text(faces: set[int], limit: int = 8) -> str:
-    """``face 3``, ``faces 3, 7`` or ``faces 1, 2, ... (12 in all)`` (at most ``limit`` named)."""
-    ids = sorted(faces)
-    shown = ", ".join(map(str, ids[:limit])) + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
-    return ("faces " if len(ids) > 1 else "face ") + shown
-
-
-def _write(delivered: _Delivered, output: Path) -> None:
-    """Write a delivered or joined result with meshio (no gmsh writer had the whole mesh): in a ``.msh`` (format 2.2) the triangles
-    and edge segments carry the physical groups gmsh's writer would give (``face <id>``, ``edge <id>``,
-    tagged with the B-rep ids, see :mod:`cadedge.mesh.groups`); ``.stl`` and ``.vtk`` get the triangles."""
-    import meshio
-
-    result = delivered.result
-    faces = result.triangle_faces.astype(np.int64)
-    cells = [("triangle", result.triangles)]
-    tags = [faces]
-    field_data = {}
-    # MSH 2.2: elements carry their physical and entity tags themselves (meshio's MSH 4.1 writer wants one
-    # cell block and one node per entity)
-    fmt = {".msh": "gmsh22", ".stl": "stl", ".vtk": "vtk"}[output.suffix.lower()]
-    if fmt == "gmsh22":
-        if len(delivered.lines):
-            cells.insert(0, ("line", delivered.lines))
-            tags.insert(0, delivered.line_edges)
-        field_data = {**{f"edge {e}": np.array([e, 1]) for e in np.unique(delivered.line_edges).tolist()},
-                      **{f"face {f}": np.array([f, 2]) for f in np.unique(faces).tolist()}}
-    mesh = meshio.Mesh(result.nodes, cells, cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
-                       field_data=field_data)
-    with atomic_path(output) as dst:
-        meshio.write(str(dst), mesh, file_format=fmt)
-    result.written = True
 
 
 def _failed(reason: str, events: list[str]) -> JobResult:

@@ -100,7 +100,7 @@ def coincident(grid) -> bool:
 @dataclass
 class Part:
     """One process's share of a job: the faces it stands for, its result, and its edges' segments as it
-    delivered them (edge -> (k, 2, 3) corners; see :func:`cadedge.mesh.isolate.read_deliveries`)."""
+    delivered them (edge -> (k, 2, 3) corners; see :func:`cadedge.mesh.delivered.read_deliveries`)."""
 
     faces: frozenset[int]
     result: JobResult
@@ -145,6 +145,13 @@ def drop_faces(part: Part, faces: set[int], reason: str) -> None:
     r.triangles, r.triangle_faces = r.triangles[keep], r.triangle_faces[keep]
     r.faces = [FaceOutcome(face=o.face, surface=o.surface, attempts=[("joining the shards", reason)] + o.attempts)
                if o.face in faces else o for o in r.faces]
+
+
+def faces_text(faces: set[int], limit: int = 8) -> str:
+    """``face 3``, ``faces 3, 7`` or ``faces 1, 2, ... (12 in all)`` (at most ``limit`` named)."""
+    ids = sorted(faces)
+    shown = ", ".join(map(str, ids[:limit])) + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
+    return ("faces " if len(ids) > 1 else "face ") + shown
 
 
 def edge_uses(grid, edge_ids: np.ndarray, meshed: set[int]) -> np.ndarray:
