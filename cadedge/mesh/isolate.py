@@ -186,8 +186,18 @@ def _learn(lines: list[str], skip: dict[int, dict[int, str]], known_ok: dict[int
             skip.setdefault(face, {})[k] = words[4] if len(words) > 4 else "failed"
 
 
-def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_timeout: float,
-               progress: Callable[[str], None] | None = None, stop: threading.Event | None = None) -> _Run:
+@dataclass
+class _Limits:
+    """A job's time bounds: ``deadline`` and ``kill_at`` on ``time.monotonic()`` (see the module doc)."""
+
+    deadline: float
+    kill_at: float
+    timeout: float
+    face_timeout: float
+
+
+def _run_child(job: MeshJob, tmp: str, limits: _Limits, progress: Callable[[str], None] | None = None,
+               stop: threading.Event | None = None) -> _Run:
     job_path, result_path, progress_path = (os.path.join(tmp, n) for n in ("job.pkl", "result.pkl", "progress"))
     for p in (result_path, progress_path):
         if os.path.exists(p):
@@ -200,7 +210,7 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                                  os.path.join(tmp, "faces")],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
                                 start_new_session=True)
-        last, since, cpu_since, bound = "", time.monotonic(), 0.0, face_timeout
+        last, since, cpu_since, bound = "", time.monotonic(), 0.0, limits.face_timeout
         segments = face_segments(job.grid)
         tail = _Tail(progress_path)
         try:
@@ -221,13 +231,13 @@ def _run_child(job: MeshJob, tmp: str, deadline: float, kill_at: float, face_tim
                 cpu = _cpu_seconds(proc.pid)
                 if line != last:
                     last, since, cpu_since = line, now, cpu or 0.0
-                    bound = attempt_bound(line, face_timeout, segments)
-                if now > deadline:
+                    bound = attempt_bound(line, limits.face_timeout, segments)
+                if now > limits.deadline:
                     return _Run(None, "timeout", last, "")
                 busy = now - since if cpu is None else cpu - cpu_since
                 if line.startswith(_ATTEMPT_LINES) and (busy > bound or now - since > WALL_SLACK * bound):
                     return _Run(None, "hung", last, f"hung: no result within {bound:.3g} s")
-                if line.startswith(_ATTEMPT_LINES) and now > kill_at:
+                if line.startswith(_ATTEMPT_LINES) and now > limits.kill_at:
                     return _Run(None, "late", last, "not finished: out of time (timeout)")
         finally:
             if proc.poll() is None:
@@ -266,29 +276,19 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     job.finish_by = time.time() + FINISH_SHARE * timeout
     job.attempt_bound = face_timeout
     _remove_orphaned_folders()
-    shards = plan(job.grid, workers, face_segments(job.grid)) if job.mode == "nodes" and job.faces is None \
-        else [job.faces]
+    segments = face_segments(job.grid)
+    shards = plan(job.grid, workers, segments) if job.mode == "nodes" and job.faces is None else [job.faces]
     with tempfile.TemporaryDirectory(prefix=f"{FOLDER_PREFIX}{os.getpid()}-") as tmp:
         if len(shards) > 1:
-            return _run_shards(job, shards, tmp, output, limits, progress)
+            return _run_shards(job, shards, segments, tmp, output, limits, progress)
         return _supervise(job, tmp, output, limits, progress)
-
-
-@dataclass
-class _Limits:
-    """A job's time bounds: ``deadline`` and ``kill_at`` on ``time.monotonic()`` (see the module doc)."""
-
-    deadline: float
-    kill_at: float
-    timeout: float
-    face_timeout: float
 
 
 def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
                progress: Callable[[str], None] | None, stop: threading.Event | None = None) -> JobResult:
     """Run ``job`` in children in folder ``tmp`` until one finishes, the restarts run out or the time does
     (see the module doc); ``stop``, once set, kills the child and raises KeyboardInterrupt here."""
-    deadline, kill_at, timeout, face_timeout = limits.deadline, limits.kill_at, limits.timeout, limits.face_timeout
+    timeout = limits.timeout
     events: list[str] = []
     skip: dict[int, dict[int, str]] = {k: dict(v) for k, v in job.skip.items()}
     known_ok: dict[int, int] = dict(job.known_ok)
@@ -297,7 +297,7 @@ def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
         job.skip, job.known_ok = skip, known_ok
         if events and progress is not None:
             progress(f"restart {events[-1]}")
-        run = _run_child(job, tmp, deadline, kill_at, face_timeout, progress, stop)
+        run = _run_child(job, tmp, limits, progress, stop)
         if run.status == "ok":
             result = run.result
             result.notes = events + result.notes
@@ -398,14 +398,14 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Path | None, limits: _Limits,
-                progress: Callable[[str], None] | None) -> JobResult:
+def _run_shards(job: MeshJob, shards: list[frozenset[int]], segments: dict[int, int], tmp: str,
+                output: Path | None, limits: _Limits, progress: Callable[[str], None] | None) -> JobResult:
     """Mesh each shard of ``job``'s faces in its own child at once, each under :func:`_supervise`; mesh
     again the faces on edges another shard changed (see :mod:`cadedge.mesh.shards`); join the meshes and
     write them to ``output``."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from .shards import ADOPT_ROUNDS, Part, conflicts, drop_faces, faces_text, join
+    from .shards import ADOPT_ROUNDS, Part, conflicts, drop_faces, faces_text, join, weight
 
     lock, stop = threading.Lock(), threading.Event()
 
@@ -414,12 +414,11 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
             with lock:
                 progress(line)
 
-    segments = face_segments(job.grid)
-    total = sum(segments.get(f, 0) + 1 for f in range(1, job.grid.faces + 1))
+    total = weight(range(1, job.grid.faces + 1), segments)
 
     def run(faces: frozenset[int], adopt: dict, folder: str) -> Part:
         os.makedirs(folder)
-        share = sum(segments.get(f, 0) + 1 for f in faces) / total
+        share = weight(faces, segments) / total
         sub = replace(job, faces=faces, adopt=adopt, skip={k: dict(v) for k, v in job.skip.items()},
                       known_ok=dict(job.known_ok), no_batch=set(job.no_batch), no_refine=set(job.no_refine),
                       share=share)

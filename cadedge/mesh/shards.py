@@ -53,6 +53,11 @@ def face_edges(grid) -> dict[int, set[int]]:
     return out
 
 
+def weight(faces, segments: dict[int, int]) -> int:
+    """What meshing ``faces`` weighs: their boundary ``segments`` (face -> count), and 1 a face."""
+    return sum(segments.get(f, 0) + 1 for f in faces)
+
+
 def plan(grid, workers: int, segments: dict[int, int]) -> list[frozenset[int]]:
     """The faces of ``grid`` in at most ``workers`` shards of about equal boundary ``segments`` (face ->
     count); one shard with every face when ``workers`` is 1 or the job is small (:data:`MIN_SEGMENTS`).
@@ -77,13 +82,13 @@ def plan(grid, workers: int, segments: dict[int, int]) -> list[frozenset[int]]:
     units: dict[frozenset[int], list[int]] = {}
     for f, edges in sorted(face_edges(grid).items()):
         units.setdefault(frozenset(edges) or frozenset({-f}), []).append(f)
-    weight = {key: sum(segments.get(f, 0) + 1 for f in faces) for key, faces in units.items()}
+    weights = {key: weight(faces, segments) for key, faces in units.items()}
     shards: list[list[int]] = [[] for _ in range(min(workers, len(units)))]
     loads = [0] * len(shards)
-    for key in sorted(units, key=lambda k: (-weight[k], min(units[k]))):  # heaviest first, to the lightest
+    for key in sorted(units, key=lambda k: (-weights[k], min(units[k]))):  # heaviest first, to the lightest
         i = loads.index(min(loads))
         shards[i] += units[key]
-        loads[i] += weight[key]
+        loads[i] += weights[key]
     return [frozenset(s) for s in shards if s]
 
 
