@@ -324,15 +324,15 @@ def _face_grid_points(grid: ShapeGrid) -> np.ndarray:
 
 def _multiplicity_from_grid(nodes: np.ndarray, grid: ShapeGrid) -> dict[tuple[int, int], int]:
     """Expected triangle counts of grid segments found in a raw mesh (by exact coordinates)."""
-    from .check import _row_keys
+    from .check import row_keys
 
-    keys = _row_keys(nodes)
+    keys = row_keys(nodes)
     order = np.argsort(keys)
     out: dict[tuple[int, int], int] = {}
     for e in grid.edges:
         if e.degenerate:
             continue
-        k = _row_keys(e.points)
+        k = row_keys(e.points)
         pos = np.clip(np.searchsorted(keys[order], k), 0, len(order) - 1)
         idx = np.where(keys[order][pos] == k, order[pos], -1)
         n = len(e.faces) if len(e.faces) > 1 else 0  # one face: free boundary or seam, both fine

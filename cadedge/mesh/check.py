@@ -80,7 +80,7 @@ class MeshCheck:
         return out
 
 
-def _row_keys(a: np.ndarray) -> np.ndarray:
+def row_keys(a: np.ndarray) -> np.ndarray:
     """Rows of a float array as hashable byte strings (exact coordinate identity)."""
     a = np.ascontiguousarray(np.asarray(a, dtype=np.float64) + 0.0)  # +0.0 folds -0.0 into 0.0
     return a.view(np.dtype((np.void, a.dtype.itemsize * a.shape[1]))).ravel()
@@ -154,7 +154,7 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
             problems.append(f"shell on faces {faces[:8]}{'...' if len(faces) > 8 else ''}: {n_bad} triangle "
                             "edges not shared by the expected number of triangles (not watertight/conforming)")
     used_nodes = _nodes_of(tris, len(nodes))
-    keys = _row_keys(nodes[used_nodes])
+    keys = row_keys(nodes[used_nodes])
     # nodes on free-boundary segments of B-rep edges: where two such edges coincide the B-rep itself is open
     # (an IGES face whose seam is two edges), so their coinciding nodes are the input's gap, not a crack
     on_free = np.zeros(len(nodes), dtype=bool)
@@ -162,7 +162,7 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
     n_dup = 0
     for comp in labels:  # separate shells may touch (an assembly); within one shell it is a crack
         comp_nodes = _nodes_of(tris[np.asarray(comp)], len(nodes))
-        _, dup_inverse, dup_counts = np.unique(_row_keys(nodes[comp_nodes]), return_inverse=True,
+        _, dup_inverse, dup_counts = np.unique(row_keys(nodes[comp_nodes]), return_inverse=True,
                                                return_counts=True)
         inner = np.zeros(len(dup_counts), dtype=bool)  # a copy not on a free boundary: a crack of the mesh
         np.logical_or.at(inner, dup_inverse.ravel(), ~on_free[comp_nodes])
@@ -171,7 +171,7 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
         problems.append(f"{n_dup} coordinates carry more than one mesh node within a shell (a crack between faces)")
     n_grid = n_missing = 0
     if grid_points is not None and len(grid_points):
-        gkeys = np.unique(_row_keys(grid_points))
+        gkeys = np.unique(row_keys(grid_points))
         n_grid = len(gkeys)
         n_missing = int((~np.isin(gkeys, keys)).sum())
         if n_missing:

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .check import row_keys
 from .generate import FaceOutcome
 from .worker import JobResult, empty_result
 
@@ -98,7 +99,7 @@ def coincident(grid) -> bool:
     coordinates, so such a job is meshed in one process."""
     points = [np.asarray(v.point, dtype=float).reshape(1, 3) for v in grid.vertices]
     points += [np.asarray(e.points, dtype=float)[1:-1] for e in grid.edges if not e.degenerate]
-    keys = _keys(np.concatenate(points)) if points else np.zeros(0)
+    keys = row_keys(np.concatenate(points)) if points else np.zeros(0)
     return len(np.unique(keys)) < len(keys)
 
 
@@ -170,12 +171,6 @@ def edge_uses(grid, edge_ids: np.ndarray, meshed: set[int]) -> np.ndarray:
     return np.array([uses[e] for e in edge_ids.tolist()], dtype=np.int64)
 
 
-def _keys(x: np.ndarray) -> np.ndarray:
-    """Rows of a float array as bytes, for merging nodes by exact coordinates (-0.0 folded into 0.0)."""
-    x = np.ascontiguousarray(np.asarray(x, dtype=np.float64) + 0.0)
-    return x.view(np.dtype((np.void, 8 * x.shape[1]))).ravel()
-
-
 def merge_extras(values: list[Any]) -> Any:
     """One hook's extras from several parts as one: dicts merged key by key, lists and tuples joined
     (sorted when they hold numbers only), arrays concatenated; any other value is the first part's.
@@ -218,8 +213,8 @@ def join(grid, parts: list[Part]) -> tuple[JobResult, np.ndarray, np.ndarray]:
         offset += len(r.nodes)
     edge_order = sorted(edges)
     blocks += [edges[e].reshape(-1, 3) for e in edge_order]
-    _, first, inverse = np.unique(_keys(np.concatenate(blocks)), return_index=True, return_inverse=True)
     everything = np.concatenate(blocks)
+    _, first, inverse = np.unique(row_keys(everything), return_index=True, return_inverse=True)
     inverse = inverse.ravel()
     result = empty_result("")
     result.error = None
