@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
-from .generate import STRATEGIES
+from .generate import STRATEGIES, FaceOutcome
 from .worker import JobResult, MeshJob, empty_result
 
 
@@ -55,7 +55,6 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     when no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes,
     and the delivered edge segments are the faces' boundary segments, so each edge's multiplicity for the
     check is known (how many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
-    from .generate import FaceOutcome
     from .shards import edge_uses, faces_text
 
     faces, edges = read_deliveries(path)
