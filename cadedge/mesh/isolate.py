@@ -188,12 +188,14 @@ def _learn(lines: list[str], skip: dict[int, dict[int, str]], known_ok: dict[int
 
 @dataclass
 class _Limits:
-    """A job's time bounds: ``deadline`` and ``kill_at`` on ``time.monotonic()`` (see the module doc)."""
+    """A job's time bounds: ``deadline`` and ``kill_at`` on ``time.monotonic()`` (see the module doc), and
+    the faces' boundary segments that scale an attempt's bound (:func:`attempt_bound`)."""
 
     deadline: float
     kill_at: float
     timeout: float
     face_timeout: float
+    segments: dict[int, int]
 
 
 def _run_child(job: MeshJob, tmp: str, limits: _Limits, progress: Callable[[str], None] | None = None,
@@ -211,7 +213,6 @@ def _run_child(job: MeshJob, tmp: str, limits: _Limits, progress: Callable[[str]
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
                                 start_new_session=True)
         last, since, cpu_since, bound = "", time.monotonic(), 0.0, limits.face_timeout
-        segments = face_segments(job.grid)
         tail = _Tail(progress_path)
         try:
             while True:
@@ -231,7 +232,7 @@ def _run_child(job: MeshJob, tmp: str, limits: _Limits, progress: Callable[[str]
                 cpu = _cpu_seconds(proc.pid)
                 if line != last:
                     last, since, cpu_since = line, now, cpu or 0.0
-                    bound = attempt_bound(line, limits.face_timeout, segments)
+                    bound = attempt_bound(line, limits.face_timeout, limits.segments)
                 if now > limits.deadline:
                     return _Run(None, "timeout", last, "")
                 busy = now - since if cpu is None else cpu - cpu_since
@@ -270,17 +271,17 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
 
     face_timeout = face_timeout or FACE_SHARE * timeout
     t0 = time.monotonic()
+    segments = face_segments(job.grid)
     limits = _Limits(deadline=t0 + timeout, kill_at=t0 + KILL_SHARE * timeout, timeout=timeout,
-                     face_timeout=face_timeout)
+                     face_timeout=face_timeout, segments=segments)
     job.deadline = time.time() + SOFT_SHARE * timeout
     job.finish_by = time.time() + FINISH_SHARE * timeout
     job.attempt_bound = face_timeout
     _remove_orphaned_folders()
-    segments = face_segments(job.grid)
     shards = plan(job.grid, workers, segments) if job.mode == "nodes" and job.faces is None else [job.faces]
     with tempfile.TemporaryDirectory(prefix=f"{FOLDER_PREFIX}{os.getpid()}-") as tmp:
         if len(shards) > 1:
-            return _run_shards(job, shards, segments, tmp, output, limits, progress)
+            return _run_shards(job, shards, tmp, output, limits, progress)
         return _supervise(job, tmp, output, limits, progress)
 
 
@@ -398,8 +399,8 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _run_shards(job: MeshJob, shards: list[frozenset[int]], segments: dict[int, int], tmp: str,
-                output: Path | None, limits: _Limits, progress: Callable[[str], None] | None) -> JobResult:
+def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Path | None, limits: _Limits,
+                progress: Callable[[str], None] | None) -> JobResult:
     """Mesh each shard of ``job``'s faces in its own child at once, each under :func:`_supervise`; mesh
     again the faces on edges another shard changed (see :mod:`cadedge.mesh.shards`); join the meshes and
     write them to ``output``."""
@@ -414,11 +415,11 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], segments: dict[int, 
             with lock:
                 progress(line)
 
-    total = weight(range(1, job.grid.faces + 1), segments)
+    total = weight(range(1, job.grid.faces + 1), limits.segments)
 
     def run(faces: frozenset[int], adopt: dict, folder: str) -> Part:
         os.makedirs(folder)
-        share = weight(faces, segments) / total
+        share = weight(faces, limits.segments) / total
         sub = replace(job, faces=faces, adopt=adopt, skip={k: dict(v) for k, v in job.skip.items()},
                       known_ok=dict(job.known_ok), no_batch=set(job.no_batch), no_refine=set(job.no_refine),
                       share=share)
