@@ -17,6 +17,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from .generate import STRATEGIES, FaceOutcome
+from .shards import edge_uses, faces_text, weld
 from .worker import JobResult, MeshJob, empty_result
 
 
@@ -55,25 +56,15 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     when no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes,
     and the delivered edge segments are the faces' boundary segments, so each edge's multiplicity for the
     check is known (how many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
-    from .shards import edge_uses, faces_text
-
     faces, edges = read_deliveries(path)
     if not faces:
         return None
     order = sorted(faces)
-    edge_order = sorted(edges)
-    corners = np.concatenate([faces[f].reshape(-1, 3) for f in order]
-                             + [edges[e].reshape(-1, 3) for e in edge_order])
-    nodes, index = np.unique(corners, axis=0, return_inverse=True)
-    index = index.ravel()
-    n_tri = sum(len(faces[f]) for f in order)
     result = empty_result("")
     result.error = None
-    result.nodes, result.triangles = nodes, index[:3 * n_tri].reshape(-1, 3).astype(np.int64)
-    result.triangle_faces = np.concatenate([np.full(len(faces[f]), f, dtype=np.int64) for f in order])
-    lines = index[3 * n_tri:].reshape(-1, 2).astype(np.int64)
-    line_edges = np.concatenate([np.full(len(edges[e]), e, dtype=np.int64) for e in edge_order]) \
-        if edge_order else np.zeros(0, dtype=np.int64)
+    result.nodes, index, lines, line_edges = weld([faces[f] for f in order], edges)
+    result.triangles = index.reshape(-1, 3)
+    result.triangle_faces = np.repeat(np.array(order, dtype=np.int64), [len(faces[f]) for f in order])
     result.edge_pairs = np.sort(lines, axis=1)
     result.edge_uses = edge_uses(job.grid, line_edges, set(faces))
     names = {f: STRATEGIES[k].name for f, k in known_ok.items()}

@@ -189,6 +189,27 @@ def merge_extras(values: list[Any]) -> Any:
     return values[0]
 
 
+def weld(blocks: list[np.ndarray], edges: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                          np.ndarray]:
+    """Point blocks and edges' segments ((k, 2, 3) corners each) as one node array, merged by exact
+    coordinates (:func:`cadedge.mesh.check.row_keys`: -0.0 is 0.0): ``(nodes, index of each block row in
+    nodes, lines (k, 2) node indices, line_edges (k,) edge ids)``, the edges in id order.
+
+    >>> nodes, index, lines, line_edges = weld([np.array([[0., 0, 0], [1, 0, 0]])],
+    ...                                        {7: np.array([[[1., 0, 0], [-0.0, 0, 0]]])})
+    >>> len(nodes), index.tolist(), lines.tolist(), line_edges.tolist()
+    (2, [0, 1], [[1, 0]], [7])
+    """
+    order = sorted(edges)
+    points = [np.asarray(b, dtype=np.float64).reshape(-1, 3) for b in blocks]
+    n = sum(len(p) for p in points)
+    rows = np.concatenate(points + [edges[e].reshape(-1, 3) for e in order])
+    _, first, inverse = np.unique(row_keys(rows), return_index=True, return_inverse=True)
+    inverse = inverse.ravel().astype(np.int64)
+    line_edges = np.repeat(np.array(order, dtype=np.int64), np.array([len(edges[e]) for e in order], dtype=np.int64))
+    return rows[first], inverse[:n], inverse[n:].reshape(-1, 2), line_edges
+
+
 def join(grid, parts: list[Part]) -> tuple[JobResult, np.ndarray, np.ndarray]:
     """The parts' meshes as one result, nodes merged by exact coordinates, and the edges' segments for
     the writer: ``(result, lines (k, 2) node indices, line_edges (k,) edge ids)``. An edge's segments are
@@ -211,19 +232,11 @@ def join(grid, parts: list[Part]) -> tuple[JobResult, np.ndarray, np.ndarray]:
         tris.append(r.triangles[sel] + offset)
         tri_faces.append(r.triangle_faces[sel])
         offset += len(r.nodes)
-    edge_order = sorted(edges)
-    blocks += [edges[e].reshape(-1, 3) for e in edge_order]
-    everything = np.concatenate(blocks)
-    _, first, inverse = np.unique(row_keys(everything), return_index=True, return_inverse=True)
-    inverse = inverse.ravel()
     result = empty_result("")
     result.error = None
-    result.nodes = everything[first]
-    result.triangles = inverse[np.concatenate(tris)].astype(np.int64)
+    result.nodes, index, lines, line_edges = weld(blocks, edges)
+    result.triangles = index[np.concatenate(tris)]
     result.triangle_faces = np.concatenate(tri_faces).astype(np.int64)
-    lines = inverse[offset:].reshape(-1, 2).astype(np.int64)
-    line_edges = np.concatenate([np.full(len(edges[e]), e, dtype=np.int64) for e in edge_order]) \
-        if edge_order else np.zeros(0, dtype=np.int64)
     outcomes: dict[int, FaceOutcome] = {}
     for p in parts:
         if p.result.error is not None:
