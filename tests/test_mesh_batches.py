@@ -40,3 +40,45 @@ def test_a_first_face_that_hangs_alone_costs_only_its_own_attempt():
     assert any(n.startswith("face 1: hung") for n in result.notes)
     assert not any("one by one" in n for n in result.notes)
     assert all(o.strategy == STRATEGIES[0].name and not o.attempts for o in result.faces if o.face != 1)
+
+
+def test_a_face_with_many_boundary_nodes_starts_from_the_older_triangulation_in_its_own_call(monkeypatch):
+    """Two plane faces in one batch: a 2 x 100 strip with 1 001 nodes on each long side and a unit square
+    with 12. gmsh's newer initial triangulation takes time growing with the square of the
+    boundary nodes; the strip is meshed in a gmsh call of its own with the older one
+    (``Mesh.OldInitialDelaunay2D``), the square with gmsh's default, and the option is reset after."""
+    import gmsh
+
+    from cadedge.mesh.generate import OLD_INITIAL_FROM, boundary_nodes, mesh_faces
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    calls = []
+    generate = gmsh.model.mesh.generate
+
+    def recorded(dim=3):
+        if dim == 2:
+            visible = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getVisibility(2, s)]
+            calls.append((visible, gmsh.option.getNumber("Mesh.OldInitialDelaunay2D")))
+        return generate(dim)
+
+    def rectangle(x0, w, h, nw, nh):
+        geo = gmsh.model.geo
+        p = [geo.addPoint(x0, 0, 0), geo.addPoint(x0 + w, 0, 0), geo.addPoint(x0 + w, h, 0), geo.addPoint(x0, h, 0)]
+        lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
+        surface = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+        for line, n in zip(lines, (nw, nh, nw, nh)):
+            geo.mesh.setTransfiniteCurve(line, n)
+        geo.synchronize()
+        return surface
+
+    with gmsh_session():
+        strip, square = rectangle(0.0, 2.0, 100.0, 3, 1001), rectangle(20.0, 1.0, 1.0, 4, 4)
+        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(1)
+        assert boundary_nodes(strip) >= OLD_INITIAL_FROM > boundary_nodes(square)
+        monkeypatch.setattr(gmsh.model.mesh, "generate", recorded)
+        out = mesh_faces([strip, square], {}, batch_started=lambda faces: None)
+        assert all(o.ok for o in out.values()), out
+        assert sorted(calls) == [([strip], 1.0), ([square], 0.0)]
+        assert gmsh.option.getNumber("Mesh.OldInitialDelaunay2D") == 0
