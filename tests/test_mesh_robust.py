@@ -188,6 +188,51 @@ def test_a_face_meshed_again_alone_by_a_splitting_strategy_has_its_neighbours_me
     assert face.strategy == next(s.name for s in STRATEGIES if s.split)
 
 
+def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neighbours(cylinder, tmp_path,
+                                                                                      monkeypatch):
+    """A face whose earlier strategies are barred splits its curves, which clears its meshed neighbours in
+    gmsh, and the process is stopped during that attempt (here the attempt raises, as a hang or the
+    timeout ends it). What the parent has, the delivered faces and edges, must still hold the neighbours'
+    meshes on the curves as they were, and join watertight where they meet: a horn torus at 1e-2, whose
+    pinched face hung in its splitting strategies, ended with no face at all, its 4 meshed neighbours
+    cleared from what the process had delivered."""
+    import pickle
+
+    from cadedge.mesh import generate
+    from cadedge.mesh.delivered import delivered
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    class Stopped(Exception):
+        pass
+
+    attempt = generate._attempt
+
+    def stopped_when_split(surface, strategy):
+        if strategy.split:
+            raise Stopped
+        return attempt(surface, strategy)
+
+    monkeypatch.setattr(generate, "_attempt", stopped_when_split)
+    first = next(k for k, s in enumerate(STRATEGIES) if s.split)
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
+                  field=SizeField(cylinder), mode="nodes",
+                  skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}})
+    path = tmp_path / "faces"
+    with open(path, "wb") as f, pytest.raises(Stopped):
+        run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
+    got = delivered(str(path), job, {}, "stopped by the test", [])
+    meshed = {o.face for o in got.result.faces if o.ok}
+    neighbours = {f for e in cylinder.edges if FAULT_FACE in e.faces for f in e.faces} - {FAULT_FACE}
+    assert neighbours and meshed == set(range(1, cylinder.faces + 1)) - {FAULT_FACE}
+    res = got.result
+    multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
+    check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
+                            edge_multiplicity=multiplicity)
+    assert check.ok, check.lines()
+
+
 def test_check_names_faces_with_small_angles():
     nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [1.05, 0.5, 0]], dtype=float)
     tris = np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3]])

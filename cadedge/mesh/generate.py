@@ -469,7 +469,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     With ``batch_started``, the first strategy meshes faces in batches (faces in ``no_batch`` excepted):
     ``batch_started(faces)`` is called before each chunk, ``prepare(face, k)`` sets a face's options (it is
     also what ``started`` should call), ``finished`` follows each face of the batch. ``cleared(faces)`` names
-    meshed faces cleared because a neighbour's strategy changed their boundary (they are meshed again).
+    meshed faces cleared because a neighbour's strategy changed their boundary (they are meshed again), once
+    that strategy has meshed the neighbour: until then their last meshes, on the curves as they were, are
+    the ones a process stopped during the attempt can hand over.
     ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches.
     """
     skip = skip or {}
@@ -524,7 +526,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     curves = [c for c in surface_curve_uses(s) if c not in own_curves]
                     own_curves.update(curves)
                     touched = remesh_curves(curves)
-                cleared([out[n].face for n in touched if n in out and out[n].ok])
+                # the neighbours' last meshes stand for them until this attempt meshes the face: a process
+                # stopped during it (a hang, the timeout) delivers them as they were, on the curves as they were
+                lost = [out[n].face for n in touched if n in out and out[n].ok]
                 for n in touched:  # their boundary changed: mesh them again
                     tried_first.discard(n)  # a face whose batch attempt failed starts again on the new boundary
                     if n == s or (n in out and not out[n].ok) or (n not in out and n not in meshed):
@@ -535,6 +539,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     tried_first.discard(n)
                     queue.append(n)
                 reason = _attempt(s, strategy)
+                if reason is None:
+                    cleared(lost)
                 finished(rec.face, k, reason)
                 if reason is None:
                     rec.strategy = strategy.name
