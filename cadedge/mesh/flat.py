@@ -64,13 +64,12 @@ def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndar
     import gmsh
 
     from ..grid import polygon_area
+    from .generate import OLD_INITIAL_FROM
 
     chains = loops(segments)
     if not chains:
         return "its boundary does not close when unrolled"
     current = gmsh.model.getCurrent()
-    from .generate import OLD_INITIAL_FROM
-
     fixed = {"Mesh.MeshSizeExtendFromBoundary": 1, "Mesh.MeshOnlyVisible": 0, "Mesh.MeshOnlyEmpty": 0,
              "Mesh.Algorithm": algorithm, "Mesh.OldInitialDelaunay2D": int(len(plane) >= OLD_INITIAL_FROM),
              **options}

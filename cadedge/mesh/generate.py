@@ -204,8 +204,9 @@ def uniform_curvature_size(surface: int, per_circle: float) -> float | None:
 #: newer one's time grows with their square. A 9.2 x 400 rectangle, 0.06 apart on its long sides
 #: (13 638 nodes), took 24 s in Frontal-Delaunay with the newer, 6.7 s with the older; 6 800 nodes
 #: 4.5 s and 2.2 s, 3 400 nodes 1.4 s and 1.1 s. The flat side of a box 1 000 long with 0.4 mm fillets
-#: has 33 000 at ALD 1e-3 and took 244 s. Periodic faces (a seam) are triangulated by another
-#: path, which this option does not change. Below it faces keep gmsh's default.
+#: has 33 000 at ALD 1e-3 and took 244 s. Faces on a periodic surface (a cylinder, also a fillet's
+#: quarter of one) go another way in gmsh, which this option does not change. Below it faces keep
+#: gmsh's default.
 OLD_INITIAL_FROM = 2_000
 
 
