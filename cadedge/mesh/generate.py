@@ -212,8 +212,7 @@ OLD_INITIAL_FROM = 2_000
 
 def boundary_nodes(surface: int) -> int:
     """Mesh nodes on gmsh ``surface``'s boundary curves (a curve's end nodes once per curve)."""
-    curves = {abs(t) for _, t in gmsh.model.getBoundary([(2, surface)], combined=False, oriented=False)}
-    return sum(len(gmsh.model.mesh.getNodes(1, c, includeBoundary=True)[0]) for c in curves)
+    return sum(len(gmsh.model.mesh.getNodes(1, c, includeBoundary=True)[0]) for c in surface_curve_uses(surface))
 
 
 def old_initial(surfaces: list[int]) -> int:
