@@ -8,7 +8,7 @@ import pytest
 
 from cadedge.mesh.collapse import collapse_edges
 from cadedge.mesh.optimize import climb_nodes, flip_edges, smooth_nodes
-from cadedge.mesh.quality import triangle_angles
+from cadedge.mesh.quality import flat_triangles, triangle_angles
 
 from conftest import FIXTURES
 
@@ -488,3 +488,15 @@ def test_a_face_with_few_small_angles_is_left_to_the_optimiser(gmsh_cylinder):
     ctx, lines = _adapt_context(side, 4.0 * np.pi, 1e-2)
     after_generate(ctx)
     assert not lines and ctx.outcomes[side].strategy == "Frontal-Delaunay"
+
+
+def test_flat_triangles_are_those_with_a_node_on_the_opposite_edge_not_needles():
+    """A node on the opposite edge (to rounding, on a line off the axes) or two nodes at one point is
+    flat; a triangle 2e-6 radians short of flat is not, nor a needle with a 1e-9 radian tip (as at a cusp
+    the B-rep forces: its other angles are right angles)."""
+    a, b = np.array([0.3, 10.0, -7.0]), np.array([1.7, 2.0, 5.0])
+    side = np.cross(b - a, [0.0, 0.0, 1.0])
+    side *= np.linalg.norm(b - a) / np.linalg.norm(side)
+    nodes = np.array([a, a + (b - a) / 3.0, b, a + (b - a) * 2.0 + 2e-6 * side, a, b + 1e-9 * side])
+    tris = np.array([[0, 1, 2], [0, 4, 2], [0, 2, 3], [0, 2, 5]])
+    assert flat_triangles(nodes, tris).tolist() == [True, True, False, False]

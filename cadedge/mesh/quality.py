@@ -47,6 +47,27 @@ def triangle_angles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return out
 
 
+#: A triangle whose largest angle is within this many radians of 180 degrees is flat: its middle node lies
+#: on the opposite edge, to rounding (Frontal-Delaunay left three consecutive seam nodes as one triangle
+#: beside a pinch of a cylinder's face). A needle at a cusp is not flat: its small angle is forced.
+FLAT_RAD = 1e-8
+
+
+def flat_triangles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Which triangles (m,) are flat (:data:`FLAT_RAD`), two of their nodes at one point included.
+
+    >>> flat_triangles(np.array([[0., 0, 0], [1, 0, 0], [2, 0, 0], [1, 1e-3, 0]]), np.array([[0, 1, 2], [0, 2, 3]]))
+    array([ True, False])
+    """
+    p = np.asarray(nodes, dtype=float)[np.asarray(triangles, dtype=np.int64).reshape(-1, 3)]
+    e = [p[:, 1] - p[:, 0], p[:, 2] - p[:, 1], p[:, 0] - p[:, 2]]  # edge k leaves corner k
+    c = cross(e[0], e[1])
+    twice_area = np.sqrt(np.einsum("ij,ij->i", c, c))
+    # 180 degrees less the angle at corner k: arctan2(|a x b|, a . b) of the edges along it
+    return np.any([np.arctan2(twice_area, np.einsum("ij,ij->i", e[k], e[k - 1])) <= FLAT_RAD
+                   for k in range(3)], axis=0)
+
+
 def min_angles(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """The smallest interior angle (m,) of each triangle in degrees: ``triangle_angles(...).min(axis=1)``,
     compiled (``cadedge/_angles.c``); the face optimiser asks it thousands of times per face."""
