@@ -17,7 +17,9 @@ lofted blades with sharp edges on a hub), and two wings whose sections' splines 
 trailing edge to the seam, one of them 0.12 mm thick. A fifth, parts drawn every day and scale: a gear, cadquery's
 bottle, a cut torus, an ellipsoid, a filleted cone on a cylinder, a mug, a filleted pocket box, a
 0.2 mm-walled shell, a thin washer, a sphere with a 0.3 mm hole, and the bracket fixture scaled by
-1e-3 and 1e3 and moved far from the origin.
+1e-3 and 1e3 and moved far from the origin. A sixth: two tees whose run cylinder has its seam through
+the point where the branch touches it (a tangential inlet, an equal pipe tee): two vertices of the run's
+face at one point.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -389,6 +391,23 @@ def notched_block() -> object:
     return wire.close().extrude(8.0).val().wrapped
 
 
+def tangent_inlet_tee() -> object:
+    """A 10 mm radius run along x and a 4 mm radius branch up z, its axis 6 mm off the run's, so that
+    its side touches the run's wall at (0, 10, 0): the run's seam passes there, and the run's face has
+    the seam's vertex and the intersection loop's vertex at that one point."""
+    run = cq.Workplane("YZ").circle(10).extrude(30, both=True)
+    return run.union(cq.Workplane("XY").center(0, 6).circle(4).extrude(25)).val().wrapped
+
+
+def pipe_tee_equal() -> object:
+    """Two 10 mm radius pipes (bored 8 mm) crossing at right angles: the saddle curves of equal radii
+    meet at two tangent points, one of them on the run's seam (two vertices of its face at one point)."""
+    run = cq.Workplane("YZ").circle(10).extrude(30, both=True)
+    body = run.union(cq.Workplane("XY").circle(10).extrude(30))
+    body = body.cut(cq.Workplane("YZ").circle(8).extrude(31, both=True))
+    return body.cut(cq.Workplane("XY").circle(8).extrude(31)).val().wrapped
+
+
 def faceted() -> object:
     """A sphere fused with a cylinder, triangulated and sewn back as 228 planar triangle faces (a STEP
     made from an STL mesh): many small faces, thin triangles forced by the facets."""
@@ -563,6 +582,7 @@ MODELS: dict[str, Callable[[], object]] = {
     "mug": mug, "pocket_box": pocket_box, "thin_shell": thin_shell, "washer_thin": washer_thin,
     "sphere_pinhole": sphere_pinhole, "bracket_micro": bracket_micro, "bracket_huge": bracket_huge,
     "bracket_far": bracket_far, "star_prism": star_prism, "notched_block": notched_block,
+    "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}

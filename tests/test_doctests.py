@@ -6,7 +6,8 @@ import importlib
 import pytest
 
 MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments",
-           "cadedge.mesh.shards"]
+           "cadedge.mesh.shards",
+           "cadedge.mesh.coincident", "cadedge.mesh.quality"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -228,6 +228,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     import dataclasses
 
     from .check import check_triangles
+    from .coincident import coincident_vertices, meshed_as
     from .generate import FaceFailure
     from .gmsh_model import shape_to_brep
     from .isolate import DEFAULT_TIMEOUT, run_isolated
@@ -235,8 +236,14 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .status import MeshStatus
     from .worker import MeshJob
 
-    job = MeshJob(source=grid.source, brep=shape_to_brep(grid.shape), grid=dataclasses.replace(grid, shape=None, curves=None),
-                  field=field_, mode=mode, hooks=dict(hooks or {}), options=dict(job_options or {}))
+    shape, coincident = grid.shape, coincident_vertices(grid)
+    if coincident:
+        from ..occt.merge import merge_vertices
+
+        shape, coincident = merge_vertices(shape, coincident)
+    meshed = meshed_as(dataclasses.replace(grid, shape=None, curves=None), coincident)
+    job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
+                  hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident)
     res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout,
                        progress=MeshStatus(say, faces=grid.faces), workers=workers or default_workers())
     faces = list(res.faces)
@@ -252,13 +259,16 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         grid_points = None
         if mode == "nodes":  # imposed grids whose faces all meshed must be there, node for node
             imposed = set(res.imposed_edges)
-            pts = [e.points for e in grid.edges
+            pts = [e.points for e in meshed.edges
                    if e.id in imposed and e.faces and not failed.intersection(e.faces) and len(e.points)]
             grid_points = np.vstack(pts) if pts else np.zeros((0, 3))
         multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
         check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
                                 grid_points=grid_points, edge_multiplicity=multiplicity)
     notes = list(res.notes)
+    if coincident:
+        pairs = ", ".join(f"{v} with {k}" for v, k in sorted(coincident.items()))
+        notes.append(f"vertices of one face at one point, meshed as one node: {pairs}")
     if res.unmatched_edges:
         notes.append(f"edges {_ids(res.unmatched_edges)} match no gmsh curve: gmsh meshed those curves itself")
     if res.own_mesh_edges:

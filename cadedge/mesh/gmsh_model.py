@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import GeometryError, MeshError
 from ..shapegrid import ShapeGrid
+from .coincident import point_tags
 
 
 @contextlib.contextmanager
@@ -132,7 +133,8 @@ def _curve_values(tag: int, params: np.ndarray) -> np.ndarray:
     return np.asarray(gmsh.model.getValue(1, tag, params.tolist()), dtype=float).reshape(-1, 3)
 
 
-def _match_vertices(grid: ShapeGrid, tol: float, notes: list[str]) -> dict[int, int]:
+def _match_vertices(grid: ShapeGrid, tol: float, notes: list[str], expected: dict[int, int]) -> dict[int, int]:
+    """Vertex id -> gmsh point: the ``expected`` tag where it lies there, else the nearest within ``tol``."""
     from scipy.spatial import cKDTree
 
     tags = [t for _, t in gmsh.model.getEntities(0)]
@@ -141,8 +143,9 @@ def _match_vertices(grid: ShapeGrid, tol: float, notes: list[str]) -> dict[int, 
     tree = cKDTree(coords) if len(coords) else None
     for v in grid.vertices:
         p = np.asarray(v.point, dtype=float)
-        if v.id <= len(tags) and np.linalg.norm(coords[v.id - 1] - p) <= tol:
-            out[v.id] = tags[v.id - 1]
+        k = expected[v.id]
+        if k <= len(tags) and np.linalg.norm(coords[k - 1] - p) <= tol:
+            out[v.id] = tags[k - 1]
             continue
         d, i = tree.query(p) if tree is not None else (np.inf, 0)
         if d > tol:  # its edges cannot carry imposed nodes: gmsh meshes them itself
@@ -174,11 +177,14 @@ def _match_by_geometry(edge, candidates: list[int], tol: float) -> CurveMatch | 
     return None
 
 
-def map_entities(grid: ShapeGrid) -> EntityMap:
-    """Map every cadedge vertex, edge and face of ``grid`` onto the gmsh model loaded from ``grid.shape``."""
+def map_entities(grid: ShapeGrid, *, coincident: dict[int, int] | None = None) -> EntityMap:
+    """Map every cadedge vertex, edge and face of ``grid`` onto the gmsh model loaded from ``grid.shape``,
+    or from it with the ``coincident`` vertices merged (:mod:`cadedge.mesh.coincident`): those map to
+    the point of the vertex they were merged into."""
     tol = model_tolerance(grid)
     notes: list[str] = []
-    vertices = _match_vertices(grid, tol, notes)
+    expected = point_tags(grid, coincident or {})
+    vertices = _match_vertices(grid, tol, notes, expected)
     curve_tags = [t for _, t in gmsh.model.getEntities(1)]
     by_tag = set(curve_tags)
     edges: dict[int, CurveMatch] = {}
@@ -218,7 +224,7 @@ def map_entities(grid: ShapeGrid) -> EntityMap:
         taken.add(m.tag)
         notes.append(f"edge {e.id} matched to gmsh curve {m.tag} by geometry")
     unmatched = [t for t in curve_tags if t not in taken]
-    if pending or any(tag != v for v, tag in vertices.items()):  # else gmsh's order held throughout
+    if pending or any(tag != expected[v] for v, tag in vertices.items()):  # else gmsh's order held throughout
         _vertices_from_edges(grid, edges, vertices, tol, notes)
     faces = _match_faces(grid, edges)
     return EntityMap(vertices=vertices, edges=edges, faces=faces, degenerate_curves=degenerate_curves,

@@ -1,6 +1,7 @@
 """Impose cadedge's edge grids on gmsh's curves as their 1-D mesh.
 
-Every B-rep vertex gets one node on its gmsh point entity; every edge's interior grid points become
+Every gmsh point entity gets one node, shared by the B-rep vertices on it (vertices of one face at one
+point are merged into one point: :mod:`cadedge.mesh.coincident`); every edge's interior grid points become
 nodes on its gmsh curve (with gmsh parameters), and its line elements start and end on the vertex
 nodes. Faces sharing an edge therefore share its nodes. With ``Mesh.MeshOnlyEmpty`` gmsh leaves these
 curves alone and meshes only the faces (and the degenerate curves, which carry no grid, and the curves
@@ -37,12 +38,15 @@ def impose_edge_grids(grid: ShapeGrid, emap: EntityMap,
     parameters; see :func:`cadedge.mesh.worker.changed_edges`)."""
     adopt = adopt or {}
     vertex_nodes: dict[int, int] = {}
+    point_node: dict[int, int] = {}  # one node per gmsh point: vertices meshed as one share it
     for v in grid.vertices:
         if v.id not in emap.vertices:
             continue
-        tag = v.id
-        gmsh.model.mesh.addNodes(0, emap.vertices[v.id], [tag], np.asarray(v.point, dtype=float).tolist())
-        vertex_nodes[v.id] = tag
+        point = emap.vertices[v.id]
+        if point not in point_node:
+            gmsh.model.mesh.addNodes(0, point, [v.id], np.asarray(v.point, dtype=float).tolist())
+            point_node[point] = v.id
+        vertex_nodes[v.id] = point_node[point]
     next_node = max(vertex_nodes.values(), default=0) + 1
     next_elem = 1
     edge_nodes: dict[int, np.ndarray] = {}

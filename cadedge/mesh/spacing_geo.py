@@ -44,6 +44,7 @@ from ..atomic import atomic_path
 from ..errors import InputError
 from ..shapegrid import ShapeGrid
 from . import DEFAULT_GROWTH
+from .coincident import coincident_vertices, point_tags
 from .sizes import INTEGRATION_PRECISION, SizeField, node_spacings, vertex_sizes
 
 #: At most this many triangles per circle of curvature in a face's cap: the caps keep gmsh off faces much
@@ -131,10 +132,13 @@ def _threshold(n: int, size: float, max_size: float, growth: float) -> str:
 
 
 def geo_fields(grid: ShapeGrid, field: SizeField, growth: float,
-               face_sizes: dict[int, float] | None = None) -> list[str]:
+               face_sizes: dict[int, float] | None = None, points: dict[int, int] | None = None) -> list[str]:
     """The ``.geo`` lines of the size fields: per size class a Distance and a Threshold field, for the
     vertices and for the curves of that class, and a Constant field for the faces of that class in
-    ``face_sizes`` (face id -> size; boundaries included), then their ``Min`` as the background field."""
+    ``face_sizes`` (face id -> size; boundaries included), then their ``Min`` as the background field.
+    ``points`` maps vertex ids to the BREP's point tags where they differ (vertices merged:
+    :func:`cadedge.mesh.coincident.point_tags`)."""
+    points = points or {}
     vertex_h = {vid: h for vid, h in vertex_sizes(grid).items() if h > 0}
     edges = [e for e in grid.edges if not e.degenerate and len(e.points) >= 2]
     curve_h = {e.id: float(np.median(node_spacings(e))) for e in edges}
@@ -146,7 +150,8 @@ def geo_fields(grid: ShapeGrid, field: SizeField, growth: float,
     base, top = min(sizes), field.max_size
     lines, thresholds, n = [], [], 1
     for size, vids in size_classes(vertex_h, base).items():
-        lines += [f"Field[{n}] = Distance; Field[{n}].PointsList = {{{_ids(vids)}}};",
+        tags = sorted({points.get(v, v) for v in vids})
+        lines += [f"Field[{n}] = Distance; Field[{n}].PointsList = {{{_ids(tags)}}};",
                   _threshold(n, size, max(top, size), growth)]
         thresholds.append(n + 1)
         n += 2
@@ -170,7 +175,8 @@ def geo_fields(grid: ShapeGrid, field: SizeField, growth: float,
 
 def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAULT_GROWTH,
               max_size: float | None = None, surface_ald: float | None = None) -> Path:
-    """Write a gmsh ``.geo`` carrying our spacings, plus the shape as ``<stem>.brep`` beside it.
+    """Write a gmsh ``.geo`` carrying our spacings, plus the shape as ``<stem>.brep`` beside it (vertices
+    of one face at one point merged into one: :mod:`cadedge.mesh.coincident`).
 
     The ``.geo`` merges the BREP (gmsh's tags are then cadedge's ids: MapShapes order) without any of
     gmsh's healing, and sizes the mesh with the size-class fields of :func:`geo_fields` (see the module
@@ -188,16 +194,21 @@ def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAU
     field = SizeField(grid, growth=growth, max_size=max_size)
     surface_ald = surface_ald or grid.options.get("ald")
     face_sizes = face_curvature_sizes(grid.shape, float(surface_ald)) if surface_ald else {}
+    shape, into = grid.shape, coincident_vertices(grid)  # one gmsh point where a face has two vertices
+    if into:
+        from ..occt.merge import merge_vertices
+
+        shape, into = merge_vertices(shape, into)
     brep = target.with_suffix(".brep")
     with atomic_path(brep) as tmp:
-        if not BRepTools.Write_s(grid.shape, str(tmp)):
+        if not BRepTools.Write_s(shape, str(tmp)):
             raise InputError(f"{brep}: OCCT could not write the BREP")
     lines = [f"// cadedge spacing export of {grid.source} (options {grid.options})",
              'SetFactory("OpenCASCADE");', *_IMPORT,
              f'Merge "{brep.name}";',
              "Mesh.MeshSizeFromCurvature = 0; Mesh.MeshSizeFromPoints = 0; Mesh.MeshSizeExtendFromBoundary = 0;",
              f"Mesh.MeshSizeMax = {field.max_size!r}; Mesh.LcIntegrationPrecision = {INTEGRATION_PRECISION!r};",
-             *geo_fields(grid, field, growth, face_sizes)]
+             *geo_fields(grid, field, growth, face_sizes, point_tags(grid, into) if into else None)]
     with atomic_path(target) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
     return target

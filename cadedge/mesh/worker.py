@@ -81,6 +81,9 @@ class MeshJob:
     # this job's share of the whole job's faces (by boundary segments; a shard's is under 1): the steps'
     # minimum time budgets, meant for the whole job, are scaled by it
     share: float = 1.0
+    # vertex -> the vertex it is meshed as: vertices of one face at one point, merged in ``brep`` (see
+    # cadedge.mesh.coincident)
+    coincident: dict[int, int] = field(default_factory=dict)
 
 
 @dataclass
@@ -295,7 +298,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             return empty_result(error)
         ctx = JobContext(job=job)
         say("map")
-        emap = ctx.emap = map_entities(job.grid)
+        emap = ctx.emap = map_entities(job.grid, coincident=job.coincident)
         unmatched = list(emap.unmatched_edges)
         imposed_edges: list[int] = []
         if job.mode == "nodes":
