@@ -150,3 +150,37 @@ def test_at_1e_3_the_chamfers_cusps_have_their_tips_lengthened_and_graded():
     assert report.triangles * report.below_20 <= 2 * 12
     assert report.min_angle > 1.0
     assert report.worst_deficit <= 1e-3
+
+
+def _plate_with_hole_touching_a_fillet():
+    """A 40 x 30 x 5 plate with 6 mm corner fillets and a 2.5 mm hole inside one fillet, touching it: the
+    top and bottom faces' outline passes the tangent vertex twice (four edge ends, two cusps)."""
+    cq = pytest.importorskip("cadquery")
+    plate = cq.Workplane("XY").box(40, 30, 5).edges("|Z").fillet(6)
+    d = 6 - 2.5
+    hole = cq.Workplane("XY").center(14 + d / math.sqrt(2), -9 - d / math.sqrt(2)).circle(2.5).extrude(5, both=True)
+    return plate.cut(hole).val().wrapped
+
+
+def test_a_hole_touching_the_outline_has_both_its_cusps_graded():
+    """At the tangent vertex each face has four edge ends: they pair into two cusps, each a fillet arc with
+    the hole's circle. They were left ungraded (a corner had to have exactly two ends): four triangles
+    under 20 degrees on each face there, two on the tips and two beside them (with more holes, at 1e-2:
+    1.08% of the triangles under 20 degrees and two 4.1-degree ones not forced by the B-rep)."""
+    from cadedge.mesh.quality import min_angles
+    from cadedge.mesh import mesh_shape
+
+    grid = refine_shape(_plate_with_hole_touching_a_fillet(), ald=1e-2)
+    corners = [c for c in narrow_corners(list(grid.edges))
+               if np.allclose(grid.vertices[c.vertex - 1].point[:2], [14 + 6 / math.sqrt(2), -9 - 6 / math.sqrt(2)])]
+    assert len(corners) == 4 and len({(c.face, c.vertex) for c in corners}) == 2
+    for c in corners:
+        assert c.angle < 2.0 and {grid.edges[i].curve for i, _ in c.sides} == {"Circle"}
+        assert len({grid.edges[i].id for i, _ in c.sides}) == 2
+    result = mesh_shape(grid, workers=1)
+    assert result.ok, result.problems()
+    assert result.report.below_20 <= 0.01
+    assert all(s.forced for s in result.report.small_angles)
+    angles = min_angles(result.nodes, result.triangles)
+    for c in corners:  # under 20 degrees, only the triangles on the two cusps' tips
+        assert np.sum(angles[result.triangle_faces == c.face] < 20.0) <= 2

@@ -87,9 +87,10 @@ def _from_vertex(e, at_start: bool) -> np.ndarray:
 
 
 def narrow_corners(edges: list, *, below: float = WEDGE_DEG) -> list[Corner]:
-    """Every corner where a face's boundary meets a B-rep vertex with exactly two edge ends (degenerate
-    edges and grids of fewer than two points left out) whose first segments are under ``below`` degrees
-    apart."""
+    """Every corner where a face's boundary meets a B-rep vertex (degenerate edges and grids of fewer than
+    two points left out) between two edge ends whose first segments are under ``below`` degrees apart.
+    Where the boundary passes the vertex more than once (a hole touching the outline: four ends, two
+    cusps), the ends are paired closest first, each end in one corner."""
     ends: dict[tuple[int, int], list[tuple[int, bool]]] = {}
     for i, e in enumerate(edges):
         if e.degenerate or len(e.points) < 2 or len(e.vertices) < 2:
@@ -99,15 +100,18 @@ def narrow_corners(edges: list, *, below: float = WEDGE_DEG) -> list[Corner]:
             ends.setdefault((f, e.vertices[-1]), []).append((i, False))
     out = []
     for (f, v), sides in ends.items():
-        if len(sides) != 2:
+        if len(sides) < 2:
             continue
-        d = [np.diff(_from_vertex(edges[i], s)[:2], axis=0)[0] for i, s in sides]
-        norms = np.linalg.norm(d[0]) * np.linalg.norm(d[1])
-        if not norms > 0:
-            continue
-        angle = float(np.degrees(np.arccos(np.clip(np.dot(d[0], d[1]) / norms, -1.0, 1.0))))
-        if angle < below:
-            out.append(Corner(face=f, vertex=v, sides=(sides[0], sides[1]), angle=angle))
+        d = np.array([np.diff(_from_vertex(edges[i], s)[:2], axis=0)[0] for i, s in sides])
+        norms = np.linalg.norm(d, axis=1)
+        unit = d / np.where(norms > 0, norms, 1.0)[:, None]
+        angles = np.degrees(np.arccos(np.clip(unit @ unit.T, -1.0, 1.0)))
+        used = norms <= 0
+        pairs = sorted((angles[a, b], a, b) for a, b in zip(*np.triu_indices(len(sides), k=1)))
+        for angle, a, b in pairs:
+            if angle < below and not used[a] and not used[b]:
+                used[[a, b]] = True
+                out.append(Corner(face=f, vertex=v, sides=(sides[a], sides[b]), angle=float(angle)))
     return out
 
 
