@@ -95,3 +95,33 @@ def test_a_seam_through_the_tangent_point_of_a_tee_meshes_without_crack_or_slive
     assert not flat_triangles(result.nodes, result.triangles).any()
     assert result.report.min_angle >= 20.0
     assert any("meshed as one node: 6 with 1" in n for n in result.notes)
+
+
+def test_the_geo_export_of_a_tee_has_one_point_where_its_run_face_had_two(tmp_path):
+    """The ``.geo`` export merges the BREP it writes the same way, and its vertex size fields name the
+    merged shape's points: gmsh meshes it without two nodes at one point or a flat triangle."""
+    import gmsh
+
+    import cadedge
+    from cadedge.mesh.spacing_geo import write_geo
+
+    grid = cadedge.refine_shape(_tee("tangent_inlet_tee", tmp_path), ald=1e-2)
+    geo = write_geo(grid, tmp_path / "tee.geo")
+    points = {int(t) for line in geo.read_text().splitlines() if "PointsList" in line
+              for t in line.split("{")[1].split("}")[0].split(",")}
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(geo))
+        assert len(gmsh.model.getEntities(0)) == len(grid.vertices) - 1
+        assert points <= {t for _, t in gmsh.model.getEntities(0)}
+        gmsh.model.mesh.generate(2)
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        _, tri = gmsh.model.mesh.getElementsByType(2)
+    finally:
+        gmsh.finalize()
+    nodes = np.asarray(coords).reshape(-1, 3)
+    index = {int(t): k for k, t in enumerate(tags)}
+    triangles = np.array([index[int(t)] for t in tri]).reshape(-1, 3)
+    assert len(np.unique(nodes, axis=0)) == len(nodes)
+    assert len(triangles) and not flat_triangles(nodes, triangles).any()

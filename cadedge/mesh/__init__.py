@@ -228,7 +228,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     import dataclasses
 
     from .check import check_triangles
-    from .coincident import coincident_vertices, meshed_as
+    from .coincident import meshed_as, merged_shape
     from .generate import FaceFailure
     from .gmsh_model import shape_to_brep
     from .isolate import DEFAULT_TIMEOUT, run_isolated
@@ -236,11 +236,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .status import MeshStatus
     from .worker import MeshJob
 
-    shape, coincident = grid.shape, coincident_vertices(grid)
-    if coincident:
-        from ..occt.merge import merge_vertices
-
-        shape, coincident = merge_vertices(shape, coincident)
+    shape, coincident = merged_shape(grid)  # one gmsh point where a face has two vertices
     meshed = meshed_as(dataclasses.replace(grid, shape=None, curves=None), coincident)
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
                   hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident)

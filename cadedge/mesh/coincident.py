@@ -15,6 +15,7 @@ as (the lowest id of its group).
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import numpy as np
 
@@ -68,6 +69,17 @@ def coincident_vertices(grid: ShapeGrid) -> dict[int, int]:
     for k in np.argsort(ids):
         lowest.setdefault(int(label[k]), int(ids[k]))
     return {int(i): lowest[int(label[k])] for k, i in enumerate(ids) if lowest[int(label[k])] != int(i)}
+
+
+def merged_shape(grid: ShapeGrid) -> tuple[Any, dict[int, int]]:
+    """``grid.shape`` with its :func:`coincident_vertices` merged (:func:`cadedge.occt.merge.merge_vertices`)
+    and the merges made: none, and the shape as it was, where OCCT's check refuses the merged faces."""
+    into = coincident_vertices(grid)
+    if not into:
+        return grid.shape, {}
+    from ..occt.merge import merge_vertices
+
+    return merge_vertices(grid.shape, into)
 
 
 def point_tags(grid: ShapeGrid, coincident: dict[int, int]) -> dict[int, int]:

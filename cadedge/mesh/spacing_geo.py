@@ -44,7 +44,7 @@ from ..atomic import atomic_path
 from ..errors import InputError
 from ..shapegrid import ShapeGrid
 from . import DEFAULT_GROWTH
-from .coincident import coincident_vertices, point_tags
+from .coincident import merged_shape, point_tags
 from .sizes import INTEGRATION_PRECISION, SizeField, node_spacings, vertex_sizes
 
 #: At most this many triangles per circle of curvature in a face's cap: the caps keep gmsh off faces much
@@ -194,11 +194,7 @@ def write_geo(grid: ShapeGrid, path: str | os.PathLike, *, growth: float = DEFAU
     field = SizeField(grid, growth=growth, max_size=max_size)
     surface_ald = surface_ald or grid.options.get("ald")
     face_sizes = face_curvature_sizes(grid.shape, float(surface_ald)) if surface_ald else {}
-    shape, into = grid.shape, coincident_vertices(grid)  # one gmsh point where a face has two vertices
-    if into:
-        from ..occt.merge import merge_vertices
-
-        shape, into = merge_vertices(shape, into)
+    shape, into = merged_shape(grid)  # one gmsh point where a face has two vertices
     brep = target.with_suffix(".brep")
     with atomic_path(brep) as tmp:
         if not BRepTools.Write_s(shape, str(tmp)):
