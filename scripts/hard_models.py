@@ -19,7 +19,8 @@ bottle, a cut torus, an ellipsoid, a filleted cone on a cylinder, a mug, a fille
 0.2 mm-walled shell, a thin washer, a sphere with a 0.3 mm hole, and the bracket fixture scaled by
 1e-3 and 1e3 and moved far from the origin. A sixth: two tees whose run cylinder has its seam through
 the point where the branch touches it (a tangential inlet, an equal pipe tee): two vertices of the run's
-face at one point.
+face at one point; and a pipe swept along two lines and an arc that meet them at an angle, its corners
+rounded (surfaces of revolution between two poles).
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -408,6 +409,14 @@ def pipe_tee_equal() -> object:
     return body.cut(cq.Workplane("XY").circle(8).extrude(31)).val().wrapped
 
 
+def swept_elbow() -> object:
+    """A 100 mm pipe (6 mm wall) swept along a line, an arc of radius 150 and a line, the arc meeting the
+    lines at an angle: the sweep rounds those corners with patches of surfaces of revolution between two
+    poles, which Frontal-Delaunay meshed at ALD 1e-3 with their boundary nodes alone (73% short)."""
+    path = cq.Workplane("XZ").moveTo(0, 0).lineTo(0, 400).radiusArc((150, 550), -150).lineTo(600, 550)
+    return cq.Workplane("XY").circle(50).circle(44).sweep(path, transition="round").val().wrapped
+
+
 def faceted() -> object:
     """A sphere fused with a cylinder, triangulated and sewn back as 228 planar triangle faces (a STEP
     made from an STL mesh): many small faces, thin triangles forced by the facets."""
@@ -582,7 +591,7 @@ MODELS: dict[str, Callable[[], object]] = {
     "mug": mug, "pocket_box": pocket_box, "thin_shell": thin_shell, "washer_thin": washer_thin,
     "sphere_pinhole": sphere_pinhole, "bracket_micro": bracket_micro, "bracket_huge": bracket_huge,
     "bracket_far": bracket_far, "star_prism": star_prism, "notched_block": notched_block,
-    "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal,
+    "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal, "swept_elbow": swept_elbow,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}

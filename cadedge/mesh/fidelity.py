@@ -122,6 +122,30 @@ COARSEN_FLOOR = 0.5
 RIDGE_SPLIT = 0.5
 
 
+#: gmsh's other 2-D algorithms, tried in turn on a face whose mesh is too far from its B-rep area to be
+#: chased (:func:`other_algorithms`).
+OTHER_ALGORITHMS = ("MeshAdapt", "Delaunay")
+
+
+def other_algorithms(s: int, per_circle: float, measured: float, outcomes: dict, deficit, target: float) -> float:
+    """Mesh gmsh surface ``s``, meshed ``measured`` off its B-rep area (too far to be chased:
+    :func:`not_converging` on one mesh), again by gmsh's other algorithms (:data:`OTHER_ALGORITHMS`) at the same
+    sizes, until one is no longer that far; the mesh nearest the B-rep area is kept and its deficit returned
+    (:func:`cadedge.mesh.remesh.keep_closer`).
+
+    Frontal-Delaunay meshed the round corner patches of a swept elbow (surfaces of revolution between two
+    poles) at ALD 1e-3 with their boundary nodes alone: 40 triangles, 73% short of the face, which was then
+    named as not converging; MeshAdapt and Delaunay mesh it in about 2 000 triangles within reach of the
+    target (1e-2 was fine). Faces whose mesh and B-rep disagree in every mesher (loose tolerances) pay one
+    attempt per algorithm at their first sizes, not finer meshes."""
+    from .remesh import keep_closer
+
+    for name in OTHER_ALGORITHMS:
+        if outcomes[s].strategy != name and not_converging(measured, None, target):
+            measured = keep_closer(s, name, per_circle, measured, outcomes, deficit)
+    return measured
+
+
 def not_converging(deficit: float, before: float | None, target: float) -> bool:
     """Whether a face at ``deficit`` is not converging to ``target``: meshed finer (from ``before``), it is
     still over the target and kept more than :data:`CONVERGED` of its deficit; meshed once (``before``
@@ -161,7 +185,7 @@ def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
     (its boundary curves keep their nodes); returns its :class:`~cadedge.mesh.generate.FaceOutcome`."""
     import gmsh
 
-    from .generate import mesh_faces
+    from .generate import face_order, mesh_faces
     from .interior import use_per_circle
 
     use_per_circle(s, per_circle)
@@ -263,7 +287,7 @@ def after_generate(ctx) -> None:
     from .coarsen import coarsen
     from .facemesh import read_face, write_interior
     from .floored import DELAUNAY, try_delaunay
-    from .generate import mesh_faces
+    from .generate import face_order, mesh_faces
     from .interior import use_per_circle
     from .midpoints import split_short_faces
     from .remesh import job_groups, remesh_group
@@ -308,6 +332,13 @@ def after_generate(ctx) -> None:
     for k in range(PASSES + 1):
         late = ctx.job.deadline is not None and time.time() > ctx.job.deadline
         measured = {s: deficit(s, a) for s, a in unfolded_areas(pending).items()}
+        for s in [s for s in measured if not late and s not in floored and face_order(s)[0] == 0
+                  and face_of.get(s, s) not in no_refine and not_converging(measured[s], None, target)]:
+            f = face_of.get(s, s)  # far off on this mesh, first or finer: gmsh's other algorithms
+            say(f"refine {f}")  # the watchdog bounds it; a hang or crash here keeps the face as first meshed
+            measured[s] = other_algorithms(s, per_face.get(f, opts["face_per_circle"].get(f, n0)), measured[s],
+                                           ctx.outcomes, lambda a, s=s: deficit(s, a), target)
+            say(f"refined {f}")
         for s in [s for s in measured if s in floored and abs(measured[s]) > target and not late]:
             f = face_of.get(s, s)
             say(f"refine {f}")  # the watchdog bounds it; a hang or crash here keeps the face as first meshed

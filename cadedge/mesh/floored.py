@@ -18,7 +18,8 @@ def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
                  deficit: Callable[[float], float]) -> float:
     """Mesh gmsh surface ``s`` (a face held at a size floor, over its target at ``measured``) again by
     gmsh's Delaunay at ``per_circle`` (the sizes it was meshed with); keep whichever mesh has the smaller
-    area deficit (``deficit(mesh area)``) and return it (``outcomes[s]`` names the strategy kept).
+    area deficit (``deficit(mesh area)``) and return it (``outcomes[s]`` names the strategy kept:
+    :func:`cadedge.mesh.remesh.keep_closer`).
 
     Across a ridge much sharper than the floor, Frontal-Delaunay left triangles that join the two sides of
     the propeller's blades (``scripts/hard_models.py``) straight through the solid, edges of 0.3-0.8 mm
@@ -26,22 +27,6 @@ def try_delaunay(s: int, per_circle: float, measured: float, outcomes: dict,
     2.4e-2, finer or not; Delaunay follows the ridge there (8.6e-3 to 1e-2). Neither is better everywhere,
     so both are measured: at ``--ald 1e-3`` Frontal-Delaunay's first mesh of a blade face was 1.05e-2
     short and Delaunay's 4.1e-3, and meshed finer 2.2e-3 against 1.2e-3."""
-    import gmsh
+    from .remesh import keep_closer
 
-    from .areas import unfolded_areas
-    from .generate import STRATEGIES, FaceOutcome
-    from .remesh import mesh_again
-
-    delaunay = next(st for st in STRATEGIES if st.name == DELAUNAY)
-    other = measured
-
-    def closer() -> bool:
-        nonlocal other
-        other = deficit(unfolded_areas([s]).get(s, 0.0))
-        return abs(other) < abs(measured)
-
-    if not mesh_again(s, delaunay, per_circle, closer):
-        return measured
-    outcomes[s] = FaceOutcome(face=outcomes[s].face, surface=s, strategy=delaunay.name,
-                              triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
-    return other
+    return keep_closer(s, DELAUNAY, per_circle, measured, outcomes, deficit)

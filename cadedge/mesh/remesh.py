@@ -92,6 +92,31 @@ def mesh_again(surface: int, strategy: Strategy, per_circle: float, keep: Callab
     return False
 
 
+def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes: dict,
+                deficit: Callable[[float], float]) -> float:
+    """Mesh gmsh surface ``s`` (over its area target at ``measured``) again by the gmsh strategy ``name``
+    at ``per_circle`` (the sizes it was meshed with); keep whichever mesh has the smaller area deficit
+    (``deficit(mesh area)``) and return it (``outcomes[s]`` names the strategy kept)."""
+    import gmsh
+
+    from .areas import unfolded_areas
+    from .generate import STRATEGIES, FaceOutcome
+
+    strategy = next(st for st in STRATEGIES if st.name == name)
+    other = measured
+
+    def closer() -> bool:
+        nonlocal other
+        other = deficit(unfolded_areas([s]).get(s, 0.0))
+        return abs(other) < abs(measured)
+
+    if not mesh_again(s, strategy, per_circle, closer):
+        return measured
+    outcomes[s] = FaceOutcome(face=outcomes[s].face, surface=s, strategy=strategy.name,
+                              triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
+    return other
+
+
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
     """Mesh gmsh ``surfaces`` (one group of :func:`job_groups`) again from scratch in one call at
     ``per_circle`` triangles per ``2 pi`` (see :func:`cadedge.mesh.interior.use_per_circle`); a face that
