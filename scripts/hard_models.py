@@ -19,8 +19,8 @@ bottle, a cut torus, an ellipsoid, a filleted cone on a cylinder, a mug, a fille
 0.2 mm-walled shell, a thin washer, a sphere with a 0.3 mm hole, and the bracket fixture scaled by
 1e-3 and 1e3 and moved far from the origin. A sixth: two tees whose run cylinder has its seam through
 the point where the branch touches it (a tangential inlet, an equal pipe tee): two vertices of the run's
-face at one point; and a pipe swept along two lines and an arc that meet them at an angle, its corners
-rounded (surfaces of revolution between two poles).
+face at one point; and a sphere and a revolved spline cut to 270 degrees (a face spanning more than half a
+turn between two poles).
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -409,12 +409,18 @@ def pipe_tee_equal() -> object:
     return body.cut(cq.Workplane("XY").circle(8).extrude(31)).val().wrapped
 
 
-def swept_elbow() -> object:
-    """A 100 mm pipe (6 mm wall) swept along a line, an arc of radius 150 and a line, the arc meeting the
-    lines at an angle: the sweep rounds those corners with patches of surfaces of revolution between two
-    poles, which Frontal-Delaunay meshed at ALD 1e-3 with their boundary nodes alone (73% short)."""
-    path = cq.Workplane("XZ").moveTo(0, 0).lineTo(0, 400).radiusArc((150, 550), -150).lineTo(600, 550)
-    return cq.Workplane("XY").circle(50).circle(44).sweep(path, transition="round").val().wrapped
+def sphere_sector() -> object:
+    """A 50 mm sphere cut to 270 degrees about its axis: one spherical face between two meridians that meet
+    at both poles, which Frontal-Delaunay meshed on the other side of its boundary (the missing quarter)."""
+    return cq.Solid.makeSphere(50, angleDegrees1=-90, angleDegrees2=90, angleDegrees3=270).wrapped
+
+
+def revolved_sector() -> object:
+    """A spline profile whose ends lie on the axis, revolved 270 degrees: a surface of revolution between
+    two poles spanning more than half a turn (the missing quarter meshed at ALD 1e-3, not at 1e-2)."""
+    profile = cq.Workplane("XZ").spline([(0, -50), (40, -20), (45, 20), (0, 50)], tangents=[(1, 0), (-1, 0)],
+                                        includeCurrent=False).close()
+    return profile.revolve(270, (0, 0, 0), (0, 1, 0)).val().wrapped
 
 
 def faceted() -> object:
@@ -591,7 +597,8 @@ MODELS: dict[str, Callable[[], object]] = {
     "mug": mug, "pocket_box": pocket_box, "thin_shell": thin_shell, "washer_thin": washer_thin,
     "sphere_pinhole": sphere_pinhole, "bracket_micro": bracket_micro, "bracket_huge": bracket_huge,
     "bracket_far": bracket_far, "star_prism": star_prism, "notched_block": notched_block,
-    "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal, "swept_elbow": swept_elbow,
+    "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal,
+    "sphere_sector": sphere_sector, "revolved_sector": revolved_sector,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}

@@ -454,18 +454,16 @@ def test_an_extrusion_notched_to_a_fold_is_within_its_target_and_keeps_its_angle
     assert result.report.min_angle >= 20.0 and result.report.folded == 0
 
 
-def test_a_face_meshed_far_off_its_area_gets_gmshs_other_algorithms_before_it_is_given_up(tmp_path):
-    """swept_elbow of ``scripts/hard_models.py`` at 1e-3: Frontal-Delaunay meshed its round corner patches
-    (surfaces of revolution between two poles) with their boundary nodes alone, 40 triangles 73% short,
-    and they were named as not converging (over 10 times the target on their first mesh). MeshAdapt meshes
-    them within reach, and the surface target does the rest."""
-    result = mesh_shape(_hard_model("swept_elbow", tmp_path), ald=1e-3, workers=1)
+@pytest.mark.parametrize("name, eps", [("sphere_sector", 1e-2), ("revolved_sector", 1e-3)])
+def test_a_face_meshed_on_the_wrong_side_of_its_boundary_gets_gmshs_other_algorithms(tmp_path, name, eps):
+    """sphere_sector and revolved_sector of ``scripts/hard_models.py``: one face spanning 270 degrees between
+    two poles, which Frontal-Delaunay meshed on the other side of its boundary (the missing quarter, 73%
+    short, watertight with the flat faces: only the area tells). Over 10 times the target on one mesh, the
+    face was named as not converging and left so, exit 0; gmsh's Delaunay meshes the face itself."""
+    result = mesh_shape(_hard_model(name, tmp_path), ald=eps, workers=1)
     assert result.ok, result.problems()
-    deficits = _independent_deficits(result)
-    assert np.abs(deficits).max() <= 1e-3, deficits
+    assert np.abs(_independent_deficits(result)).max() <= eps
     assert not result.report.over_target and result.report.min_angle >= 20.0
-    patches = [f.face for f in result.report.faces if f.surface == "SurfaceOfRevolution" and f.triangles < 1000]
-    assert not patches, patches
 
 
 def test_a_blade_face_meshed_by_delaunay_keeps_its_mesh_through_the_optimiser(tmp_path):
