@@ -93,13 +93,16 @@ def mesh_again(surface: int, strategy: Strategy, per_circle: float, keep: Callab
 
 
 def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes: dict,
-                deficit: Callable[[float], float]) -> float:
+                deficit: Callable[[float], float], *, within: float = float("inf"),
+                min_angle: float = 0.0) -> float:
     """Mesh gmsh surface ``s`` (over its area target at ``measured``) again by the gmsh strategy ``name``
     at ``per_circle`` (the sizes it was meshed with); keep whichever mesh has the smaller area deficit
-    (``deficit(mesh area)``) and return it (``outcomes[s]`` names the strategy kept)."""
+    (``deficit(mesh area)``), the new one only if that is at most ``within`` and its smallest angle at
+    least ``min_angle`` degrees, and return it (``outcomes[s]`` names the strategy kept)."""
     import gmsh
 
     from .areas import unfolded_areas
+    from .facemesh import triangle_min_angles
     from .generate import STRATEGIES, FaceOutcome
 
     strategy = next(st for st in STRATEGIES if st.name == name)
@@ -108,7 +111,10 @@ def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes:
     def closer() -> bool:
         nonlocal other
         other = deficit(unfolded_areas([s]).get(s, 0.0))
-        return abs(other) < abs(measured)
+        if not (abs(other) < abs(measured) and abs(other) <= within):
+            return False
+        angles = triangle_min_angles(s) if min_angle > 0 else None
+        return min_angle <= 0 or (angles is not None and float(angles.min()) >= min_angle)
 
     if not mesh_again(s, strategy, per_circle, closer):
         return measured
