@@ -124,8 +124,9 @@ RIDGE_SPLIT = 0.5
 
 #: gmsh's other 2-D algorithms, tried in turn on a face whose mesh is too far from its B-rep area to be
 #: chased (:func:`other_algorithms`). Delaunay alone: on a 270-degree revolved spline face between two
-#: poles it took 0.1-0.3 s where MeshAdapt took 8.5-89 s (sizes 5 and 2), both the right side; on LLNL
-#: boxed_sphere at 1e-3, whose 16 faces are off in every mesher, MeshAdapt after it cost 56 s of 146.
+#: poles it took 0.1-0.3 s where MeshAdapt took 8.5-89 s (sizes 5 and 2), both the right side; with both
+#: tried on every face far off (LLNL boxed_sphere's 20 faces off in every mesher) its run at 1e-3 took
+#: 146 s instead of 90.
 OTHER_ALGORITHMS = ("Delaunay",)
 
 
@@ -197,7 +198,7 @@ def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
     (its boundary curves keep their nodes); returns its :class:`~cadedge.mesh.generate.FaceOutcome`."""
     import gmsh
 
-    from .generate import face_order, mesh_faces
+    from .generate import mesh_faces
     from .interior import use_per_circle
 
     use_per_circle(s, per_circle)

@@ -113,8 +113,10 @@ def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes:
         other = deficit(unfolded_areas([s]).get(s, 0.0))
         if not (abs(other) < abs(measured) and abs(other) <= within):
             return False
-        angles = triangle_min_angles(s) if min_angle > 0 else None
-        return min_angle <= 0 or (angles is not None and float(angles.min()) >= min_angle)
+        if min_angle <= 0:
+            return True
+        angles = triangle_min_angles(s)
+        return angles is not None and float(angles.min()) >= min_angle
 
     if not mesh_again(s, strategy, per_circle, closer):
         return measured
