@@ -61,18 +61,8 @@ def test_a_face_with_many_boundary_nodes_starts_from_the_older_triangulation_in_
             calls.append((visible, gmsh.option.getNumber("Mesh.OldInitialDelaunay2D")))
         return generate(dim)
 
-    def rectangle(x0, w, h, nw, nh):
-        geo = gmsh.model.geo
-        p = [geo.addPoint(x0, 0, 0), geo.addPoint(x0 + w, 0, 0), geo.addPoint(x0 + w, h, 0), geo.addPoint(x0, h, 0)]
-        lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
-        surface = geo.addPlaneSurface([geo.addCurveLoop(lines)])
-        for line, n in zip(lines, (nw, nh, nw, nh)):
-            geo.mesh.setTransfiniteCurve(line, n)
-        geo.synchronize()
-        return surface
-
     with gmsh_session():
-        strip, square = rectangle(0.0, 2.0, 100.0, 3, 1001), rectangle(20.0, 1.0, 1.0, 4, 4)
+        strip, square = _rectangle(0.0, 2.0, 100.0, 3, 1001), _rectangle(20.0, 1.0, 1.0, 4, 4)
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
         gmsh.model.mesh.generate(1)
@@ -82,3 +72,39 @@ def test_a_face_with_many_boundary_nodes_starts_from_the_older_triangulation_in_
         assert all(o.ok for o in out.values()), out
         assert sorted(calls) == [([strip], 1.0), ([square], 0.0)]
         assert gmsh.option.getNumber("Mesh.OldInitialDelaunay2D") == 0
+
+
+def _rectangle(x0, w, h, nw, nh):
+    """A plane gmsh rectangle (geo kernel) with ``nw`` x ``nh`` nodes on its sides; returns its surface."""
+    import gmsh
+
+    geo = gmsh.model.geo
+    p = [geo.addPoint(x0, 0, 0), geo.addPoint(x0 + w, 0, 0), geo.addPoint(x0 + w, h, 0), geo.addPoint(x0, h, 0)]
+    lines = [geo.addLine(p[i], p[(i + 1) % 4]) for i in range(4)]
+    surface = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+    for line, n in zip(lines, (nw, nh, nw, nh)):
+        geo.mesh.setTransfiniteCurve(line, n)
+    geo.synchronize()
+    return surface
+
+
+def test_every_gmsh_call_of_a_batch_is_announced_to_the_watchdog():
+    """The second batch holds the strip and a square, meshed in two gmsh calls (different initial
+    triangulations): each call is announced, so the watchdog, which bounds the attempt it last heard of,
+    bounds the second one too. Announcing only the batch left the call after the first group's results
+    unbounded: 260 s of a 300 s job on a face that hangs gmsh."""
+    import gmsh
+
+    from cadedge.mesh.generate import mesh_faces
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    with gmsh_session():
+        first = _rectangle(-10.0, 1.0, 1.0, 4, 4)
+        strip, square = _rectangle(0.0, 2.0, 100.0, 3, 1001), _rectangle(20.0, 1.0, 1.0, 4, 4)
+        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(1)
+        announced = []
+        out = mesh_faces([first, strip, square], {}, batch_started=announced.append)
+        assert all(o.ok for o in out.values()), out
+        assert announced == [[first], [strip, square], [square]]

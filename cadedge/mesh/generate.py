@@ -426,7 +426,9 @@ def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
             prepare(out[s].face, 0)
             key = tuple(gmsh.option.getNumber(o) for o in FACE_OPTIONS) + (old_initial([s]),)
             groups.setdefault(key, []).append(s)
-        for group in groups.values():
+        for n, group in enumerate(groups.values()):
+            if n:  # the watchdog bounds each gmsh call: after a group's results it would bound nothing
+                batch_started([out[s].face for s in group])
             prepare(out[group[0]].face, 0)
             for s, reason in _attempt_many(group, first).items():
                 finished(out[s].face, 0, reason)
