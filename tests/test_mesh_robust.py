@@ -231,6 +231,8 @@ def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neigh
     check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
                             edge_multiplicity=multiplicity)
     assert check.ok, check.lines()
+    assert check.lines(missing=1)[-1] == "check: ok on the faces meshed, open where the 1 failed face is missing"
+    assert check.lines()[-1] == "check: ok"
 
 
 def test_check_names_faces_with_small_angles():

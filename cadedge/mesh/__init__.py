@@ -96,7 +96,7 @@ class MeshResult:
         """The printed report: the check summary and the problems."""
         head = f"{self.source}: {len(self.grid.edges)} edges, {self.grid.segments} segments, mode {self.mode}, " \
                f"{self.seconds:.2f} s"
-        return [head] + (self.check.lines() if self.check else []) + (self.report.lines() if self.report else []) \
+        return [head] + (self.check.lines(missing=len(self.failures)) if self.check else []) + (self.report.lines() if self.report else []) \
             + self.problems()
 
 

@@ -57,8 +57,9 @@ class MeshCheck:
     def ok(self) -> bool:
         return not self.problems
 
-    def lines(self) -> list[str]:
-        """Human-readable summary, one line per shell, then the verdict."""
+    def lines(self, *, missing: int = 0) -> list[str]:
+        """Human-readable summary, one line per shell, then the verdict. ``missing``: faces that failed to
+        mesh; the check passes the triangles there are, open where those faces would be, and says so."""
         out = [f"mesh: {self.nodes} nodes, {self.triangles} triangles, {len(self.shells)} shells, "
                f"min angle {self.min_angle_deg:.1f} deg"]
         for i, s in enumerate(self.shells, 1):
@@ -74,7 +75,10 @@ class MeshCheck:
             out.append(f"  quality: {100 * self.small_angle_share:.2g}% of triangles under {SMALL_ANGLE:g} deg, "
                        f"on faces {worst}" + (f" and {more} more" if more > 0 else ""))
         verdict = "check: ok" if self.ok else f"check: FAILED ({len(self.problems)} problems)"
-        if self.ok and self.small_angle_faces:
+        if self.ok and missing:
+            verdict += (f" on the faces meshed, open where the {missing} failed "
+                        f"face{'s are' if missing > 1 else ' is'} missing")
+        elif self.ok and self.small_angle_faces:
             verdict += f" (watertight and conforming, but min angle {self.min_angle_deg:.1f} deg)"
         out.append(verdict)
         return out
