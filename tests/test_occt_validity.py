@@ -8,8 +8,9 @@ import pytest
 b3d = pytest.importorskip("build123d")
 
 from cadedge import refine_shape  # noqa: E402
-from cadedge.mesh import _with_brep_checks  # noqa: E402
-from cadedge.mesh.generate import FaceFailure  # noqa: E402
+from cadedge.mesh import _invalid_faces, _with_brep_checks  # noqa: E402
+from cadedge.mesh.generate import (EXTRUSION_ORDER, INVALID_FACE_STRATEGIES, STRATEGIES, FaceFailure,  # noqa: E402
+                                   FaceOutcome, invalid_face_skips)
 from cadedge.occt.validity import face_problems  # noqa: E402
 
 
@@ -36,8 +37,25 @@ def test_broken_faces_are_found_and_said_in_words_and_sound_ones_are_not():
 
 def test_a_failed_faces_reason_says_when_the_face_itself_is_invalid():
     grid = refine_shape(_mitred_tube(), ald=1e-2)
+    problems = _invalid_faces(grid)
+    assert sorted(problems) == [1, 3, 5, 7]
     failures = [FaceFailure(face=f, surface=f, reason="gmsh's reason") for f in (1, 2)]
-    out = _with_brep_checks(grid, failures)
+    out = _with_brep_checks(failures, problems)
     assert out[0].reason == ("gmsh's reason; the B-rep face itself is invalid (OCCT's BRepCheck: "
                              "a wire not closed)")
     assert out[1].reason == "gmsh's reason"  # face 2 passes the check
+
+
+def test_an_invalid_face_is_tried_only_as_gmsh_alone_would_mesh_it():
+    """Every strategy but the first and gmsh's own curve mesh is barred, with the check's words; the
+    failed face's reason counts the two tried apart from those not tried."""
+    skips = invalid_face_skips({3: "a wire not closed"})
+    barred = skips[3]
+    assert set(range(len(STRATEGIES))) - set(barred) == set(INVALID_FACE_STRATEGIES)
+    assert [STRATEGIES[k].name for k in INVALID_FACE_STRATEGIES] == [
+        "Frontal-Delaunay", "gmsh's own curve mesh, Frontal-Delaunay"]
+    assert barred[1] == "not tried: the B-rep face is invalid (OCCT's BRepCheck: a wire not closed)"
+    outcome = FaceOutcome(face=3, surface=3, attempts=[
+        (STRATEGIES[k].name, barred.get(k, "gmsh's reason")) for k in EXTRUSION_ORDER])
+    assert outcome.reason() == f"Frontal-Delaunay: gmsh's reason (1 other strategies failed, " \
+                               f"{len(EXTRUSION_ORDER) - 2} not tried)"

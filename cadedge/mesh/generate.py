@@ -86,6 +86,19 @@ NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
 #: A face of linear extrusion is meshed flat first: in the plane gmsh meets no parameters to distort (on
 #: a spline with sharp valleys it hung in its own, every strategy), and the triangles keep their shapes.
 EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "extrusion") + GMSH_ORDER
+#: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
+#: would mesh it, on the imposed curves and on its own: other sizes and algorithms do not mend its wires.
+#: On a seam-tangent hole read back from STEP they hung 60 s each, 199 s before the face was named; on a
+#: sweep mitred at a corner each of its four broken faces went through all 12 strategies.
+INVALID_FACE_STRATEGIES = (0, next(k for k, s in enumerate(STRATEGIES) if s.own_curves))
+
+
+def invalid_face_skips(problems: dict[int, str]) -> dict[int, dict[int, str]]:
+    """``skip`` entries (see :func:`mesh_faces`) barring every strategy but
+    :data:`INVALID_FACE_STRATEGIES` on the faces of ``problems`` (face id -> what OCCT's check finds)."""
+    return {face: {k: f"not tried: the B-rep face is invalid (OCCT's BRepCheck: {why})"
+                   for k in range(len(STRATEGIES)) if k not in INVALID_FACE_STRATEGIES}
+            for face, why in problems.items()}
 
 
 @dataclass
@@ -115,12 +128,16 @@ class FaceOutcome:
         return self.strategy is not None
 
     def reason(self) -> str:
-        """Short reason for a failed face: gmsh's message for the first strategy, and how many were tried."""
+        """Short reason for a failed face: gmsh's message for the first strategy tried, how many others
+        failed and how many were not tried (barred after a hang, or out of time)."""
         if not self.attempts:
             return "not meshed"
-        name, first = self.attempts[0]
-        more = f" (and {len(self.attempts) - 1} other strategies failed)" if len(self.attempts) > 1 else ""
-        return f"{name}: {first}{more}"
+        tried = [a for a in self.attempts if not a[1].startswith("not tried")] or self.attempts
+        name, first = tried[0]
+        more = [f"{len(tried) - 1} other strategies failed"] if len(tried) > 1 else []
+        if len(tried) < len(self.attempts):
+            more.append(f"{len(self.attempts) - len(tried)} not tried")
+        return f"{name}: {first}" + (f" ({', '.join(more)})" if more else "")
 
 
 def surface_ok(surface: int) -> bool:
