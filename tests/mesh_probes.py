@@ -21,3 +21,16 @@ def smoothed(ctx) -> list[int]:
 def share(ctx) -> list[float]:
     """``after_mesh`` hook: the job's share of the whole job's faces (``MeshJob.share``; under 1 in a shard)."""
     return [ctx.job.share]
+
+
+
+def small_budget_first(ctx) -> None:
+    """``before_generate``: a triangle budget of 500 a face (:data:`cadedge.mesh.budget.MAX_FACE_TRIANGLES`)
+    and the one-size strategy, which keeps to it, tried first: curved faces come out over their surface
+    target with their budget held, as a long thin fillet does at 1e-3 with the real budget."""
+    import cadedge.mesh.budget
+    import cadedge.mesh.generate as generate
+
+    cadedge.mesh.budget.MAX_FACE_TRIANGLES = 500
+    first = next(k for k, s in enumerate(generate.STRATEGIES) if s.uniform)
+    generate.GMSH_ORDER = (first,) + tuple(k for k in generate.GMSH_ORDER if k != first)

@@ -172,6 +172,21 @@ def test_a_face_meshed_finer_into_its_target_is_never_taken_for_not_converging()
     assert not not_converging(0.0101, None, 1e-3)  # 10x off but within 2%: a lobed gear's side, meshed finer
 
 
+def test_a_face_over_its_target_at_its_triangle_budget_is_not_meshed_finer():
+    """The sphere at 1e-3 with a budget of 500 triangles a face, meshed first by the one-size strategy: over
+    its target with its budget held. Meshed finer it would pass the budget (a long thin torus fillet's
+    finer mesh hung gmsh for 60 s, and its edge splits ran into the time's cut), so it is left as meshed,
+    not split either, and reported with the reason."""
+    from cadedge.mesh.report import AFTER_MESH_HOOK
+
+    result = mesh_shape(FIXTURES / "sphere.step", ald=1e-3, hooks={"before_generate": ["mesh_probes:small_budget_first"]})
+    done = result.extras[AFTER_MESH_HOOK]
+    assert result.ok and done["budget"] == [1] and done["refined"] == {} and done["split"] == []
+    (face,) = result.report.faces
+    assert face.status == "over target" and face.reason == "triangle budget"
+    assert face.note.startswith(f"its {face.triangles} triangles hold the face's budget")
+
+
 def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():
     """A prism on a triangle with a 2.9-degree corner: its end faces must hold a triangle that thin."""
     shape = cq.Workplane().polyline([(0, 0), (10, 0), (10, 0.5)]).close().extrude(1.0).val()

@@ -122,6 +122,14 @@ COARSEN_FLOOR = 0.5
 RIDGE_SPLIT = 0.5
 
 
+#: A face over the target whose mesh holds this share of its triangle budget
+#: (:data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`) is not meshed again, finer or on split edges: its
+#: sizes are at the budget's already, and gmsh takes longer than one attempt on more. A torus R35 r0.2 at
+#: 1e-3 (a small fillet along a 220 mm edge), 403 110 triangles at 1.24e-3 by the one-size strategy: its
+#: finer mesh hung for 60 s, the replay took 24 s and the edge splits ran into the 70% cut, 213 s in all.
+AT_BUDGET = 0.9
+
+
 #: gmsh's other 2-D algorithms, tried in turn on a face whose mesh is too far from its B-rep area to be
 #: chased (:func:`other_algorithms`). Delaunay alone: on a 270-degree revolved spline face between two
 #: poles it took 0.1-0.3 s where MeshAdapt took 8.5-89 s (sizes 5 and 2), both the right side; with both
@@ -297,6 +305,7 @@ def after_generate(ctx) -> None:
 
     import gmsh
 
+    from .budget import MAX_FACE_TRIANGLES
     from .coarsen import coarsen
     from .facemesh import read_face, write_interior
     from .floored import DELAUNAY, try_delaunay
@@ -327,6 +336,11 @@ def after_generate(ctx) -> None:
     floored = getattr(ctx, "floored", {})  # held at a size floor: reported as such
     pending = [s for s, o in ctx.outcomes.items() if o.ok and face_of.get(s, s) in curved]
     say("measure")
+    full: set[int] = set()  # surfaces over the target at their triangle budget: not meshed again
+
+    def at_budget(s: int) -> bool:
+        return len(gmsh.model.mesh.getElementsByType(2, s)[0]) >= AT_BUDGET * MAX_FACE_TRIANGLES
+
     best: dict[int, tuple] = {}  # floored surface -> its smallest deficit so far, that mesh, outcome, count
 
     def keep_best(s: int, d: float) -> float:
@@ -383,8 +397,9 @@ def after_generate(ctx) -> None:
             say("refined " + " ".join(str(face_of.get(s, s)) for s in group))
         # faces held at a size floor too: finer sizes away from the ridge remove triangles spanning it (the
         # propeller's blades at 1e-3: 7.5e-3 to 9.8e-3 -> within 1e-3)
+        full.update(s for s, d in measured.items() if abs(d) > target and at_budget(s))
         pending = [s for s, d in measured.items() if abs(d) > target and face_of.get(s, s) not in stuck
-                   and face_of.get(s, s) not in no_refine]
+                   and face_of.get(s, s) not in no_refine and s not in full]
         if not pending or k == PASSES:
             break
         old = {s: per_face.get(face_of.get(s, s), opts["face_per_circle"].get(face_of.get(s, s), n0))
@@ -419,14 +434,15 @@ def after_generate(ctx) -> None:
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
     # curved faces still short of their area (a sharp ridge spanned by triangles), and faces held at a size
     # floor past RIDGE_SPLIT of it: edges split on the surface
-    short = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) in curved]
+    short = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) in curved and s not in full]
     split = split_short_faces(ctx, {s: RIDGE_SPLIT * target if s in floored else target for s in short},
                               target=target, most=DISAGREE * target, deficit=deficit, areas=areas,
                               ridged=frozenset(floored))
     stuck = [f for f in stuck if f not in split]  # within their target now: the optimiser keeps them there
     ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "split": split,
                     "stuck": sorted(stuck),
-                    "floored": {face_of.get(s, s): h for s, h in floored.items()}}
+                    "floored": {face_of.get(s, s): h for s, h in floored.items()},
+                    "budget": sorted(face_of.get(s, s) for s in full)}
 
 
 def after_mesh(ctx) -> dict:

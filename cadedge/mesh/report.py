@@ -17,6 +17,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from .areas import area_deficits, face_mesh_areas
+from .budget import MAX_FACE_TRIANGLES
 from .interior import SPREAD
 from .quality import GOOD_DEG, SLIVER_DEG, SmallAngle, small_angles, triangle_angles
 
@@ -28,10 +29,10 @@ AFTER_MESH_HOOK = "cadedge.mesh.fidelity:after_mesh"
 
 
 #: Why a face is over the target (``FaceReport.reason``): its deficit is within what its edges' tolerances
-#: allow; its sizes were held above a floor on a sharp ridge of its surface; finer meshes did not reduce it
-#: (its meshed and B-rep areas disagree); a planar face (its boundary polygon sets its area); still over
-#: after it was meshed again finer.
-OVER_REASONS = ("tolerances", "size floor", "not converging", "planar", "still over")
+#: allow; its sizes were held above a floor on a sharp ridge of its surface; its mesh holds the face's
+#: triangle budget (not meshed finer); finer meshes did not reduce it (its meshed and B-rep areas
+#: disagree); a planar face (its boundary polygon sets its area); still over after it was meshed again finer.
+OVER_REASONS = ("tolerances", "size floor", "triangle budget", "not converging", "planar", "still over")
 
 
 @dataclass
@@ -150,6 +151,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  stuck: list[int] | tuple[int, ...] = (),
                  tolerances: dict[int, tuple[float, float]] | None = None,
                  planar: set[int] | None = None, floored: dict[int, float] | None = None,
+                 budget: set[int] | frozenset[int] = frozenset(),
                  face_edges: dict[int, list[np.ndarray]] | None = None,
                  folded: dict[int, int] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
@@ -160,7 +162,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     a face to its edges' largest tolerance and the share of its area they leave open
     (:func:`tolerance_bands`): a face over target within that share is reported as such; ``planar`` the
     faces meshed as planes (default: those of type ``Plane``); ``floored`` the faces whose sizes were held
-    at or above a floor (face -> size, :func:`cadedge.mesh.interior.size_floors`); ``face_edges`` the grid
+    at or above a floor (face -> size, :func:`cadedge.mesh.interior.size_floors`); ``budget`` the faces not
+    meshed finer because their mesh holds their triangle budget; ``face_edges`` the grid
     polylines of each face's edges (:func:`face_edge_grids`: to tell small angles forced by a face
     narrower than its boundary segments); ``folded`` the faces with triangles that face against their
     surface (face -> how many).
@@ -195,7 +198,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
             rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar,
-                                              (floored or {}).get(fid))
+                                              (floored or {}).get(fid), fid in budget)
         elif rec.area_deficit is None:
             rec.note = "the B-rep face has no area (degenerate)"
         faces.append(rec)
@@ -209,7 +212,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
 
 
 def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None, planar: bool,
-               floor: float | None) -> tuple[str, str]:
+               floor: float | None, at_budget: bool = False) -> tuple[str, str]:
     """Why a meshed face is over the target: its reason (one of :data:`OVER_REASONS`) and note."""
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
         return "tolerances", (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} "
@@ -219,6 +222,10 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
         return "size floor", (f"its surface has a sharp ridge: its triangles were held at {floor:.2g} or more "
                               "(the face's triangle budget; curvature sizes would go down to a share of the "
                               "finest edge spacing and gmsh run out of time), and some span the ridge")
+    if at_budget:
+        return "triangle budget", (f"its {rec.triangles} triangles hold the face's budget (about "
+                                   f"{MAX_FACE_TRIANGLES:,} triangles from curvature sizes): finer, gmsh would "
+                                   "take longer than one attempt's time; --timeout does not lift it")
     if stuck:
         return "not converging", ("not meshed finer, or finer meshes did not reduce it: the meshed face and its "
                                   "B-rep area disagree by more than meshing explains (loose tolerances, or a "
@@ -258,7 +265,8 @@ def report_of(result, opts: dict) -> MeshReport | None:
                         vertex_points=vertex_points, stuck=extras.get("stuck", ()),
                         tolerances=tolerance_bands(result.grid, opts["brep_areas"]),
                         planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]),
-                        floored=extras.get("floored"), face_edges=face_edge_grids(result.grid),
+                        floored=extras.get("floored"), budget=set(extras.get("budget", ())),
+                        face_edges=face_edge_grids(result.grid),
                         folded=extras.get("folded"))
 
 
