@@ -96,8 +96,8 @@ class MeshResult:
         """The printed report: the check summary and the problems."""
         head = f"{self.source}: {len(self.grid.edges)} edges, {self.grid.segments} segments, mode {self.mode}, " \
                f"{self.seconds:.2f} s"
-        return [head] + (self.check.lines(missing=len(self.failures)) if self.check else []) + (self.report.lines() if self.report else []) \
-            + self.problems()
+        check = self.check.lines(missing=len(self.failures)) if self.check else []
+        return [head] + check + (self.report.lines() if self.report else []) + self.problems()
 
 
 def _grid_of(source: Any, ald: float, min_length: float | None, max_length: float | None,

@@ -434,7 +434,8 @@ def after_generate(ctx) -> None:
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
     # curved faces still short of their area (a sharp ridge spanned by triangles), and faces held at a size
     # floor past RIDGE_SPLIT of it: edges split on the surface
-    short = [s for s, o in ctx.outcomes.items() if o.ok and s > 0 and face_of.get(s, s) in curved and s not in full]
+    short = [s for s, o in ctx.outcomes.items()
+             if o.ok and s > 0 and face_of.get(s, s) in curved and s not in full]
     split = split_short_faces(ctx, {s: RIDGE_SPLIT * target if s in floored else target for s in short},
                               target=target, most=DISAGREE * target, deficit=deficit, areas=areas,
                               ridged=frozenset(floored))
