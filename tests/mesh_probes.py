@@ -23,7 +23,6 @@ def share(ctx) -> list[float]:
     return [ctx.job.share]
 
 
-
 def small_budget_first(ctx) -> None:
     """``before_generate``: a triangle budget of 500 a face (:data:`cadedge.mesh.budget.MAX_FACE_TRIANGLES`)
     and the one-size strategy, which keeps to it, tried first: curved faces come out over their surface
