@@ -159,7 +159,7 @@ def test_tri_normals_is_numpys_cross_product_of_two_edges():
 
 
 def test_idw_size_is_the_inverse_distance_mean_of_the_nearest_samples():
-    """gmsh's size callback's compiled lookup against scipy's k-d tree and numpy's weighted mean, to the
+    """gmsh's size callback's compiled lookup against scipy's k-d tree and the weighted mean, to the
     bit (the nearest summed first); at a sample the sample's own size; bad shapes refused."""
     from scipy.spatial import cKDTree
 
@@ -170,8 +170,11 @@ def test_idw_size_is_the_inverse_distance_mean_of_the_nearest_samples():
     tree = cKDTree(pts)
     for q in rng.uniform(-0.2, 1.2, (200, 3)):
         d, i = tree.query(q, k=4)
-        w = 1.0 / (d + 1e-12)
-        assert idw_size(pts, sizes, *q, 4) == float(np.dot(w, sizes[i]) / w.sum())
+        num = den = 0.0
+        for dj, ij in zip(d.tolist(), i.tolist()):  # in order, as the kernel sums (np.dot's order is BLAS's)
+            w = 1.0 / (dj + 1e-12)
+            num, den = num + w * float(sizes[ij]), den + w
+        assert idw_size(pts, sizes, *q, 4) == num / den
     assert idw_size(pts, sizes, *pts[7], 4) == pytest.approx(sizes[7], rel=1e-9)
     with pytest.raises(ValueError):
         idw_size(pts, sizes[:-1], 0.0, 0.0, 0.0, 4)
