@@ -23,13 +23,10 @@ def share(ctx) -> list[float]:
     return [ctx.job.share]
 
 
-def small_budget_first(ctx) -> None:
-    """``before_generate``: a triangle budget of 500 a face (:data:`cadedge.mesh.budget.MAX_FACE_TRIANGLES`)
-    and the one-size strategy, which keeps to it, tried first: curved faces come out over their surface
-    target with their budget held, as a long thin fillet does at 1e-3 with the real budget."""
+def small_budget(ctx) -> None:
+    """``before_generate``: a triangle budget of 2 000 a face (:data:`cadedge.mesh.budget.MAX_FACE_TRIANGLES`):
+    curved faces come out over their surface target with their budget held, as a long thin fillet does at
+    1e-3 with the real budget."""
     import cadedge.mesh.budget
-    import cadedge.mesh.generate as generate
 
-    cadedge.mesh.budget.MAX_FACE_TRIANGLES = 500
-    first = next(k for k, s in enumerate(generate.STRATEGIES) if s.uniform)
-    generate.GMSH_ORDER = (first,) + tuple(k for k in generate.GMSH_ORDER if k != first)
+    cadedge.mesh.budget.MAX_FACE_TRIANGLES = 2_000

@@ -91,6 +91,35 @@ def test_one_curvature_size_follows_the_sampled_curvature():
         assert uniform_curvature_size(2, 20.0) is None
 
 
+def test_gmsh_curvature_sizes_are_held_to_the_face_triangle_budget(monkeypatch):
+    """A sphere of radius 2 at 200 triangles per 2 pi would take about 29 000 triangles; with a budget of
+    2 000 a face gmsh is given the count that fills it with about that many, and meshes it so. A torus
+    R 35, r 0.2 (a small fillet along a 220 mm edge) at 57 per 2 pi would take 1.3 million triangles: it
+    gets the count of the real budget, 400 000."""
+    import gmsh
+
+    import cadedge.mesh.budget as budget
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.interior import install, sized_per_circle, use_per_circle
+
+    with gmsh_session():
+        gmsh.model.occ.addSphere(0, 0, 0, 2.0)
+        gmsh.model.occ.addTorus(10, 0, 0, 35.0, 0.2)
+        gmsh.model.occ.synchronize()
+        install([])
+        torus = sized_per_circle(2, 57.0)
+        assert 2.3 * 4 * np.pi ** 2 * 35 * 0.2 * (57.0 / (2 * np.pi * 0.2)) ** 2 > 1.2e6
+        assert 2.3 * 4 * np.pi ** 2 * 35 * 0.2 * (torus / (2 * np.pi * 0.2)) ** 2 == pytest.approx(4e5, rel=0.01)
+        monkeypatch.setattr(budget, "MAX_FACE_TRIANGLES", 2_000)
+        install([])
+        use_per_circle(1, 200.0)
+        assert gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") == pytest.approx(sized_per_circle(1, 200.0), abs=1)
+        gmsh.model.setVisibility([(2, 2)], 0)
+        gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
+        gmsh.model.mesh.generate(2)
+        assert 1_400 < len(gmsh.model.mesh.getElementsByType(2, 1)[0]) < 2_600
+
+
 def test_a_hang_while_meshing_a_face_again_finer_keeps_it_as_first_meshed(cylinder):
     """The re-mesh for the surface target announces each face (``refine F``): when it hangs, the new child
     skips that face's re-mesh and delivers every face."""

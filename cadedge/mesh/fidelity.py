@@ -123,7 +123,8 @@ RIDGE_SPLIT = 0.5
 
 
 #: A face over the target whose mesh holds this share of its triangle budget
-#: (:data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`) is not meshed again, finer or on split edges: its
+#: (:data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`), or whose curvature sizes are held to the budget
+#: (:func:`cadedge.mesh.interior.use_per_circle`), is not meshed again, finer or on split edges: its
 #: sizes are at the budget's already, and gmsh takes longer than one attempt on more. A torus R35 r0.2 at
 #: 1e-3 (a small fillet along a 220 mm edge), 403 110 triangles at 1.24e-3 by the one-size strategy: its
 #: finer mesh hung for 60 s, the replay took 24 s and the edge splits ran into the 70% cut, 213 s in all.
@@ -310,7 +311,7 @@ def after_generate(ctx) -> None:
     from .facemesh import read_face, write_interior
     from .floored import DELAUNAY, try_delaunay
     from .generate import face_order, mesh_faces
-    from .interior import use_per_circle
+    from .interior import SIZES, use_per_circle
     from .midpoints import split_short_faces
     from .remesh import job_groups, remesh_group
     from .report import tolerance_bands
@@ -338,8 +339,9 @@ def after_generate(ctx) -> None:
     say("measure")
     full: set[int] = set()  # surfaces over the target at their triangle budget: not meshed again
 
-    def at_budget(s: int) -> bool:
-        return len(gmsh.model.mesh.getElementsByType(2, s)[0]) >= AT_BUDGET * MAX_FACE_TRIANGLES
+    def at_budget(s: int) -> bool:  # or its curvature sizes held to the budget already (use_per_circle)
+        return (len(gmsh.model.mesh.getElementsByType(2, s)[0]) >= AT_BUDGET * MAX_FACE_TRIANGLES
+                or (s not in SIZES.faces and SIZES.per_circle.get(s, 0.0) >= SIZES.cap(s)))
 
     best: dict[int, tuple] = {}  # floored surface -> its smallest deficit so far, that mesh, outcome, count
 

@@ -192,32 +192,26 @@ def _clear_log() -> None:
     gmsh.logger.start()
 
 
-#: Curvature samples per parametric direction for :func:`uniform_curvature_size`.
-CURVATURE_SAMPLES = 24
-#: Percentile of the sampled curvatures taken as the face's curvature (spikes at poles and near-singular
-#: points of spline surfaces are left out).
+#: Percentile of a face's sampled curvatures taken as the one curvature of :func:`uniform_curvature_size`
+#: (spikes at poles and near-singular points of spline surfaces are left out).
 CURVATURE_PERCENTILE = 95.0
 
 
 def uniform_curvature_size(surface: int, per_circle: float) -> float | None:
     """One size for the whole face: ``2 pi / (per_circle * k)`` with ``k`` a high percentile of the largest
-    principal curvature sampled on a grid of the surface's parameters, no smaller than the size giving
+    principal curvature sampled on a grid of the surface's parameters
+    (:func:`~cadedge.mesh.interior.face_curvatures`), no smaller than the size giving
     :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES` on the face's area. None when the face is flat or gmsh
     cannot sample it."""
-    from .interior import surface_samples
+    from .interior import face_curvatures
 
-    samples = surface_samples(surface, CURVATURE_SAMPLES)
-    if samples is None:
+    found = face_curvatures(surface)
+    if found is None or per_circle <= 0:
         return None
-    k = samples[1][np.isfinite(samples[1])]
-    try:
-        area = float(gmsh.model.occ.getMass(2, surface))
-    except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
+    k = float(np.percentile(found[0], CURVATURE_PERCENTILE))
+    if not k > 0:
         return None
-    if not len(k) or not np.percentile(k, CURVATURE_PERCENTILE) > 0 or per_circle <= 0:
-        return None
-    h = 2.0 * np.pi / (per_circle * float(np.percentile(k, CURVATURE_PERCENTILE)))
-    return max(h, float(filling_size(area)))
+    return max(2.0 * np.pi / (per_circle * k), float(filling_size(np.sum(found[1]))))
 
 
 #: A face with at least this many boundary nodes gets gmsh's older initial triangulation of them

@@ -101,6 +101,8 @@ class InteriorSizes:
         self.faces: dict[int, _Face] = {}
         self.floors: dict[int, float] = {}
         self.per_circle: dict[int, float] = {}  # what :func:`use_per_circle` last set each surface to
+        self.caps: dict[int, float] = {}  # the budget's count per 2 pi of surfaces sized by gmsh (:meth:`cap`)
+        self.samples: dict[int, tuple[np.ndarray, np.ndarray] | None] = {}  # :meth:`curvatures`
         self.target: float | None = None  # the job's surface target (|area deficit| per face), if any
 
     def sample(self, surface: int) -> bool:
@@ -126,6 +128,42 @@ class InteriorSizes:
             return False
         face.sizes = root_sizes(face.k, face.da, per_circle) if per_circle > 0 else None
         return True
+
+    def cap(self, surface: int) -> float:
+        """The most triangles per ``2 pi`` gmsh's curvature sizes are given on ``surface``: the largest count
+        whose sizes put about :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES` on it
+        (:func:`~cadedge.mesh.budget.budget_per_circle` on its :func:`face_curvatures`, within
+        :meth:`bounds`); infinite when no count does or it cannot be evaluated. Found once a surface."""
+        from .budget import budget_per_circle
+
+        if surface not in self.caps:
+            found = self.curvatures(surface)
+            self.caps[surface] = np.inf if found is None else budget_per_circle(*found, *self.bounds(surface))
+        return self.caps[surface]
+
+    def curvature_triangles(self, surface: int, per_circle: float) -> float:
+        """About how many triangles gmsh's curvature sizes at ``per_circle`` put on ``surface``, the rest of
+        the size field aside (:func:`~cadedge.mesh.budget.curvature_triangles` on its
+        :func:`face_curvatures`, within :meth:`bounds`); infinite when it cannot be evaluated."""
+        from .budget import curvature_triangles
+
+        found = self.curvatures(surface)
+        return np.inf if found is None else curvature_triangles(*found, per_circle, *self.bounds(surface))
+
+    def curvatures(self, surface: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """:func:`face_curvatures` of ``surface``, sampled once."""
+        if surface not in self.samples:
+            self.samples[surface] = face_curvatures(surface)
+        return self.samples[surface]
+
+    def bounds(self, surface: int) -> tuple[float, float]:
+        """The smallest and largest size gmsh gives ``surface``: its size floor or ``Mesh.MeshSizeMin``,
+        and ``Mesh.MeshSizeMax`` (infinite when unset), as set now."""
+        import gmsh
+
+        hi = gmsh.option.getNumber("Mesh.MeshSizeMax")
+        return (max(gmsh.option.getNumber("Mesh.MeshSizeMin"), self.floors.get(surface, 0.0)),
+                hi if 0 < hi < 1e22 else np.inf)
 
     def __call__(self, dim: int, tag: int, x: float, y: float, z: float, lc: float) -> float:
         if dim != 2:
@@ -206,6 +244,26 @@ def surface_samples(surface: int, n: int = SAMPLES) -> tuple[np.ndarray, np.ndar
     return x, k, da
 
 
+def face_curvatures(surface: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """Gmsh surface ``surface``'s largest principal curvature on a :data:`SAMPLES` square grid of its
+    parameters, and the area each sample stands for: the area elements scaled to sum to the face's area
+    (a trimmed face taken as curved like the rest of its surface). None when gmsh cannot evaluate it."""
+    import gmsh
+
+    samples = surface_samples(surface)
+    if samples is None:
+        return None
+    _, k, da = samples
+    good = np.isfinite(k) & np.isfinite(da)
+    try:
+        area = float(gmsh.model.occ.getMass(2, surface))
+    except Exception:  # gmsh's bare Exception: a surface it cannot evaluate
+        return None
+    if not good.any() or not area > 0 or not np.sum(da[good]) > 0:
+        return None
+    return k[good], da[good] * (area / np.sum(da[good]))
+
+
 def install(surfaces: list[int], floors: dict[int, float] | None = None,
             target: float | None = None) -> list[int]:
     """Sample ``surfaces`` (gmsh tags of curved faces whose curvature varies), keep the smallest sizes
@@ -215,6 +273,8 @@ def install(surfaces: list[int], floors: dict[int, float] | None = None,
 
     SIZES.faces.clear()
     SIZES.per_circle.clear()
+    SIZES.caps.clear()
+    SIZES.samples.clear()
     SIZES.floors = dict(floors or {})
     SIZES.target = target
     done = [s for s in surfaces if SIZES.sample(s)]
@@ -226,7 +286,10 @@ def install(surfaces: list[int], floors: dict[int, float] | None = None,
 def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) -> None:
     """Size gmsh surface ``surface`` at ``per_circle`` triangles per ``2 pi``: by :data:`SIZES` where it was
     sampled (gmsh's curvature sizes off), else by gmsh's ``Mesh.MeshSizeFromCurvature``. ``uniform``
-    (the one-size strategy, which reads the gmsh option) always takes the latter.
+    (the one-size strategy, which reads the gmsh option) always takes the latter. gmsh's curvature sizes
+    are given no more than the face's triangle budget allows (:meth:`InteriorSizes.cap`): a fillet of
+    0.2 mm along a 500 mm edge at 1e-3 took 736 000 triangles at its surface type's count, and meshing it
+    again (coarser, or by another algorithm) ran past the 60 s of an attempt.
 
     A face held at a size floor keeps what gmsh's Frontal-Delaunay makes of it
     (``Mesh.AlgorithmSwitchOnFailure`` off there): across a ridge much sharper than its triangles some
@@ -238,10 +301,16 @@ def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) ->
     import gmsh
 
     gmsh.option.setNumber("Mesh.AlgorithmSwitchOnFailure", 0 if surface in SIZES.floors else 1)
-    SIZES.per_circle[surface] = per_circle
-
     if not uniform and SIZES.set(surface, per_circle):
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     else:
         SIZES.set(surface, 0.0)
+        per_circle = min(per_circle, SIZES.cap(surface))
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
+    SIZES.per_circle[surface] = per_circle
+
+
+def sized_per_circle(surface: int, per_circle: float) -> float:
+    """The count per ``2 pi`` :func:`use_per_circle` sizes ``surface`` at when asked for ``per_circle``:
+    itself on a sampled face, else no more than the face's triangle budget allows."""
+    return per_circle if surface in SIZES.faces else min(per_circle, SIZES.cap(surface))
