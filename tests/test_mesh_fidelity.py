@@ -369,6 +369,24 @@ def test_a_face_whose_deficit_hardly_moves_is_coarsened_again():
     assert len(result.triangles) < 7500
 
 
+def test_a_face_sized_by_its_boundary_is_not_coarsened():
+    """A disc with an annular groove whose top edges are filleted 0.3 at 1e-2: the groove's walls and the
+    disc's side are far under the worst face, but their triangles follow their boundary spacings (the
+    fillets' and the rim's), not their curvature sizes, so a lower count per 2 pi changes nothing; they
+    were meshed again, twice, for nothing."""
+    body = cq.Workplane("XY").circle(10).extrude(4)
+    body = body.cut(cq.Workplane("XY").workplane(offset=1).circle(8).circle(6).extrude(3))
+    rims = [e for e in body.edges().vals()
+            if abs(e.Center().z - 4) < 1e-6 and e.geomType() == "CIRCLE" and e.radius() < 9]
+    steps: list[str] = []
+    result = mesh_shape(body.val().fillet(0.3, rims), ald=1e-2, progress=steps.append)
+    assert result.ok, result.problems()
+    walls = [f.face for f in result.report.faces if f.surface == "Cylinder"]
+    assert len(walls) == 3 and all(abs(f.area_deficit) < 1e-3 for f in result.report.faces if f.face in walls)
+    assert not [s for s in steps if "again" in s]
+    assert result.report.worst_deficit <= 1e-2
+
+
 @pytest.mark.corpus
 def test_loose_bspline_model_meshes_on_its_own_grids_with_good_angles():
     """mesh_T106_V3 (unsewn faces, B-spline curves of uneven parameter speed): splitting by parameter
