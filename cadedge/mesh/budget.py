@@ -22,7 +22,6 @@ def filling_size(area):
     return np.sqrt(2.3 * np.abs(area) / MAX_FACE_TRIANGLES)
 
 
-
 def curvature_triangles(k: np.ndarray, da: np.ndarray, per_circle: float, lo: float = 0.0,
                         hi: float = np.inf) -> float:
     """About how many triangles curvature sizes ``2 pi / (per_circle k)``, held within ``[lo, hi]``, put on

@@ -286,10 +286,11 @@ def install(surfaces: list[int], floors: dict[int, float] | None = None,
 def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) -> None:
     """Size gmsh surface ``surface`` at ``per_circle`` triangles per ``2 pi``: by :data:`SIZES` where it was
     sampled (gmsh's curvature sizes off), else by gmsh's ``Mesh.MeshSizeFromCurvature``. ``uniform``
-    (the one-size strategy, which reads the gmsh option) always takes the latter. gmsh's curvature sizes
-    are given no more than the face's triangle budget allows (:meth:`InteriorSizes.cap`): a fillet of
-    0.2 mm along a 500 mm edge at 1e-3 took 736 000 triangles at its surface type's count, and meshing it
-    again (coarser, or by another algorithm) ran past the 60 s of an attempt.
+    (the one-size strategy, which reads the gmsh option and keeps to the face's triangle budget, see
+    :func:`~cadedge.mesh.generate.uniform_curvature_size`) always takes the latter. Otherwise gmsh's
+    curvature sizes are given no more than the face's triangle budget allows (:meth:`InteriorSizes.cap`):
+    a fillet of 0.2 mm along a 500 mm edge at 1e-3 took 736 000 triangles at its surface type's count, and
+    meshing it again (coarser, or by another algorithm) ran past the 60 s of an attempt.
 
     A face held at a size floor keeps what gmsh's Frontal-Delaunay makes of it
     (``Mesh.AlgorithmSwitchOnFailure`` off there): across a ridge much sharper than its triangles some
@@ -305,7 +306,8 @@ def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) ->
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     else:
         SIZES.set(surface, 0.0)
-        per_circle = min(per_circle, SIZES.cap(surface))
+        if not uniform:  # the one-size strategy holds its size to the budget itself
+            per_circle = min(per_circle, SIZES.cap(surface))
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
     SIZES.per_circle[surface] = per_circle
 
