@@ -4,7 +4,9 @@ They are the parts of docs/mesh.md's *Large parts* table: a 1 000 mm I-beam with
 (over a hundred thousand boundary segments at 1e-2), a 200 x 200 plate with 900 holes, a heat sink with
 40 filleted fins, a disc with 72 filleted holes on a bolt circle, a gear whose side is one spline of 30
 lobes with sharp valleys (cyclo_gear), the same with rounder valleys (lobed_gear) and a hex nut whose
-30-degree chamfer cone touches its flats.
+30-degree chamfer cone touches its flats; and small curved faces on large parts, each face's curvature
+sizes past the triangle budget: a 200 mm flange with 0.2 mm fillets on an O-ring groove (the same at 100
+mm), a 0.2 mm torus alone and a 1 x 1 000 mm rod.
 They are kept apart from ``scripts/hard_models.py`` because each takes minutes at ``--ald 1e-3``.
 
     python scripts/large_models.py large         # writes large/<name>.step for every model
@@ -111,10 +113,42 @@ def hex_nut() -> object:
     return nut.faces(">Z").workplane().hole(8.5).val().wrapped
 
 
+def _grooved_flange(diameter: float) -> object:
+    """A disc ``diameter`` across and 20 thick with a bore of half that, and an O-ring groove 4 wide and 3
+    deep on the circle of 0.4 ``diameter``, whose two top edges are filleted 0.2."""
+    body = cq.Workplane("XY").circle(diameter / 2).circle(diameter / 4).extrude(20)
+    groove = cq.Workplane("XY").workplane(offset=17).circle(0.4 * diameter).circle(0.4 * diameter - 4).extrude(3)
+    body = body.cut(groove)
+    rims = [e for e in body.edges().vals() if e.geomType() == "CIRCLE" and abs(e.Center().z - 20) < 1e-6
+            and min(abs(e.radius() - 0.4 * diameter), abs(e.radius() - 0.4 * diameter + 4)) < 1e-6]
+    return body.val().fillet(0.2, rims).wrapped
+
+
+def flange_200() -> object:
+    """:func:`_grooved_flange` 200 mm across: two 0.2 mm fillets about 500 mm long."""
+    return _grooved_flange(200.0)
+
+
+def flange_100() -> object:
+    """:func:`_grooved_flange` 100 mm across."""
+    return _grooved_flange(100.0)
+
+
+def torus_fillet() -> object:
+    """A torus R 35, r 0.2: one 0.2 mm fillet along a 220 mm edge, alone."""
+    return cq.Solid.makeTorus(35.0, 0.2).wrapped
+
+
+def rod() -> object:
+    """A rod 1 mm across and 1 000 long: one long thin cylinder."""
+    return cq.Workplane("XY").circle(0.5).extrude(1000).val().wrapped
+
+
 MODELS: dict[str, Callable[[], object]] = {
     "i_beam": i_beam, "perforated_plate": perforated_plate, "plate_225": plate_225, "heat_sink": heat_sink,
     "bolt_circle_fillets": bolt_circle_fillets, "cyclo_gear": cyclo_gear, "lobed_gear": lobed_gear,
-    "hex_nut": hex_nut,
+    "hex_nut": hex_nut, "flange_200": flange_200, "flange_100": flange_100, "torus_fillet": torus_fillet,
+    "rod": rod,
 }
 
 
