@@ -126,7 +126,8 @@ def remesh_split(ctx) -> None:
     curves; its neighbours, outside that call's faces, are meshed again on the split curves."""
     import gmsh
 
-    from cadedge.mesh.generate import STRATEGIES, mesh_faces
+    from cadedge.mesh.generate import mesh_faces
+    from cadedge.mesh.strategies import STRATEGIES
 
     s = ctx.emap.faces[FAULT_FACE]
     first = next(k for k, strategy in enumerate(STRATEGIES) if strategy.split)

@@ -14,7 +14,8 @@ pytest.importorskip("trimesh")
 
 import cadedge  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
-from cadedge.mesh.generate import BATCH_FACES, STRATEGIES, _chunk_size  # noqa: E402
+from cadedge.mesh.generate import BATCH_FACES, _chunk_size  # noqa: E402
+from cadedge.mesh.strategies import STRATEGIES
 
 from conftest import FIXTURES  # noqa: E402
 

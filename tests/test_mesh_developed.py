@@ -176,7 +176,7 @@ def test_a_hung_unrolled_meshadapt_leaves_the_unrolled_frontal_delaunay_to_try()
     """Strategies on the same sizes are skipped once one hangs; in an unrolled sector MeshAdapt's time grows
     faster than Frontal-Delaunay's, and a 1 x 200 cone at 1e-3 failed when the one hanging barred the
     other (Frontal-Delaunay meshes it in 49 s)."""
-    from cadedge.mesh.generate import NARROW_CONE_ORDER, STRATEGIES
+    from cadedge.mesh.strategies import NARROW_CONE_ORDER, STRATEGIES
 
     unrolled = [STRATEGIES[k] for k in NARROW_CONE_ORDER if STRATEGIES[k].unrolled == "cone"]
     assert [s.algorithm for s in unrolled] == [1, 6]  # MeshAdapt first: fewer triangles where it is in time

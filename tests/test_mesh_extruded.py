@@ -37,9 +37,10 @@ def test_a_sharp_valleyed_extrusion_is_meshed_flat_within_its_chords():
     and its area is under its exact one (its section's length times the height) by at most what its
     boundary chords lose."""
     from cadedge.mesh.extruded import extrusion_of, is_extrusion, mesh_unrolled
-    from cadedge.mesh.generate import EXTRUSION_ORDER, GMSH_ORDER, face_order, surface_ok
+    from cadedge.mesh.generate import surface_ok
     from cadedge.mesh.gmsh_model import gmsh_session
     from cadedge.mesh.quality import triangle_angles
+    from cadedge.mesh.strategies import EXTRUSION_ORDER, GMSH_ORDER, face_order
 
     with gmsh_session():
         side, splines = _valleyed_prism()

@@ -17,7 +17,7 @@ pytest.importorskip("trimesh")
 
 import cadedge  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
-from cadedge.mesh.generate import STRATEGIES  # noqa: E402
+from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
 
 from conftest import FIXTURES  # noqa: E402
 
@@ -281,8 +281,8 @@ def test_two_faces_on_one_boundary_loop_get_interior_nodes():
 
     import gmsh
 
-    from cadedge.mesh.generate import FaceOutcome
     from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.outcomes import FaceOutcome
     from cadedge.mesh.worker import _overlapping_faces, _recheck
 
     with gmsh_session():

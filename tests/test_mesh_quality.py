@@ -422,7 +422,7 @@ def _adapt_context(side: int, brep_area: float, target: float):
     import time
     from types import SimpleNamespace
 
-    from cadedge.mesh.generate import FaceOutcome
+    from cadedge.mesh.outcomes import FaceOutcome
 
     options = {"fidelity": {"surface_ald": target, "brep_areas": np.array([brep_area]), "per_circle": 20.0,
                             "face_per_circle": {1: 20.0}}}  # 0.31 on the radius-1 cylinder

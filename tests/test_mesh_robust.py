@@ -26,7 +26,7 @@ import cadedge  # noqa: E402
 from cadedge.cli import main  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
 from cadedge.mesh.check import check_triangles  # noqa: E402
-from cadedge.mesh.generate import STRATEGIES  # noqa: E402
+from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
 
 from conftest import FIXTURES, ROOT  # noqa: E402
 

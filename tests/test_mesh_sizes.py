@@ -18,8 +18,8 @@ pytest.importorskip("trimesh")
 
 import cadedge  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
-from cadedge.mesh.generate import STRATEGIES  # noqa: E402
 from cadedge.mesh.spacing_geo import CLASS_RATIO, size_classes  # noqa: E402
+from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
 
 ALD = 1e-2
 PROBE = {"after_mesh": ["mesh_probes:curve_segments"]}
@@ -195,8 +195,9 @@ def test_a_face_that_failed_every_strategy_gets_its_curves_meshed_again_at_other
     no strategy could use (on mesh_T106_V3 gmsh could not recover the loose B-spline edges of the thin
     face 5 in its parameter plane; here the cap's circle simply loses its mesh) has its curves meshed
     again at other sizes and is meshed again with the faces sharing them, every face conforming."""
-    from cadedge.mesh.generate import FaceOutcome, mesh_faces, surface_ok
+    from cadedge.mesh.generate import mesh_faces, surface_ok
     from cadedge.mesh.gmsh_model import gmsh_session, import_brep, map_entities, shape_to_brep, surface_curve_uses
+    from cadedge.mesh.outcomes import FaceOutcome
     from cadedge.mesh.sizes import SizeField, apply_spacing_sizes, configure_gmsh_sizes, retry_failed_faces
     from cadedge.mesh.worker import JobContext, MeshJob
 

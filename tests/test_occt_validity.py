@@ -9,8 +9,9 @@ b3d = pytest.importorskip("build123d")
 
 from cadedge import refine_shape  # noqa: E402
 from cadedge.mesh import _invalid_faces, _with_brep_checks  # noqa: E402
-from cadedge.mesh.generate import (EXTRUSION_ORDER, INVALID_FACE_STRATEGIES, STRATEGIES, FaceFailure,  # noqa: E402
-                                   FaceOutcome, invalid_face_skips)
+from cadedge.mesh.outcomes import FaceFailure, FaceOutcome  # noqa: E402
+from cadedge.mesh.strategies import (EXTRUSION_ORDER, INVALID_FACE_STRATEGIES, STRATEGIES,  # noqa: E402
+                                     invalid_face_skips)
 from cadedge.occt.validity import face_problems  # noqa: E402
 
 

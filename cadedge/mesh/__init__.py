@@ -36,7 +36,7 @@ from ..shapegrid import ShapeGrid
 
 if TYPE_CHECKING:  # gmsh, trimesh and scipy load only when a mesh is made (``cadedge --help`` stays fast)
     from .check import MeshCheck
-    from .generate import FaceFailure
+    from .outcomes import FaceFailure
     from .sizes import SizeField
 
 MODES = ("nodes", "sizes")
@@ -65,7 +65,7 @@ class MeshResult:
     notes: list[str] = field(default_factory=list)
     #: notes for ``--verbose`` only (how each edge and vertex was matched to gmsh's)
     details: list[str] = field(default_factory=list)
-    #: per face: the strategy that meshed it and every failed attempt (``generate.FaceOutcome``)
+    #: per face: the strategy that meshed it and every failed attempt (``outcomes.FaceOutcome``)
     faces: list[Any] = field(default_factory=list)
     #: edges no gmsh curve carries: gmsh meshed them itself, so their faces lack our grid nodes there
     unmatched_edges: list[int] = field(default_factory=list)
@@ -86,7 +86,7 @@ class MeshResult:
     def problems(self, *, verbose: bool = False) -> list[str]:
         """The failed faces grouped by reason (one line each, or one per face with every attempt when
         ``verbose``), then the check's problems."""
-        from .generate import failure_lines
+        from .outcomes import failure_lines
 
         head = [self.error] if self.error and not self.failures else []
         check = self.check.problems if self.check else []
@@ -229,11 +229,12 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
 
     from .check import check_triangles
     from .coincident import meshed_as, merged_shape
-    from .generate import FaceFailure, invalid_face_skips
     from .gmsh_model import shape_to_brep
     from .isolate import DEFAULT_TIMEOUT, run_isolated
+    from .outcomes import FaceFailure
     from .shards import default_workers
     from .status import MeshStatus
+    from .strategies import invalid_face_skips
     from .worker import MeshJob
 
     shape, coincident = merged_shape(grid)  # one gmsh point where a face has two vertices
@@ -283,7 +284,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
 def _invalid_faces(grid: ShapeGrid) -> dict[int, str]:
     """Face id -> what OCCT's own check finds wrong with it (:func:`cadedge.occt.validity.face_problems`),
     for every face that fails it: such a face gets only the strategies gmsh alone would use
-    (:data:`~cadedge.mesh.generate.INVALID_FACE_STRATEGIES`), and if it fails the fault is said to be the
+    (:data:`~cadedge.mesh.strategies.INVALID_FACE_STRATEGIES`), and if it fails the fault is said to be the
     model's. Up front it costs milliseconds (0.16 s for 917_fusee's 249 faces)."""
     if grid.shape is None or not grid.faces:
         return {}

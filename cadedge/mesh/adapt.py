@@ -84,8 +84,8 @@ def after_generate(ctx) -> None:
     import gmsh
 
     from .areas import unfolded_areas
-    from .generate import STRATEGIES
     from .remesh import mesh_again
+    from .strategies import STRATEGIES
 
     opts = ctx.job.options.get("fidelity")
     if not opts:

@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from ..atomic import atomic_path
-from .generate import STRATEGIES, FaceOutcome
+from .outcomes import FaceOutcome
 from .shards import edge_uses, faces_text, weld
+from .strategies import STRATEGIES
 from .worker import JobResult, MeshJob, empty_result
 
 

@@ -50,7 +50,7 @@ FAN_TURN = 3
 #: segments, 2 left triangles turning 136 degrees just beyond the rings.
 TIP = 3.0
 #: A cone whose half-angle's sine is under this (15 degrees) is meshed unrolled before gmsh tries it as
-#: it is (:data:`cadedge.mesh.generate.NARROW_CONE_ORDER`): gmsh's Frontal-Delaunay hung for 60 s on a
+#: it is (:data:`cadedge.mesh.strategies.NARROW_CONE_ORDER`): gmsh's Frontal-Delaunay hung for 60 s on a
 #: 1 x 40 cone at 1e-3 (1.4 degrees) before the unrolled strategies had their turn, and it fails on a
 #: 1 x 6 one (9.5 degrees); it meshes a 1 x 3 one (18.4 degrees) well.
 NARROW = float(np.sin(np.radians(15.0)))

@@ -204,7 +204,7 @@ INTERIOR_GROWTH = 2.0
 
 def remesh_face(s: int, per_circle: float, face_of: dict[int, int]):
     """Mesh gmsh surface ``s`` again from scratch with ``Mesh.MeshSizeFromCurvature`` at ``per_circle``
-    (its boundary curves keep their nodes); returns its :class:`~cadedge.mesh.generate.FaceOutcome`."""
+    (its boundary curves keep their nodes); returns its :class:`~cadedge.mesh.outcomes.FaceOutcome`."""
     import gmsh
 
     from .generate import mesh_faces
@@ -277,8 +277,8 @@ def before_face(ctx) -> None:
     """Hook: the curvature sizes of the face about to be meshed (its surface type's constant)."""
     import gmsh
 
-    from .generate import STRATEGIES
     from .interior import use_per_circle
+    from .strategies import STRATEGIES
 
     opts = ctx.job.options.get("fidelity")
     if opts:
@@ -310,11 +310,12 @@ def after_generate(ctx) -> None:
     from .coarsen import coarsen
     from .facemesh import read_face, write_interior
     from .floored import DELAUNAY, try_delaunay
-    from .generate import face_order, mesh_faces
+    from .generate import mesh_faces
     from .interior import SIZES, use_per_circle
     from .midpoints import split_short_faces
     from .remesh import job_groups, remesh_group
     from .report import tolerance_bands
+    from .strategies import face_order
 
     opts = ctx.job.options.get("fidelity")
     if not opts:

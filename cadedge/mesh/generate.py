@@ -8,7 +8,7 @@ model, 15-25% of the time on a 192-face model); a batch that hangs or crashes gm
 face. A face passes when it carries
 triangles whose edges on its boundary curves are exactly the curve segments, each used as often as the
 curve bounds the face (seams twice), and whose other edges are shared by two triangles. A face that
-fails is cleared and retried through :data:`STRATEGIES`: other 2-D algorithms, finer and coarser local
+fails is cleared and retried through :data:`~cadedge.mesh.strategies.STRATEGIES`: other 2-D algorithms, finer and coarser local
 sizes, then its boundary segments split in two (faces sharing those curves are meshed again on the split
 curves), then its curves meshed by gmsh itself instead of imposed (likewise for the faces sharing them).
 Faces that fail every strategy are reported with gmsh's own messages.
@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import re
 import time
-from dataclasses import dataclass, field
 from typing import Callable
 
 import gmsh
@@ -27,117 +26,9 @@ import numpy as np
 from .budget import filling_size
 from .facemesh import element_corners
 from .gmsh_model import surface_curve_uses
+from .outcomes import FaceOutcome
 from .quality import flat_triangles
-
-
-@dataclass(frozen=True)
-class Strategy:
-    """One way to mesh a face: gmsh's 2-D ``algorithm``, a factor on the sizes, and whether to split the
-    face's boundary segments first."""
-
-    name: str
-    algorithm: int
-    size_factor: float = 1.0
-    split: bool = False
-    own_curves: bool = False  # drop the imposed curve meshes of the face: gmsh meshes its curves itself
-    uniform: bool = False  # curvature sizes as one size from the face's sampled curvature (cheap to evaluate)
-    unrolled: str = ""  # meshed flat: "cone", a cone with its apex on its boundary (:mod:`cadedge.mesh.developed`);
-    # "extrusion", a face of linear extrusion (:mod:`cadedge.mesh.extruded`)
-
-    @property
-    def sizes(self) -> tuple:
-        """What sets this strategy's sizes: strategies alike in it tend to hang alike (an unrolled cone is
-        meshed in another model: gmsh hanging on the cone's face tells nothing of it). In an unrolled
-        cone's plane sector the algorithm counts too: MeshAdapt's time grows faster with the sector's
-        triangles than Frontal-Delaunay's (57 s against 24 s on a 1 x 60 cone at 1e-3, where it makes
-        15% fewer triangles), and it hung on a 1 x 200 cone that Frontal-Delaunay meshes in 49 s."""
-        return (self.size_factor, self.split, self.own_curves, self.uniform, self.unrolled,
-                self.algorithm if self.unrolled == "cone" else 0)
-
-
-#: Tried in this order until a face meshes. 6 = Frontal-Delaunay, 1 = MeshAdapt, 5 = Delaunay. "one
-#: curvature size" replaces gmsh's curvature sizing (evaluated on the surface at every candidate point:
-#: about 1 ms a triangle on the twisted blade's lofted B-spline face, 20 s for 19k triangles) by one size
-#: from the face's sampled largest curvature (:func:`uniform_curvature_size`).
-STRATEGIES = (
-    Strategy("Frontal-Delaunay", 6),
-    Strategy("MeshAdapt", 1),
-    Strategy("Delaunay", 5),
-    Strategy("Frontal-Delaunay, one curvature size", 6, 1.0, False, False, True),
-    Strategy("Frontal-Delaunay, finer sizes", 6, 0.5),
-    Strategy("MeshAdapt, coarser sizes", 1, 2.0),
-    Strategy("split boundary segments, Frontal-Delaunay", 6, 1.0, True),
-    Strategy("split boundary segments, MeshAdapt", 1, 1.0, True),
-    Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
-    Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
-    Strategy("unrolled cone, MeshAdapt", 1, unrolled="cone"),
-    Strategy("unrolled cone, Frontal-Delaunay", 6, unrolled="cone"),
-    Strategy("unrolled extrusion, Frontal-Delaunay", 6, unrolled="extrusion"),
-    Strategy("unrolled extrusion, MeshAdapt", 1, unrolled="extrusion"),
-)
-#: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled
-#: right after the first (gmsh's meshers leave triangles overlapping beside the seam near the apex of
-#: narrow cones, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone at 1e-2, 60 s and more at
-#: 1e-3), then the others; a cone narrower than :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
-GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if not s.unrolled)
-UNROLLED = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "cone")
-APEX_CONE_ORDER = GMSH_ORDER[:1] + UNROLLED + GMSH_ORDER[1:]
-NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
-#: A face of linear extrusion is meshed flat first: in the plane gmsh meets no parameters to distort (on
-#: a spline with sharp valleys it hung in its own, every strategy), and the triangles keep their shapes.
-EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "extrusion") + GMSH_ORDER
-#: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
-#: would mesh it, on the imposed curves and on its own: other sizes and algorithms do not mend its wires.
-#: On a seam-tangent hole read back from STEP they hung 60 s each, 199 s before the face was named; on a
-#: sweep mitred at a corner each of its four broken faces went through all 12 strategies.
-INVALID_FACE_STRATEGIES = (0, next(k for k, s in enumerate(STRATEGIES) if s.own_curves))
-
-
-def invalid_face_skips(problems: dict[int, str]) -> dict[int, dict[int, str]]:
-    """``skip`` entries (see :func:`mesh_faces`) barring every strategy but
-    :data:`INVALID_FACE_STRATEGIES` on the faces of ``problems`` (face id -> what OCCT's check finds)."""
-    return {face: {k: f"not tried: the B-rep face is invalid (OCCT's BRepCheck: {why})"
-                   for k in range(len(STRATEGIES)) if k not in INVALID_FACE_STRATEGIES}
-            for face, why in problems.items()}
-
-
-@dataclass
-class FaceFailure:
-    """A face gmsh could not mesh conformingly: B-rep face id, gmsh surface tag and gmsh's reason."""
-
-    face: int
-    surface: int
-    reason: str
-
-    def line(self) -> str:
-        return f"face {self.face}: gmsh failed: {self.reason}"
-
-
-@dataclass
-class FaceOutcome:
-    """How a face fared: the strategy that meshed it (``None``: failed) and every failed attempt's reason."""
-
-    face: int
-    surface: int
-    strategy: str | None = None
-    attempts: list[tuple[str, str]] = field(default_factory=list)
-    triangles: int = 0
-
-    @property
-    def ok(self) -> bool:
-        return self.strategy is not None
-
-    def reason(self) -> str:
-        """Short reason for a failed face: gmsh's message for the first strategy tried, how many others
-        failed and how many were not tried (barred after a hang, or out of time)."""
-        if not self.attempts:
-            return "not meshed"
-        tried = [a for a in self.attempts if not a[1].startswith("not tried")] or self.attempts
-        name, first = tried[0]
-        more = [f"{len(tried) - 1} other strategies failed"] if len(tried) > 1 else []
-        if len(tried) < len(self.attempts):
-            more.append(f"{len(self.attempts) - len(tried)} not tried")
-        return f"{name}: {first}" + (f" ({', '.join(more)})" if more else "")
+from .strategies import STRATEGIES, Strategy, face_order
 
 
 def surface_ok(surface: int) -> bool:
@@ -450,18 +341,6 @@ def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
         per_face = (time.process_time() - cpu) / len(chunk)
 
 
-def face_order(surface: int) -> tuple[int, ...]:
-    """The strategies (indices into :data:`STRATEGIES`) gmsh surface ``surface`` is tried with, in order:
-    :data:`EXTRUSION_ORDER`, the cones' orders or :data:`GMSH_ORDER`."""
-    from .developed import NARROW, cone_of
-    from .extruded import is_extrusion
-
-    cone = cone_of(surface)
-    if cone is not None:
-        return NARROW_CONE_ORDER if cone.sin < NARROW else APEX_CONE_ORDER
-    return EXTRUSION_ORDER if is_extrusion(surface) else GMSH_ORDER
-
-
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                skip: dict[int, dict[int, str]] | None = None,
                started: Callable[[int, int], None] = lambda face, strategy: None,
@@ -473,7 +352,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                no_batch: set[int] | frozenset[int] = frozenset(),
                cleared: Callable[[list[int]], None] = lambda faces: None,
                batch_bound: float | None = None) -> dict[int, FaceOutcome]:
-    """Mesh every surface on its own through :data:`STRATEGIES`; returns each surface's outcome.
+    """Mesh every surface on its own through :data:`~cadedge.mesh.strategies.STRATEGIES`; returns each surface's outcome.
 
     ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
     in an earlier run) with the reason to record. ``started(face, k)`` is called before each attempt and
@@ -569,38 +448,3 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     for s, rec in out.items():
         rec.triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0]) if rec.ok else 0
     return out
-
-
-def _id_list(ids: list[int], limit: int = 8) -> str:
-    shown = ", ".join(str(i) for i in ids[:limit])
-    return shown + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
-
-
-#: At most this many failure lines without ``verbose``; the rest is counted.
-MAX_FAILURE_LINES = 5
-
-
-def failure_lines(failures: list[FaceFailure], outcomes: list[FaceOutcome], *, total: int,
-                  verbose: bool = False) -> list[str]:
-    """The failed faces, short: one line per distinct reason naming its faces (at most
-    :data:`MAX_FAILURE_LINES`); with ``verbose`` one line per face and failed attempt."""
-    if not failures:
-        return []
-    if verbose:
-        by_face = {o.face: o for o in outcomes}
-        out = []
-        for f in failures:
-            attempts = by_face[f.face].attempts if f.face in by_face else []
-            out += [f"face {f.face}: {name}: {why}" for name, why in attempts] or [f.line()]
-        return out
-    groups: dict[str, list[int]] = {}
-    for f in failures:
-        groups.setdefault(f.reason, []).append(f.face)
-    head = f"{len(failures)} of {total} faces failed" if total else f"{len(failures)} faces failed"
-    lines = []
-    for reason, faces in sorted(groups.items(), key=lambda kv: -len(kv[1]))[:MAX_FAILURE_LINES]:
-        word = "face" if len(faces) == 1 else "faces"
-        lines.append(f"{head}: {word} {_id_list(faces)}: {reason}")
-    if len(groups) > MAX_FAILURE_LINES:
-        lines.append(f"{head}: {len(groups) - MAX_FAILURE_LINES} more reasons (--verbose lists every face)")
-    return lines

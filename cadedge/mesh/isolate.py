@@ -56,7 +56,7 @@ from pathlib import Path
 from ..atomic import atomic_path
 from ..childproc import child_env
 from .delivered import Delivered, delivered, read_deliveries, with_earlier_faces, write_meshio
-from .generate import STRATEGIES
+from .strategies import STRATEGIES
 from .worker import JobResult, MeshJob, empty_result
 
 #: Default bound on one mesh job (all faces, all retries, restarts included), in seconds.

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .generate import Strategy
+    from .strategies import Strategy
 
 #: Faces meshed again in one gmsh call, at most (the watchdog bounds a call like one face attempt).
 BATCH_FACES = 24
@@ -103,7 +103,8 @@ def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes:
 
     from .areas import unfolded_areas
     from .facemesh import triangle_min_angles
-    from .generate import STRATEGIES, FaceOutcome
+    from .outcomes import FaceOutcome
+    from .strategies import STRATEGIES
 
     strategy = next(st for st in STRATEGIES if st.name == name)
     other = measured
@@ -128,14 +129,15 @@ def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes:
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
     """Mesh gmsh ``surfaces`` (one group of :func:`job_groups`) again from scratch in one call at
     ``per_circle`` triangles per ``2 pi`` (see :func:`cadedge.mesh.interior.use_per_circle`); a face that
-    call fails, or whose first strategy is not gmsh's (a face laid flat, :func:`~cadedge.mesh.generate.face_order`),
+    call fails, or whose first strategy is not gmsh's (a face laid flat, :func:`~cadedge.mesh.strategies.face_order`),
     is meshed again on its own through every strategy (:func:`cadedge.mesh.fidelity.remesh_face`).
-    Returns each surface's :class:`~cadedge.mesh.generate.FaceOutcome`."""
+    Returns each surface's :class:`~cadedge.mesh.outcomes.FaceOutcome`."""
     import gmsh
 
     from .fidelity import remesh_face
-    from .generate import STRATEGIES, FaceOutcome, face_order
     from .interior import use_per_circle
+    from .outcomes import FaceOutcome
+    from .strategies import STRATEGIES, face_order
 
     for s in surfaces:  # one group is sized one way (see job_groups), so the gmsh options agree
         use_per_circle(s, per_circle)

@@ -8,7 +8,7 @@ worker, balanced by boundary segments (what gmsh's time grows with, see
 loop) stay together, so the job's check for faces that repeat another's triangles still sees both.
 
 The one way shards can disagree: a face's fallback strategy splits its curves or meshes them itself
-(:data:`cadedge.mesh.generate.STRATEGIES`), which changes the edge under the neighbour meshed elsewhere.
+(:data:`cadedge.mesh.strategies.STRATEGIES`), which changes the edge under the neighbour meshed elsewhere.
 Each shard reports such edges (:func:`cadedge.mesh.worker.changed_edges`); :func:`conflicts` finds the
 neighbours meshed on the old edge, and they are meshed again in a new process with the new edge imposed
 (``MeshJob.adopt``), at most :data:`ADOPT_ROUNDS` times. Faces still on a disagreeing edge after that are
@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .check import row_keys
-from .generate import FaceOutcome
+from .outcomes import FaceOutcome
 from .worker import JobResult, empty_result
 
 #: A job is split only when its faces have at least this many boundary segments in all: below it one

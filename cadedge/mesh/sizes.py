@@ -222,8 +222,10 @@ def retry_failed_faces(ctx) -> None:
     """
     import time
 
-    from .generate import STRATEGIES, FaceOutcome, mesh_faces, remesh_curves
+    from .generate import mesh_faces, remesh_curves
     from .gmsh_model import surface_curve_uses
+    from .outcomes import FaceOutcome
+    from .strategies import STRATEGIES
 
     job = ctx.job
     if job.mode != "sizes":

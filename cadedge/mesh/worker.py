@@ -93,10 +93,10 @@ class JobContext:
     job: MeshJob
     emap: Any = None  # cadedge.mesh.gmsh_model.EntityMap
     surfaces: list[int] = field(default_factory=list)
-    outcomes: dict[int, Any] = field(default_factory=dict)  # gmsh surface -> generate.FaceOutcome
+    outcomes: dict[int, Any] = field(default_factory=dict)  # gmsh surface -> outcomes.FaceOutcome
     raw: Any = None  # cadedge.mesh.readback.RawMesh
     face: int = 0  # the face attempt under way (for "before_face" hooks)
-    strategy: int = -1  # its index in cadedge.mesh.generate.STRATEGIES
+    strategy: int = -1  # its index in cadedge.mesh.strategies.STRATEGIES
     progress: Any = None  # progress(line): a line for the parent's watchdog (see cadedge.mesh.isolate)
     deliver: Any = None  # deliver(dim, id, corners): hand mesh to the parent as it is made (see run_job)
     # faces meshed one by one after the batches: hooks name those that may take gmsh long, so that a hang
@@ -111,7 +111,7 @@ class JobResult:
     """The child's answer: plain arrays and records only.
 
     ``nodes`` (n, 3); ``triangles`` (m, 3) 0-based; ``triangle_faces`` (m,) cadedge face ids; ``faces``
-    one :class:`~cadedge.mesh.generate.FaceOutcome` per face; ``edge_pairs`` (k, 2) node-index pairs of the
+    one :class:`~cadedge.mesh.outcomes.FaceOutcome` per face; ``edge_pairs`` (k, 2) node-index pairs of the
     curve segments and ``edge_uses`` (k,) how many triangles each should have; ``imposed_edges`` the edges
     whose grid was imposed; ``unmatched_edges`` the edges gmsh meshed itself; ``error`` a reason when the
     job failed as a whole (gmsh could not import the shape, an internal error).
@@ -345,7 +345,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                                   cleared=lambda faces: [deliver(2, f, None) for f in faces] if deliver else None)
         deliver_edges()
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
-            from .generate import FaceOutcome
+            from .outcomes import FaceOutcome
 
             missing = sorted(set(job.faces or range(1, job.grid.faces + 1)) - set(emap.faces))
             ctx.outcomes.update({-f: FaceOutcome(face=f, surface=0, attempts=[("gmsh import", partial)])

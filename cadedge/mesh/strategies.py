@@ -1,0 +1,89 @@
+"""The ways a face is meshed: gmsh's 2-D algorithms at other sizes, split or gmsh-meshed boundaries, faces
+laid flat, and the order each kind of face tries them in (:mod:`cadedge.mesh.generate` runs them)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Strategy:
+    """One way to mesh a face: gmsh's 2-D ``algorithm``, a factor on the sizes, and whether to split the
+    face's boundary segments first."""
+
+    name: str
+    algorithm: int
+    size_factor: float = 1.0
+    split: bool = False
+    own_curves: bool = False  # drop the imposed curve meshes of the face: gmsh meshes its curves itself
+    uniform: bool = False  # curvature sizes as one size from the face's sampled curvature (cheap to evaluate)
+    unrolled: str = ""  # meshed flat: "cone", a cone with its apex on its boundary (:mod:`cadedge.mesh.developed`);
+    # "extrusion", a face of linear extrusion (:mod:`cadedge.mesh.extruded`)
+
+    @property
+    def sizes(self) -> tuple:
+        """What sets this strategy's sizes: strategies alike in it tend to hang alike (an unrolled cone is
+        meshed in another model: gmsh hanging on the cone's face tells nothing of it). In an unrolled
+        cone's plane sector the algorithm counts too: MeshAdapt's time grows faster with the sector's
+        triangles than Frontal-Delaunay's (57 s against 24 s on a 1 x 60 cone at 1e-3, where it makes
+        15% fewer triangles), and it hung on a 1 x 200 cone that Frontal-Delaunay meshes in 49 s."""
+        return (self.size_factor, self.split, self.own_curves, self.uniform, self.unrolled,
+                self.algorithm if self.unrolled == "cone" else 0)
+
+
+#: Tried in this order until a face meshes. 6 = Frontal-Delaunay, 1 = MeshAdapt, 5 = Delaunay. "one
+#: curvature size" replaces gmsh's curvature sizing (evaluated on the surface at every candidate point:
+#: about 1 ms a triangle on the twisted blade's lofted B-spline face, 20 s for 19k triangles) by one size
+#: from the face's sampled largest curvature (:func:`~cadedge.mesh.generate.uniform_curvature_size`).
+STRATEGIES = (
+    Strategy("Frontal-Delaunay", 6),
+    Strategy("MeshAdapt", 1),
+    Strategy("Delaunay", 5),
+    Strategy("Frontal-Delaunay, one curvature size", 6, 1.0, False, False, True),
+    Strategy("Frontal-Delaunay, finer sizes", 6, 0.5),
+    Strategy("MeshAdapt, coarser sizes", 1, 2.0),
+    Strategy("split boundary segments, Frontal-Delaunay", 6, 1.0, True),
+    Strategy("split boundary segments, MeshAdapt", 1, 1.0, True),
+    Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
+    Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
+    Strategy("unrolled cone, MeshAdapt", 1, unrolled="cone"),
+    Strategy("unrolled cone, Frontal-Delaunay", 6, unrolled="cone"),
+    Strategy("unrolled extrusion, Frontal-Delaunay", 6, unrolled="extrusion"),
+    Strategy("unrolled extrusion, MeshAdapt", 1, unrolled="extrusion"),
+)
+#: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled
+#: right after the first (gmsh's meshers leave triangles overlapping beside the seam near the apex of
+#: narrow cones, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone at 1e-2, 60 s and more at
+#: 1e-3), then the others; a cone narrower than :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
+GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if not s.unrolled)
+UNROLLED = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "cone")
+APEX_CONE_ORDER = GMSH_ORDER[:1] + UNROLLED + GMSH_ORDER[1:]
+NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
+#: A face of linear extrusion is meshed flat first: in the plane gmsh meets no parameters to distort (on
+#: a spline with sharp valleys it hung in its own, every strategy), and the triangles keep their shapes.
+EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "extrusion") + GMSH_ORDER
+#: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
+#: would mesh it, on the imposed curves and on its own: other sizes and algorithms do not mend its wires.
+#: On a seam-tangent hole read back from STEP they hung 60 s each, 199 s before the face was named; on a
+#: sweep mitred at a corner each of its four broken faces went through all 12 strategies.
+INVALID_FACE_STRATEGIES = (0, next(k for k, s in enumerate(STRATEGIES) if s.own_curves))
+
+
+def invalid_face_skips(problems: dict[int, str]) -> dict[int, dict[int, str]]:
+    """``skip`` entries (see :func:`mesh_faces`) barring every strategy but
+    :data:`INVALID_FACE_STRATEGIES` on the faces of ``problems`` (face id -> what OCCT's check finds)."""
+    return {face: {k: f"not tried: the B-rep face is invalid (OCCT's BRepCheck: {why})"
+                   for k in range(len(STRATEGIES)) if k not in INVALID_FACE_STRATEGIES}
+            for face, why in problems.items()}
+
+
+def face_order(surface: int) -> tuple[int, ...]:
+    """The strategies (indices into :data:`STRATEGIES`) gmsh surface ``surface`` is tried with, in order:
+    :data:`EXTRUSION_ORDER`, the cones' orders or :data:`GMSH_ORDER`."""
+    from .developed import NARROW, cone_of
+    from .extruded import is_extrusion
+
+    cone = cone_of(surface)
+    if cone is not None:
+        return NARROW_CONE_ORDER if cone.sin < NARROW else APEX_CONE_ORDER
+    return EXTRUSION_ORDER if is_extrusion(surface) else GMSH_ORDER
