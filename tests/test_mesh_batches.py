@@ -15,7 +15,7 @@ pytest.importorskip("trimesh")
 import cadedge  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
 from cadedge.mesh.generate import BATCH_FACES, _chunk_size  # noqa: E402
-from cadedge.mesh.strategies import STRATEGIES
+from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
 
 from conftest import FIXTURES  # noqa: E402
 

@@ -16,7 +16,7 @@ from cadedge.errors import InputError  # noqa: E402
 from cadedge.mesh import mesh_shape, shards  # noqa: E402
 from cadedge.mesh.check import check_triangles  # noqa: E402
 from cadedge.mesh.outcomes import FaceOutcome  # noqa: E402
-from cadedge.mesh.strategies import STRATEGIES
+from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
 from cadedge.mesh.worker import JobResult, MeshJob, empty_result  # noqa: E402
 
 from conftest import FIXTURES  # noqa: E402
