@@ -70,7 +70,7 @@ INVALID_FACE_STRATEGIES = (0, next(k for k, s in enumerate(STRATEGIES) if s.own_
 
 
 def invalid_face_skips(problems: dict[int, str]) -> dict[int, dict[int, str]]:
-    """``skip`` entries (see :func:`mesh_faces`) barring every strategy but
+    """``skip`` entries (see :func:`~cadedge.mesh.generate.mesh_faces`) barring every strategy but
     :data:`INVALID_FACE_STRATEGIES` on the faces of ``problems`` (face id -> what OCCT's check finds)."""
     return {face: {k: f"not tried: the B-rep face is invalid (OCCT's BRepCheck: {why})"
                    for k in range(len(STRATEGIES)) if k not in INVALID_FACE_STRATEGIES}
