@@ -191,6 +191,23 @@ def test_a_face_over_its_target_at_its_triangle_budget_is_not_meshed_finer():
     assert all(f.status == "ok" for f in result.report.faces if f.surface != "Torus")
 
 
+def test_a_longer_attempt_bound_raises_the_triangle_budget():
+    """400 000 triangles a face at the default bound on one attempt (60 s) or less, in proportion above it:
+    a longer --timeout buys finer faces where the budget holds them. The gmsh job holds its own budget and
+    gives the process's back."""
+    import cadedge.mesh.budget as budget
+    from cadedge.mesh.report import AFTER_MESH_HOOK
+
+    assert [budget.job_budget(b) for b in (None, 6.0, 60.0, 120.0, 180.0)] == [400_000] * 3 + [800_000, 1_200_000]
+    for bound, held in ((None, 400_000), (120.0, 800_000)):
+        result = mesh_shape(FIXTURES / "cylinder.step", ald=1e-2, face_timeout=bound)
+        assert result.ok and result.extras[AFTER_MESH_HOOK]["budget_triangles"] == held
+    assert budget.MAX_FACE_TRIANGLES == 400_000
+    with budget.held(1_000):
+        assert budget.MAX_FACE_TRIANGLES == 1_000 and budget.job_budget(120.0) == 2_000
+    assert budget.MAX_FACE_TRIANGLES == 400_000
+
+
 def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():
     """A prism on a triangle with a 2.9-degree corner: its end faces must hold a triangle that thin."""
     shape = cq.Workplane().polyline([(0, 0), (10, 0), (10, 0.5)]).close().extrude(1.0).val()

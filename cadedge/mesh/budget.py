@@ -10,10 +10,38 @@ curvature sizes through the count per ``2 pi`` they are given (:func:`budget_per
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 import numpy as np
 
-#: A face gets at most about this many triangles from sizes set by curvature.
+#: A face gets at most about this many triangles from sizes set by curvature, at the default bound on one
+#: face attempt (:data:`BUDGET_BOUND`); a gmsh job bounded longer holds its own (:func:`job_budget`).
 MAX_FACE_TRIANGLES = 400_000
+#: The bound on one face attempt (CPU seconds: a fifth of the default ``--timeout``) that
+#: :data:`MAX_FACE_TRIANGLES` is set for: gmsh's Frontal-Delaunay makes 375 000 triangles on a torus in
+#: about 27 s of CPU.
+BUDGET_BOUND = 60.0
+
+
+def job_budget(attempt_bound: float | None) -> int:
+    """The per-face triangle budget of a gmsh job whose face attempts are bounded at ``attempt_bound`` CPU
+    seconds: :data:`MAX_FACE_TRIANGLES`, raised in proportion to a longer bound (``--timeout 600``:
+    800 000), so a longer timeout buys finer faces where the budget holds them."""
+    if attempt_bound is None or attempt_bound <= BUDGET_BOUND:
+        return MAX_FACE_TRIANGLES
+    return int(MAX_FACE_TRIANGLES * attempt_bound / BUDGET_BOUND)
+
+
+@contextmanager
+def held(budget: int) -> Iterator[None]:
+    """:data:`MAX_FACE_TRIANGLES` set to ``budget`` for what runs inside (one gmsh job in this process)."""
+    global MAX_FACE_TRIANGLES
+    before, MAX_FACE_TRIANGLES = MAX_FACE_TRIANGLES, budget
+    try:
+        yield
+    finally:
+        MAX_FACE_TRIANGLES = before
 
 
 def filling_size(area):

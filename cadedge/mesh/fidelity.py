@@ -446,7 +446,7 @@ def after_generate(ctx) -> None:
     ctx.fidelity = {"per_circle": n0, "refined": per_face, "coarsened": coarser, "split": split,
                     "stuck": sorted(stuck),
                     "floored": {face_of.get(s, s): h for s, h in floored.items()},
-                    "budget": sorted(face_of.get(s, s) for s in full)}
+                    "budget": sorted(face_of.get(s, s) for s in full), "budget_triangles": MAX_FACE_TRIANGLES}
 
 
 def after_mesh(ctx) -> dict:

@@ -151,7 +151,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  stuck: list[int] | tuple[int, ...] = (),
                  tolerances: dict[int, tuple[float, float]] | None = None,
                  planar: set[int] | None = None, floored: dict[int, float] | None = None,
-                 budget: set[int] | frozenset[int] = frozenset(),
+                 budget: set[int] | frozenset[int] = frozenset(), budget_triangles: int | None = None,
                  face_edges: dict[int, list[np.ndarray]] | None = None,
                  folded: dict[int, int] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
@@ -163,7 +163,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     (:func:`tolerance_bands`): a face over target within that share is reported as such; ``planar`` the
     faces meshed as planes (default: those of type ``Plane``); ``floored`` the faces whose sizes were held
     at or above a floor (face -> size, :func:`cadedge.mesh.interior.size_floors`); ``budget`` the faces not
-    meshed finer because their mesh holds their triangle budget; ``face_edges`` the grid
+    meshed finer because their mesh holds their triangle budget, ``budget_triangles`` (the job's, default
+    :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`); ``face_edges`` the grid
     polylines of each face's edges (:func:`face_edge_grids`: to tell small angles forced by a face
     narrower than its boundary segments); ``folded`` the faces with triangles that face against their
     surface (face -> how many).
@@ -198,7 +199,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         elif surface_ald and rec.area_deficit is not None and abs(rec.area_deficit) > surface_ald:
             rec.status = "over target"
             rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar,
-                                              (floored or {}).get(fid), fid in budget)
+                                              (floored or {}).get(fid),
+                                              (budget_triangles or MAX_FACE_TRIANGLES) if fid in budget else 0)
         elif rec.area_deficit is None:
             rec.note = "the B-rep face has no area (degenerate)"
         faces.append(rec)
@@ -212,8 +214,9 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
 
 
 def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None, planar: bool,
-               floor: float | None, at_budget: bool = False) -> tuple[str, str]:
-    """Why a meshed face is over the target: its reason (one of :data:`OVER_REASONS`) and note."""
+               floor: float | None, budget: int = 0) -> tuple[str, str]:
+    """Why a meshed face is over the target: its reason (one of :data:`OVER_REASONS`) and note; ``budget``
+    the job's per-face triangle budget where the face holds it (0: it does not)."""
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
         return "tolerances", (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} "
                               f"from its surface, and a boundary moved that far changes its area by up to "
@@ -222,10 +225,10 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
         return "size floor", (f"its surface has a sharp ridge: its triangles were held at {floor:.2g} or more "
                               "(the face's triangle budget; curvature sizes would go down to a share of the "
                               "finest edge spacing and gmsh run out of time), and some span the ridge")
-    if at_budget:
-        return "triangle budget", (f"its {rec.triangles} triangles hold the face's budget (about "
-                                   f"{MAX_FACE_TRIANGLES:,} triangles from curvature sizes): finer, gmsh would "
-                                   "take longer than one attempt's time; --timeout does not lift it")
+    if budget:
+        return "triangle budget", (f"its {rec.triangles} triangles hold the face's budget (about {budget:,} "
+                                   "triangles from curvature sizes): finer, gmsh would take longer than one "
+                                   "attempt's time; a longer --timeout raises it")
     if stuck:
         return "not converging", ("not meshed finer, or finer meshes did not reduce it: the meshed face and its "
                                   "B-rep area disagree by more than meshing explains (loose tolerances, or a "
@@ -266,6 +269,7 @@ def report_of(result, opts: dict) -> MeshReport | None:
                         tolerances=tolerance_bands(result.grid, opts["brep_areas"]),
                         planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]),
                         floored=extras.get("floored"), budget=set(extras.get("budget", ())),
+                        budget_triangles=extras.get("budget_triangles"),
                         face_edges=face_edge_grids(result.grid),
                         folded=extras.get("folded"))
 

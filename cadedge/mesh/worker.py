@@ -269,6 +269,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     or replace its mesh). Later records of the same entity replace earlier ones."""
     import gmsh
 
+    from .budget import held, job_budget
     from .generate import mesh_faces
     from .gmsh_model import gmsh_session, map_entities
     from .impose import impose_edge_grids
@@ -291,7 +292,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             for eid, m in sorted(emap.edges.items()):
                 deliver(1, eid, element_corners(1, m.tag))
 
-    with gmsh_session():
+    with gmsh_session(), held(job_budget(job.attempt_bound)):  # a longer bound on an attempt buys finer faces
         say("import")
         error, partial = _import(job.brep, notes)
         if error is not None:
