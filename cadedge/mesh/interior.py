@@ -307,7 +307,7 @@ def use_per_circle(surface: int, per_circle: float, *, uniform: bool = False) ->
     else:
         SIZES.set(surface, 0.0)
         if not uniform:  # the one-size strategy holds its size to the budget itself
-            per_circle = min(per_circle, SIZES.cap(surface))
+            per_circle = sized_per_circle(surface, per_circle)
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
     SIZES.per_circle[surface] = per_circle
 
