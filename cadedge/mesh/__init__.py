@@ -172,7 +172,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
-    from .boundary_fit import fit_planes
+    from .boundary_fit import fit_grids, fit_planes
     from .fidelity import HOOKS, prepare
 
     if surface_ald is not None and not surface_ald > 0:
@@ -208,6 +208,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
         grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
                           kinds=fidelity["meshed_kinds"])  # faces' boundary polygons: checked again
+        grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # and the circles of
+                         kinds=fidelity["meshed_kinds"])  # cylinders meshed as grids: their rows again
         max_size = cap
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,

@@ -222,10 +222,12 @@ def before_generate(ctx) -> None:
     of the others: the propeller of ``scripts/hard_models.py`` hung gmsh on such faces, and each hang cost
     the hub's planes batched with them); planar interiors grow from their boundaries at
     :data:`INTERIOR_GROWTH` times the job's growth."""
+    from .gridded import aim
     from .interior import CONSTANT_CURVATURE, install, size_floors
     from .sizes import configure_curvature_sizes
 
     opts = ctx.job.options.get("fidelity")
+    aim(opts["surface_ald"] if opts else None)  # a cylinder meshed as a grid: its columns for the target
     if opts:
         min_size = MIN_SIZE_SHARE * ctx.job.field.min_size
         configure_curvature_sizes(opts["per_circle"], min_size)
@@ -311,6 +313,7 @@ def after_generate(ctx) -> None:
     from .facemesh import read_face, write_interior
     from .floored import DELAUNAY, try_delaunay
     from .generate import mesh_faces
+    from .gridded import NAME as GRID
     from .interior import SIZES, use_per_circle
     from .midpoints import split_short_faces
     from .remesh import job_groups, remesh_group
@@ -428,10 +431,11 @@ def after_generate(ctx) -> None:
     final = {s: deficit(s, a) for s, a in unfolded_areas(ok).items()}
     level = min(max(max(map(abs, final.values()), default=0.0), COARSEN_FLOOR * target), target)
     # a face kept as Delaunay meshed it is not coarsened: coarsening meshes a face it did not coarsen again
+    # (nor a grid, whose mesh its boundary sets: cadedge.mesh.gridded)
     # as it was, by Frontal-Delaunay (sharp_blade's face 3: 4.4e-3 as Delaunay meshed it, back at 2.6e-2);
     # leaving out every floored face cost mesh_T106_V3 at 1e-3 13 333 triangles against 8 975
     calm = [s for s in ok if face_of.get(s, s) in curved and face_of.get(s, s) not in no_refine
-            and face_of.get(s, s) not in per_face and ctx.outcomes[s].strategy != DELAUNAY]
+            and face_of.get(s, s) not in per_face and ctx.outcomes[s].strategy not in (DELAUNAY, GRID)]
     coarser = coarsen(ctx, level=level, deficit=deficit, measured={s: final[s] for s in calm},
                       per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)

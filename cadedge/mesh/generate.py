@@ -176,7 +176,11 @@ def _unrolled(surface: int, strategy: Strategy) -> str | None:
     """Mesh (empty) ``surface`` laid flat: a cone with its apex on its boundary or a face of linear
     extrusion, as ``strategy.unrolled`` says; None if it passed, else why not (the surface is then
     cleared)."""
-    if strategy.unrolled == "cone":
+    if strategy.unrolled == "grid":
+        from .gridded import mesh_grid
+
+        reason = mesh_grid(surface)
+    elif strategy.unrolled == "cone":
         from .developed import cone_of, mesh_unrolled
 
         cone = cone_of(surface)

@@ -45,6 +45,7 @@ import numpy as np
 from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
 from .folds import NodeNormals, _normals, folded, orientation, reference_normals, surface_normals
+from .gridded import NAME as GRID
 from .moves import CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
 from .project import Projector
 from .quality import min_angles
@@ -384,7 +385,8 @@ def after_generate(ctx) -> None:
     end = ctx.job.finish_by  # on the clock; the soft deadline (ctx.job.deadline) bounds meshing, not this
     deliver = ctx.deliver or (lambda dim, tag, corners: None)
     say = ctx.progress or (lambda line: None)
-    todo = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok]
+    # a grid's right triangles are as its boundary nodes set them (cadedge.mesh.gridded): nothing to move
+    todo = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok and outcome.strategy != GRID]
     for passes, rounds in ((PASSES, 1), (0, STAGE_ROUNDS - 1)):
         worst = {s: _face_min_angle(s) for s in todo}
         todo = [s for s in sorted(todo, key=lambda s: worst[s]) if worst[s] < CLIMB_BELOW]

@@ -1,0 +1,418 @@
+"""A cylinder face between two circles meshed as a grid of right triangles, its area deficit that of its
+circles' polygons.
+
+A cylinder face bounded by two circles (or two arcs of them) and the straight lines between them (its
+seam, or two of its generators) is a rectangle in its parameters, angle round the axis by height along
+it, and unrolls onto a plane rectangle without stretching. Meshed as a grid, rings at the lines' nodes and
+generators through the circles' nodes, each row of triangles is a band of the prism on the circles'
+polygon: the face's mesh area falls short of its B-rep area by exactly the share the polygon's perimeter
+falls short of the circle's, which is the circles' arc-length deficit, and cadedge's edge grids hold that
+within EPS. gmsh sizes a cylinder for triangles at any slant, 57 to the circle at 1e-3 against the
+polygon's 41, and meshes about 20 000 triangles a second: a 1 x 1 000 mm rod asked 2.4 million
+triangles of it (held to its 400 000 triangle budget and 2.3e-3 off); as a grid it is 1.07 million at
+9.8e-4, laid out in about a second.
+
+Where the circles are shared with other faces, their nodes fix the grid's columns; the lines' nodes, its
+rows, are split by the boundary fit (:func:`cadedge.mesh.boundary_fit.fit_boundaries`) to the circles'
+segment length, so the cells are about square and the triangles' smallest angles about 45 degrees. A
+face whose circles (or lines) do not carry as many nodes as each other, or whose cells would give
+triangles under :data:`MIN_ANGLE`, is left to gmsh.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: A grid's cells are at most this many times as tall as wide, or as wide as tall: right triangles of
+#: :data:`MIN_ANGLE` degrees or more.
+ASPECT = float(1.0 / np.tan(np.radians(40.0)))
+#: The strategy's name in reports (:data:`cadedge.mesh.strategies.STRATEGIES`).
+NAME = "cylinder grid"
+#: A face is meshed as a grid only if its cells give right triangles no smaller than this many degrees
+#: (cells at most 1.19 times as tall as wide, or as wide as tall): gmsh's Frontal-Delaunay gets 38-42
+#: degrees on cylinders, and the grid's triangles are the face's smallest.
+MIN_ANGLE = 40.0
+#: A circle with other nodes than the grid's columns (a rod's circle split three times finer for its
+#: flat end) is joined to the grid by a band this many rows tall, meshed by gmsh in the plane.
+BAND_ROWS = 2
+#: Triangles of a band (gmsh's, graded from the circle's segments to the grid's) are kept at this many
+#: degrees or more, else the face is left to gmsh.
+BAND_MIN_ANGLE = 30.0
+#: A face is meshed as a grid only if that takes this many triangles or more: on smaller faces gmsh is
+#: quick and the face optimiser lifts its triangles to 40 degrees and more, where a band's are 30-32
+#: (the cylinder fixture's side at 1e-3, banded: 31.7 degrees against 40.7; gmsh alone gets 39.9).
+FEWEST_TRIANGLES = 50_000
+#: A grid face's lines are split no finer than for this many triangles: a grid costs gmsh nothing, but its
+#: nodes are still read back, checked and written (the 1 x 1 000 mm rod at 1e-3: 1.07 million).
+MOST_TRIANGLES = 4_000_000
+
+
+def polygon_deficit(n, turn: float = 2.0 * np.pi):
+    """How far ``n`` equal chords fall short of the length of a circle's arc of ``turn`` radians (a number
+    or an array): the area deficit of a grid's rows between such arcs.
+
+    >>> round(float(polygon_deficit(41)), 6)
+    0.000978
+    """
+    n = np.asarray(n, dtype=float)
+    return 1.0 - 2.0 * n / turn * np.sin(turn / (2.0 * n))
+
+
+def polygon_count(target: float, turn: float = 2.0 * np.pi) -> int:
+    """The fewest equal chords whose :func:`polygon_deficit` on an arc of ``turn`` is within ``target``.
+
+    >>> polygon_count(1e-3), polygon_count(1e-2), polygon_count(1e-3, np.pi / 2)
+    (41, 13, 11)
+    """
+    n = max(int(np.ceil(abs(turn) / np.sqrt(24.0 * target))) - 1, 1)
+    while polygon_deficit(n, abs(turn)) > target:
+        n += 1
+    return n
+
+
+#: The area target of the faces meshed in this process (set by :func:`aim` for each gmsh job): a grid's
+#: columns are at least :func:`polygon_count` of it.
+TARGET: float | None = None
+
+
+def aim(target: float | None) -> None:
+    """Set :data:`TARGET` for the gmsh job starting in this process."""
+    global TARGET
+    TARGET = target
+
+
+def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict[int, float]:
+    """The faces of ``grid`` that may be meshed as a grid, each with the width of its columns: cylinders
+    (``kinds``, by face id - 1) bounded by two circles and by one seam line (full circles) or two lines
+    (arcs), and nothing else. The width is the widest whose polygon is within ``target``
+    (:func:`polygon_count`), or the circles' own segments where they are as many and at most
+    :data:`ASPECT` times finer, or where the face is too short for bands between them
+    (:data:`BAND_ROWS`): a rod's circles split three times for its flat ends get bands, a hole's split
+    twice for the plate round it carry the grid. Only faces of ``areas`` (by face id - 1) whose grid
+    takes :data:`FEWEST_TRIANGLES` or more."""
+    own: dict[int, list] = {}
+    for e in grid.edges:
+        if not e.degenerate:
+            for f in set(e.faces):
+                own.setdefault(f, []).append(e)
+    out = {}
+    for f, edges in own.items():
+        if not 1 <= f <= len(kinds) or kinds[f - 1] != "Cylinder":
+            continue
+        circles = [e for e in edges if e.curve == "Circle"]
+        lines = [e for e in edges if e.curve == "Line"]
+        if len(circles) != 2 or len(circles) + len(lines) != len(edges):
+            continue
+        closed = [bool(np.allclose(e.points[0], e.points[-1])) for e in circles]
+        if not (all(closed) and len(lines) == 1 or not any(closed) and len(lines) == 2):
+            continue
+        e = circles[0]
+        turn = 2.0 * np.pi if closed[0] else float(abs(e.params[-1] - e.params[0]))
+        need = float(e.segment_lengths.sum()) / polygon_count(target, turn)
+        own = float(np.mean(np.concatenate([c.segment_lengths for c in circles])))
+        tall = float(lines[0].segment_lengths.sum())
+        # the circles' own segments where they are about as wide, or no band fits between them
+        if len(circles[0].points) == len(circles[1].points) and (
+                own >= need / ASPECT or tall < (2 * BAND_ROWS + 2) * need):
+            need = own
+        if 2.0 * areas[f - 1] / need ** 2 >= FEWEST_TRIANGLES:
+            out[f] = need
+    return out
+
+
+def line_pieces(chord: np.ndarray, width: float, area: float) -> np.ndarray:
+    """Pieces to cut a grid face's line segments ``chord`` into: rows as tall as the circles' segments are
+    ``width``, at most :data:`MOST_TRIANGLES` on a face of ``area``.
+
+    >>> line_pieces(np.array([10.0, 0.5]), 1.0, 100.0).tolist()
+    [10, 1]
+    """
+    tallest = 2.0 * area / (max(width, 1e-300) * MOST_TRIANGLES)
+    return np.maximum(np.minimum(np.rint(chord / width), np.floor(chord / max(tallest, 1e-300))), 1).astype(int)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """A grid face's boundary nodes: ``bottom`` and ``top`` (circles, the same way round) and ``left`` and
+    ``right`` (lines, bottom to top, as many nodes each; one seam twice), as node tags, their points and
+    their surface parameters; ``angle`` the parameter round the axis (0 or 1), ``scale`` the surface's
+    length per unit of each parameter; ``columns`` the grid's columns, and which circles carry them
+    (``own``: bottom, top); a circle that does not is joined to the grid by a band of
+    :data:`BAND_ROWS` rows that gmsh meshes in the plane."""
+
+    tags: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    xyz: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    uv: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    angle: int
+    scale: np.ndarray
+    columns: int
+    own: tuple[bool, bool]
+
+
+def _chain(curve: int, surface: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A curve's node tags from its first to its last node, their points and their parameters on
+    ``surface``."""
+    import gmsh
+
+    from .generate import curve_chain
+
+    chain, t = curve_chain(curve)
+    tags, coords, _ = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
+    where = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords, dtype=float).reshape(-1, 3)))
+    xyz = np.array([where[k] for k in chain.tolist()])
+    uv = np.reshape(gmsh.model.reparametrizeOnSurface(1, curve, t.tolist(), surface), (-1, 2))
+    return chain, xyz, uv
+
+
+def _from(chain: tuple, start: int) -> tuple | None:
+    """``chain`` (tags, points, parameters) run from its end ``start``; None if neither end is ``start``."""
+    tags = chain[0]
+    if tags[0] == start:
+        return chain
+    if tags[-1] == start:
+        return tuple(a[::-1] for a in chain)
+    return None
+
+
+def _roll(chain: tuple, start: int) -> tuple | None:
+    """A closed ``chain`` turned to start and end at its node ``start``; None if it has no such node."""
+    hit = np.flatnonzero(chain[0][:-1] == start)
+    if not len(hit):
+        return None
+    return tuple(np.concatenate([a[:-1][hit[0]:], a[:-1][:hit[0] + 1]]) for a in chain)
+
+
+def _angle(surface: int) -> int:
+    """Which of a gmsh cylinder's parameters runs round its axis (the surface bends along it; along the
+    other it is straight)."""
+    import gmsh
+
+    lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
+    mid, step = 0.5 * (lo + hi), 0.25 * (hi - lo)
+    bend = []
+    for i in (0, 1):
+        uv = np.array([mid - step * (np.arange(2) == i), mid, mid + step * (np.arange(2) == i)])
+        p = np.reshape(gmsh.model.getValue(2, surface, uv.ravel().tolist()), (3, 3))
+        bend.append(float(np.linalg.norm(p[0] + p[2] - 2.0 * p[1])))
+    return int(np.argmax(bend))
+
+
+def layout(surface: int) -> Layout | str:
+    """The grid of gmsh surface ``surface`` from its meshed boundary curves, or why it has none."""
+    import gmsh
+
+    from .gmsh_model import surface_curve_uses
+
+    if gmsh.model.getType(2, surface) != "Cylinder":
+        return "not a cylinder"
+    uses = surface_curve_uses(surface)
+    if any(len(gmsh.model.mesh.getElementsByType(1, c)[1]) == 0 for c in uses):
+        return "a boundary curve carries no nodes"
+    chains = {c: _chain(c, surface) for c in uses}
+    # a circle keeps its height (gmsh may call an arc a "TrimmedCurve"), a line its angle
+    still = {c: np.ptp(ch[2], axis=0) <= 1e-9 * max(float(np.ptp(ch[2], axis=0).max()), 1e-300)
+             for c, ch in chains.items()}
+    angle = _angle(surface)
+    circles = [c for c in uses if still[c][1 - angle] and not still[c][angle]]
+    lines = [c for c in uses if still[c][angle] and not still[c][1 - angle]]
+    if len(circles) != 2 or len(circles) + len(lines) != len(uses) or sum(uses[c] for c in lines) != 2:
+        return "not bounded by two circles and the lines between them"
+    rings = [chains[c] for c in circles]
+    sides = [chains[c] for c in lines]
+    if len(lines) == 1:  # full circles and a seam
+        seam = sides[0]
+        bottom = next((r for r in rings if seam[0][0] in r[0]), None)
+        top = next((r for r in rings if r is not bottom), None)
+        if bottom is None or seam[0][-1] not in top[0]:
+            return "its seam does not join its circles"
+        bottom, top = _roll(bottom, seam[0][0]), _roll(top, seam[0][-1])
+        if bottom is None or top is None:
+            return "its circles are not closed at the seam"
+        left = right = seam
+    else:
+        bottom = rings[0]
+        left = next((c for s in sides if (c := _from(s, bottom[0][0])) is not None), None)
+        right = next((c for s in sides if (c := _from(s, bottom[0][-1])) is not None and c[0] is not
+                      (left[0] if left is not None else None)), None)
+        if left is None or right is None or left[0][0] == right[0][0]:
+            return "its lines do not join its circles' ends"
+        top = _from(rings[1], left[0][-1])
+        if top is None or top[0][-1] != right[0][-1]:
+            return "its lines do not join its circles' ends"
+    if len(left[0]) != len(right[0]):
+        return "its lines do not carry as many nodes as each other"
+    if len(lines) == 1:  # the top circle the same way round as the bottom one (both from the seam)
+        ahead = bottom[1][1] - bottom[1][0]
+        if np.dot(top[1][1] - top[1][0], ahead) < np.dot(top[1][-2] - top[1][-1], ahead):
+            top = tuple(a[::-1] for a in top)
+    chains = (bottom, top, left, right)
+    uv = [np.array(c[2], dtype=float) for c in chains]
+    for k in (0, 1):  # the circles' angles unwrapped, the top's turned onto the bottom's
+        uv[k][:, angle] = np.unwrap(uv[k][:, angle])
+    turn = 2.0 * np.pi
+    uv[1][:, angle] += turn * np.round((uv[0][0, angle] - uv[1][0, angle]) / turn)
+    steps = [np.diff(uv[k][:, angle]) for k in (0, 1)]
+    if (not all(np.all(d > 0) for d in steps) and not all(np.all(d < 0) for d in steps)
+            or not np.isclose(uv[0][-1, angle], uv[1][-1, angle])):
+        return "its circles do not run the same way round"
+    uv[2][:, angle], uv[3][:, angle] = uv[0][0, angle], uv[0][-1, angle]
+    height = np.stack([np.linalg.norm(np.diff(s[1], axis=0), axis=1) for s in (left, right)])
+    scale = _scale(surface, uv[0][0])
+    turn = abs(uv[0][-1, angle] - uv[0][0, angle])
+    fewest = polygon_count(TARGET, turn) if TARGET else min(len(bottom[0]), len(top[0])) - 1
+    k = height.shape[1]
+    widths = [np.linalg.norm(np.diff(c[1], axis=0), axis=1) for c in (bottom, top)]
+    # the circles carry the columns, else one does and the other gets a band, else both get bands
+    for own in ((True, True), (True, False), (False, True), (False, False)):
+        rows = height[:, BAND_ROWS * (not own[0]):k - BAND_ROWS * (not own[1])].ravel()
+        if not len(rows) or any(len(widths[i]) < fewest for i in (0, 1) if own[i]):
+            continue
+        if all(own) and len(widths[0]) != len(widths[1]):
+            continue
+        if any(own):
+            columns = len(widths[own.index(True)])
+            width = np.concatenate([widths[i] for i in (0, 1) if own[i]])
+        else:  # evenly spaced, never coarser than the target
+            columns = max(int(np.rint(turn * scale[angle] / rows.mean())), fewest)
+            width = np.full(1, turn * scale[angle] / columns)
+        if np.degrees(np.arctan(min(width.min() / rows.max(), rows.min() / width.max()))) >= MIN_ANGLE:
+            break
+    else:
+        return (f"its cells would give triangles under {MIN_ANGLE:g} degrees" if k > 2 * BAND_ROWS
+                else "too short for a grid between bands")
+    if 2 * columns * k < FEWEST_TRIANGLES:
+        return f"under {FEWEST_TRIANGLES} triangles as a grid: gmsh meshes it as well"
+    return Layout(tuple(c[0] for c in chains), tuple(c[1] for c in chains), tuple(uv), angle, scale, columns, own)
+
+
+def _scale(surface: int, uv: np.ndarray) -> np.ndarray:
+    """The length of ``surface`` per unit of each parameter at ``uv`` (a cylinder's radius round it)."""
+    import gmsh
+
+    d = np.reshape(gmsh.model.getDerivative(2, surface, np.asarray(uv, dtype=float).tolist()), (2, 3))
+    return np.linalg.norm(d, axis=1)
+
+
+def mesh_grid(surface: int) -> str | None:
+    """Mesh (empty) gmsh surface ``surface`` as a grid (:func:`layout`): rows at its lines' nodes, columns
+    at its circles' nodes (blended between the two where both carry them) or evenly spaced, each cell cut
+    along its shorter diagonal; a circle that does not carry the columns is joined to them by a band
+    (:func:`_band`). None if it passed, else why not (nothing is added)."""
+    import gmsh
+
+    from .flat import add_triangles
+    from .quality import min_angles
+
+    lay = layout(surface)
+    if isinstance(lay, str):
+        return lay
+    (bottom, top, left, right), (bx, tx, lx, rx), (buv, tuv, luv, ruv) = lay.tags, lay.xyz, lay.uv
+    a, h = lay.angle, 1 - lay.angle
+    lo, hi = (BAND_ROWS * (not own) for own in lay.own)
+    k = len(left) - 1
+    rows = np.arange(lo, k - hi + 1)
+    m = lay.columns
+    span = buv[-1, a] - buv[0, a]
+    own = buv if lay.own[0] else tuv if lay.own[1] else None
+    sigma = np.linspace(0.0, 1.0, m + 1) if own is None else (own[:, a] - own[0, a]) / span
+    tau = (luv[rows, h] - luv[0, h]) / (luv[-1, h] - luv[0, h])
+    uv = np.empty((m + 1, len(rows), 2))
+    if all(lay.own):  # both circles carry the columns: blended between them
+        uv[:, :, a] = (1.0 - tau)[None, :] * buv[:, a][:, None] + tau[None, :] * tuv[:, a][:, None]
+    else:
+        uv[:, :, a] = (buv[0, a] + sigma * span)[:, None]
+    uv[:, :, h] = (1.0 - sigma)[:, None] * luv[rows, h][None, :] + sigma[:, None] * ruv[rows, h][None, :]
+    tags = np.full((m + 1, len(rows)), -1, dtype=np.int64)
+    xyz = np.empty((m + 1, len(rows), 3))
+    sides = [((0, slice(None)), left[rows], lx[rows], luv[rows]), ((m, slice(None)), right[rows], rx[rows], ruv[rows])]
+    if lay.own[0]:
+        sides.append(((slice(None), 0), bottom, bx, buv))
+    if lay.own[1]:
+        sides.append(((slice(None), len(rows) - 1), top, tx, tuv))
+    for (i, j), t, x, p in sides:
+        tags[i, j], xyz[i, j], uv[i, j] = t, x, p
+    fresh = tags < 0
+    if fresh.any():
+        xyz[fresh] = np.reshape(gmsh.model.getValue(2, surface, uv[fresh].ravel().tolist()), (-1, 3))
+    p = np.arange((m + 1) * len(rows)).reshape(m + 1, len(rows))
+    c00, c10, c11, c01 = p[:-1, :-1].ravel(), p[1:, :-1].ravel(), p[1:, 1:].ravel(), p[:-1, 1:].ravel()
+    x = xyz.reshape(-1, 3)
+    short = np.linalg.norm(x[c00] - x[c11], axis=1) <= np.linalg.norm(x[c10] - x[c01], axis=1)
+    tri = [np.where(short[:, None], np.stack([c00, c10, c11], axis=1), np.stack([c00, c10, c01], axis=1)),
+           np.where(short[:, None], np.stack([c00, c11, c01], axis=1), np.stack([c10, c11, c01], axis=1))]
+    nodes = [(tags.ravel(), x, uv.reshape(-1, 2))]
+    count = len(x)
+    for end in (0, 1):
+        if lay.own[end]:
+            continue
+        ring = p[:, -1 if end else 0]  # the grid's row next to the band
+        got = _band(surface, lay, end, ring, x[ring], uv.reshape(-1, 2)[ring], count)
+        if isinstance(got, str):
+            return got
+        (t_new, x_new, uv_new), band = got
+        nodes.append((t_new, x_new, uv_new))
+        count += len(t_new)
+        tri.append(band)
+    tags_all, x_all, uv_all = (np.concatenate([n[i] for n in nodes]) for i in range(3))
+    tri_all = np.concatenate(tri)
+    smallest = float(min_angles(x_all, tri_all).min())
+    if smallest < BAND_MIN_ANGLE or (all(lay.own) and smallest < MIN_ANGLE - 1.0):
+        return f"its grid's triangles came out at {smallest:.1f} degrees"
+    add_triangles(surface, tags_all, x_all, tri_all, uv_all)
+    return None
+
+
+def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndarray, ring_uv: np.ndarray,
+          first: int) -> tuple | str:
+    """The band between circle ``end`` (0 bottom, 1 top) and the grid's row next to it (``ring``: its
+    nodes' rows in the grid's node list, their points and parameters), along the lines' last
+    :data:`BAND_ROWS` segments: laid flat (a cylinder unrolls without stretching), meshed by gmsh's
+    Frontal-Delaunay on those boundary nodes alone (:func:`cadedge.mesh.flat.mesh_plane`), rolled back up.
+    Returns the nodes it adds (tags, -1 for new ones; points; parameters; rows from ``first`` on) and its
+    triangles (rows of the grid's node list and of those), or why not."""
+    import gmsh
+
+    from .flat import boundary_sizes, mesh_plane
+
+    (_, _, left, right), (bx, tx, lx, rx), (buv, tuv, luv, ruv) = lay.tags, lay.xyz, lay.uv
+    a, h = lay.angle, 1 - lay.angle
+    k = len(left) - 1
+    inner = np.arange(len(ring) - 2, 0, -1)  # the ring's own nodes, right to left (its ends are the lines')
+    if end == 0:  # circle left to right, right line up to the ring, ring right to left, left line down
+        up = np.arange(1, BAND_ROWS + 1)
+        parts = [(lay.tags[0], bx, buv), (right[up], rx[up], ruv[up]), None, (left[up[::-1]], lx[up[::-1]], luv[up[::-1]])]
+    else:  # left line up from the ring, circle left to right, right line down to the ring, ring right to left
+        up = np.arange(k - BAND_ROWS, k)
+        parts = [(left[up], lx[up], luv[up]), (lay.tags[1], tx, tuv), (right[up[::-1]], rx[up[::-1]], ruv[up[::-1]]),
+                 None]
+    grid_part = (np.full(len(inner), -1, dtype=np.int64), ring_x[inner], ring_uv[inner])
+    at = [None] * 4
+    at[parts.index(None)] = ring[inner]
+    parts[parts.index(None)] = grid_part
+    loop_tags, loop_x, loop_uv = (np.concatenate([q[i] for q in parts]) for i in range(3))
+    grid_row = np.concatenate([g if g is not None else np.full(len(q[0]), -1) for g, q in zip(at, parts)])
+    origin = np.array([buv[0, a], luv[0, h]])
+    scale = np.array([lay.scale[a], lay.scale[h]]) * np.sign([buv[-1, a] - buv[0, a], luv[-1, h] - luv[0, h]])
+    plane = (loop_uv[:, [a, h]] - origin) * scale
+    segments = [(i, (i + 1) % len(plane)) for i in range(len(plane))]
+    got = mesh_plane(plane, segments, boundary_sizes(plane, segments), 6, lambda: None,
+                     {"Mesh.MeshSizeFromCurvature": 0})
+    if isinstance(got, str):
+        return f"its band: {got}"
+    points, tri = got
+    e1, e2 = points[tri[:, 1]] - points[tri[:, 0]], points[tri[:, 2]] - points[tri[:, 0]]
+    turned = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0  # all anticlockwise in the plane, as the grid's
+    tri[turned] = tri[turned][:, [0, 2, 1]]
+    fresh = points[len(plane):]
+    params = np.empty((len(fresh), 2))
+    params[:, [a, h]] = origin + fresh / scale
+    fresh_x = (np.reshape(gmsh.model.getValue(2, surface, params.ravel().tolist()), (-1, 3)) if len(fresh)
+               else np.zeros((0, 3)))
+    own = grid_row < 0  # the circle's and lines' nodes join the node list again, under their own tags
+    row = np.where(own, first + np.cumsum(own) - 1, grid_row)
+    row = np.concatenate([row, first + int(own.sum()) + np.arange(len(fresh))])
+    nodes = (np.concatenate([loop_tags[own], np.full(len(fresh), -1, dtype=np.int64)]),
+             np.vstack([loop_x[own], fresh_x]), np.vstack([loop_uv[own], params]))
+    return nodes, row[tri]

@@ -1,0 +1,188 @@
+"""Cylinders between two circles meshed as grids of right triangles (cadedge.mesh.gridded): a gmsh cylinder
+laid out and meshed on its curves, and a hole and a fillet through the whole mesher, each face's area
+deficit that of its circles' polygon."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+gmsh = pytest.importorskip("gmsh")
+
+
+@pytest.fixture
+def small_grids(monkeypatch):
+    """Grids of any size in this process (the gmsh-level tests' cylinders take hundreds of triangles)."""
+    from cadedge.mesh import gridded
+
+    monkeypatch.setattr(gridded, "FEWEST_TRIANGLES", 0)
+
+
+def _polygon_deficit(n: int, turn: float = 2.0 * np.pi) -> float:
+    """How far the perimeter of ``n`` equal chords falls short of an arc of ``turn`` radians."""
+    return 1.0 - n * 2.0 * np.sin(turn / (2 * n)) / turn
+
+
+def _gmsh_cylinder(around: int, along: int, top: int | None = None, height: float = 4.0):
+    """A gmsh cylinder of radius 1 and ``height`` (OCC kernel), its circles cut in ``around`` (the top one
+    in ``top``) and its seam in ``along`` segments; returns its side surface."""
+    gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, height, 1.0)
+    gmsh.model.occ.synchronize()
+    (side,) = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) == "Cylinder"]
+    circles = sorted((c for _, c in gmsh.model.getEntities(1) if gmsh.model.getType(1, c) == "Circle"),
+                     key=lambda c: gmsh.model.getValue(1, c, [0.0])[2])
+    (seam,) = [c for _, c in gmsh.model.getEntities(1) if gmsh.model.getType(1, c) == "Line"]
+    gmsh.model.mesh.setTransfiniteCurve(circles[0], around + 1)
+    gmsh.model.mesh.setTransfiniteCurve(circles[1], (top or around) + 1)
+    gmsh.model.mesh.setTransfiniteCurve(seam, along + 1)
+    gmsh.model.mesh.generate(1)
+    return side
+
+
+def test_a_gmsh_cylinder_meshed_as_a_grid_covers_the_prism_on_its_circles(small_grids):
+    """24 segments round, 15 along (cells 0.26 wide, 0.27 tall): every node on the cylinder, the curves'
+    segments bound the grid (the seam twice), the area is the prism's on the 24-gon to rounding, and every
+    triangle is right-angled at about 45 degrees."""
+    from cadedge.mesh.generate import surface_ok
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.gridded import layout, mesh_grid
+    from cadedge.mesh.quality import triangle_angles
+
+    with gmsh_session():
+        side = _gmsh_cylinder(24, 15)
+        lay = layout(side)
+        assert not isinstance(lay, str), lay
+        assert [len(t) for t in lay.tags] == [25, 25, 16, 16]
+        assert np.array_equal(lay.tags[2], lay.tags[3])  # the seam on both sides
+        assert mesh_grid(side) is None
+        assert surface_ok(side)
+        _, tri = gmsh.model.mesh.getElementsByType(2, side)
+        assert len(tri) == 3 * 2 * 24 * 15
+        nodes, xyz, _ = gmsh.model.mesh.getNodes()
+        where = {int(t): i for i, t in enumerate(nodes)}
+        x = np.asarray(xyz, dtype=float).reshape(-1, 3)
+        p = x[[where[int(t)] for t in tri]].reshape(-1, 3, 3)
+        assert np.allclose(np.hypot(p[..., 0], p[..., 1]), 1.0, atol=1e-9)
+        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+        assert 1.0 - area / (2.0 * np.pi * 4.0) == pytest.approx(_polygon_deficit(24), rel=1e-9)
+        angles = triangle_angles(p.reshape(-1, 3), np.arange(len(p) * 3).reshape(-1, 3))
+        assert np.allclose(angles.max(axis=1), 90.0, atol=1e-6) and angles.min() > 44.0
+
+
+def _side_mesh(side: int) -> np.ndarray:
+    """The corners (m, 3, 3) of gmsh surface ``side``'s triangles."""
+    _, tri = gmsh.model.mesh.getElementsByType(2, side)
+    nodes, xyz, _ = gmsh.model.mesh.getNodes()
+    where = {int(t): i for i, t in enumerate(nodes)}
+    return np.asarray(xyz, dtype=float).reshape(-1, 3)[[where[int(t)] for t in tri]].reshape(-1, 3, 3)
+
+
+def test_a_circle_finer_than_the_grid_is_joined_to_it_by_a_band(small_grids):
+    """The top circle in 72 segments, the bottom one and the grid in 24 (a rod's circle split for its flat
+    end): gmsh meshes a band two rows tall in the plane between them; the face is conforming, on the
+    cylinder, at least 30 degrees, and its area deficit the 24-gon's or less."""
+    from cadedge.mesh.generate import surface_ok
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.gridded import BAND_ROWS, layout, mesh_grid
+    from cadedge.mesh.quality import min_angles
+
+    with gmsh_session():
+        side = _gmsh_cylinder(24, 15, top=72)
+        lay = layout(side)
+        assert not isinstance(lay, str), lay
+        assert lay.columns == 24 and lay.own == (True, False)
+        assert mesh_grid(side) is None
+        assert surface_ok(side)
+        p = _side_mesh(side)
+        assert np.allclose(np.hypot(p[..., 0], p[..., 1]), 1.0, atol=1e-9)
+        assert min_angles(p.reshape(-1, 3), np.arange(len(p) * 3).reshape(-1, 3)).min() >= 30.0
+        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+        assert 0.0 < 1.0 - area / (2.0 * np.pi * 4.0) <= _polygon_deficit(24)
+        rows = 2 * 24 * (15 - BAND_ROWS)
+        assert len(p) > rows  # the grid's rows and the band's triangles
+
+
+@pytest.mark.parametrize("around, along, top, height, why", [
+    (24, 5, None, 4.0, "under 40 degrees"),  # cells three times as tall as wide
+    (24, 2, 72, 0.5, "too short"),  # no room for a band
+])
+def test_a_cylinder_whose_boundary_does_not_make_a_good_grid_is_left_to_gmsh(around, along, top, height, why,
+                                                                             small_grids):
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.gridded import layout, mesh_grid
+    from cadedge.mesh.strategies import GMSH_ORDER, face_order
+
+    with gmsh_session():
+        side = _gmsh_cylinder(around, along, top, height)
+        assert why in layout(side)
+        assert why in mesh_grid(side)
+        assert len(gmsh.model.mesh.getElementsByType(2, side)[0]) == 0
+        assert face_order(side) == GMSH_ORDER
+
+
+def _face_by_kind(result, kind: str):
+    return [f for f in result.report.faces if f.surface == kind]
+
+
+def _only_grid(result, eps: float):
+    """The one cylinder face of ``result``'s report, checked meshed as a grid within ``eps``, at the
+    fewest columns' polygon deficit or less, with no folded triangle."""
+    from cadedge.mesh.gridded import BAND_MIN_ANGLE, NAME, polygon_count
+
+    assert result.ok, result.problems()
+    (face,) = _face_by_kind(result, "Cylinder")
+    assert next(o for o in result.faces if o.face == face.face).strategy == NAME
+    assert all(abs(f.area_deficit) <= eps for f in result.report.faces)
+    assert result.report.folded == 0 and face.min_angle >= BAND_MIN_ANGLE
+    return face
+
+
+def test_a_long_rod_is_a_grid_with_bands_to_its_finer_circles():
+    """A rod 1 mm across and 60 mm long at 1e-3: its circles are split three times for its flat ends
+    (123 segments), the grid has the 41 columns the target needs and a band at each end; its deficit is
+    the 41-gon's or less."""
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.gridded import polygon_count
+
+    result = mesh_shape(cq.Solid.makeCylinder(0.5, 60.0), ald=1e-3)
+    rod = _only_grid(result, 1e-3)
+    circle = next(e for e in result.grid.edges if e.curve == "Circle")
+    assert len(circle.points) - 1 > 2 * polygon_count(1e-3)
+    assert 0 < rod.area_deficit <= _polygon_deficit(polygon_count(1e-3))
+    rows = 60.0 / (np.pi / polygon_count(1e-3))
+    assert rod.triangles == pytest.approx(2 * polygon_count(1e-3) * rows, rel=0.05)  # about the grid's alone
+
+
+def test_a_deep_hole_is_a_grid_on_its_circles():
+    """A 1 mm hole through a 100 mm block at 1e-3: its circles carry the grid's columns, every triangle
+    right-angled at about 45 degrees, its area deficit exactly its circles' arc-length deficit."""
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+
+    part = cq.Workplane().box(10, 10, 100).faces(">Z").workplane().hole(1.0).val()
+    result = mesh_shape(part, ald=1e-3)
+    hole = _only_grid(result, 1e-3)
+    circle = next(e for e in result.grid.edges if e.curve == "Circle" and hole.face in e.faces)
+    assert hole.area_deficit == pytest.approx(_polygon_deficit(len(circle.points) - 1), rel=1e-6)
+    assert hole.min_angle >= 40.0
+
+
+def test_a_long_fillet_is_a_grid_between_its_arcs_and_lines():
+    """A 250 mm bar 3 mm square with one long edge filleted 0.5 mm at 1e-3: the fillet, a quarter cylinder
+    between two arcs (split finer for the bar's small ends) and two lines, is a grid on the 11 columns the
+    target needs with a band to each arc, its deficit between its arcs' and the 11 columns'."""
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.gridded import polygon_count
+
+    part = cq.Workplane().box(250, 3, 3).edges("|X and >Y and >Z").fillet(0.5).val()
+    result = mesh_shape(part, ald=1e-3)
+    fillet = _only_grid(result, 1e-3)
+    arc = next(e for e in result.grid.edges if e.curve == "Circle" and fillet.face in e.faces)
+    columns = polygon_count(1e-3, np.pi / 2)
+    assert len(arc.points) - 1 > columns
+    assert (_polygon_deficit(len(arc.points) - 1, np.pi / 2) < fillet.area_deficit
+            <= _polygon_deficit(columns, np.pi / 2))
+    width = (np.pi / 4) / columns
+    assert fillet.triangles == pytest.approx(2 * columns * 250 / width, rel=0.05)
