@@ -186,3 +186,21 @@ def test_a_long_fillet_is_a_grid_between_its_arcs_and_lines():
             <= _polygon_deficit(columns, np.pi / 2))
     width = (np.pi / 4) / columns
     assert fillet.triangles == pytest.approx(2 * columns * 250 / width, rel=0.05)
+
+
+def test_a_grid_is_meshed_before_gmshs_batches(small_grids):
+    """Grids take a second where gmsh's batches may take the job's time: the cylinder's grid is started
+    before the first batch (its two caps)."""
+    from cadedge.mesh.generate import mesh_faces
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.gridded import NAME
+
+    events = []
+    with gmsh_session():
+        side = _gmsh_cylinder(24, 15)
+        surfaces = [s for _, s in gmsh.model.getEntities(2)]
+        out = mesh_faces(surfaces, {}, batch_started=lambda faces: events.append(("batch", sorted(faces))),
+                         started=lambda face, k: events.append(("start", face)))
+    assert events[0] == ("start", side)
+    assert events[1][0] == "batch" and side not in events[1][1]
+    assert out[side].strategy == NAME and all(o.ok for o in out.values())
