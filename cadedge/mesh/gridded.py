@@ -1,22 +1,24 @@
-"""A cylinder face between two circles meshed as a grid of right triangles, its area deficit that of its
-circles' polygons.
+"""A long cylinder face between two circles meshed as a grid of right triangles, its area deficit that of
+the polygon on its columns.
 
 A cylinder face bounded by two circles (or two arcs of them) and the straight lines between them (its
 seam, or two of its generators) is a rectangle in its parameters, angle round the axis by height along
-it, and unrolls onto a plane rectangle without stretching. Meshed as a grid, rings at the lines' nodes and
-generators through the circles' nodes, each row of triangles is a band of the prism on the circles'
-polygon: the face's mesh area falls short of its B-rep area by exactly the share the polygon's perimeter
-falls short of the circle's, which is the circles' arc-length deficit, and cadedge's edge grids hold that
-within EPS. gmsh sizes a cylinder for triangles at any slant, 57 to the circle at 1e-3 against the
-polygon's 41, and meshes about 20 000 triangles a second: a 1 x 1 000 mm rod asked 2.4 million
-triangles of it (held to its 400 000 triangle budget and 2.3e-3 off); as a grid it is 1.07 million at
-9.8e-4, laid out in about a second.
+it, and unrolls onto a plane rectangle without stretching. Meshed as a grid, rows at the lines' nodes and
+columns along generators, each row of triangles is a band of the prism on the polygon of the columns: the
+face's mesh area falls short of its B-rep area by exactly the share that polygon's perimeter falls short
+of the circle's (:func:`polygon_deficit`). So the columns are the fewest the face's target allows
+(:func:`polygon_count`: 41 round a full circle at 1e-3), the boundary fit splits the lines into rows as
+tall as the columns are wide (:func:`cadedge.mesh.boundary_fit.fit_grids`), and the triangles are right
+triangles of about 45 degrees. gmsh sizes a cylinder for triangles at any slant, 57 to the circle at 1e-3,
+and meshes about 20 000 triangles a second: a 1 x 1 000 mm rod asked 2.4 million triangles of it (held to
+its 400 000 triangle budget, 2.3e-3 off, 53 s); as a grid it is 1.07 million at 9.8e-4, in 15 s.
 
-Where the circles are shared with other faces, their nodes fix the grid's columns; the lines' nodes, its
-rows, are split by the boundary fit (:func:`cadedge.mesh.boundary_fit.fit_boundaries`) to the circles'
-segment length, so the cells are about square and the triangles' smallest angles about 45 degrees. A
-face whose circles (or lines) do not carry as many nodes as each other, or whose cells would give
-triangles under :data:`MIN_ANGLE`, is left to gmsh.
+Where the circles carry as many nodes as the columns, about as wide as the rows are tall, the columns
+run through them. A circle split finer for a neighbour (a rod's flat end: 123 segments, three times the
+41 columns) is joined to the grid by a band of :data:`BAND_ROWS` rows that gmsh meshes in the plane on
+their boundary nodes alone (:func:`_band`). Only faces whose grid takes :data:`FEWEST_TRIANGLES` or more
+are meshed so: on smaller ones gmsh is quick and the face optimiser lifts its triangles to 40 degrees and
+more, where a band's are 30-32.
 """
 
 from __future__ import annotations
@@ -25,15 +27,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: A grid's cells are at most this many times as tall as wide, or as wide as tall: right triangles of
-#: :data:`MIN_ANGLE` degrees or more.
-ASPECT = float(1.0 / np.tan(np.radians(40.0)))
 #: The strategy's name in reports (:data:`cadedge.mesh.strategies.STRATEGIES`).
 NAME = "cylinder grid"
-#: A face is meshed as a grid only if its cells give right triangles no smaller than this many degrees
-#: (cells at most 1.19 times as tall as wide, or as wide as tall): gmsh's Frontal-Delaunay gets 38-42
-#: degrees on cylinders, and the grid's triangles are the face's smallest.
+#: A face is meshed as a grid only if its cells give right triangles no smaller than this many degrees:
+#: gmsh's Frontal-Delaunay gets 38-42 degrees on cylinders, and the grid's triangles are the face's
+#: smallest.
 MIN_ANGLE = 40.0
+#: A grid's cells are at most this many times as tall as wide, or as wide as tall (1.19): right triangles
+#: of :data:`MIN_ANGLE` degrees or more.
+ASPECT = float(1.0 / np.tan(np.radians(MIN_ANGLE)))
 #: A circle with other nodes than the grid's columns (a rod's circle split three times finer for its
 #: flat end) is joined to the grid by a band this many rows tall, meshed by gmsh in the plane.
 BAND_ROWS = 2
@@ -326,7 +328,8 @@ def mesh_grid(surface: int) -> str | None:
     uv[:, :, h] = (1.0 - sigma)[:, None] * luv[rows, h][None, :] + sigma[:, None] * ruv[rows, h][None, :]
     tags = np.full((m + 1, len(rows)), -1, dtype=np.int64)
     xyz = np.empty((m + 1, len(rows), 3))
-    sides = [((0, slice(None)), left[rows], lx[rows], luv[rows]), ((m, slice(None)), right[rows], rx[rows], ruv[rows])]
+    sides = [((0, slice(None)), left[rows], lx[rows], luv[rows]),
+             ((m, slice(None)), right[rows], rx[rows], ruv[rows])]
     if lay.own[0]:
         sides.append(((slice(None), 0), bottom, bx, buv))
     if lay.own[1]:
@@ -382,11 +385,12 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
     inner = np.arange(len(ring) - 2, 0, -1)  # the ring's own nodes, right to left (its ends are the lines')
     if end == 0:  # circle left to right, right line up to the ring, ring right to left, left line down
         up = np.arange(1, BAND_ROWS + 1)
-        parts = [(lay.tags[0], bx, buv), (right[up], rx[up], ruv[up]), None, (left[up[::-1]], lx[up[::-1]], luv[up[::-1]])]
+        down = up[::-1]
+        parts = [(lay.tags[0], bx, buv), (right[up], rx[up], ruv[up]), None, (left[down], lx[down], luv[down])]
     else:  # left line up from the ring, circle left to right, right line down to the ring, ring right to left
         up = np.arange(k - BAND_ROWS, k)
-        parts = [(left[up], lx[up], luv[up]), (lay.tags[1], tx, tuv), (right[up[::-1]], rx[up[::-1]], ruv[up[::-1]]),
-                 None]
+        down = up[::-1]
+        parts = [(left[up], lx[up], luv[up]), (lay.tags[1], tx, tuv), (right[down], rx[down], ruv[down]), None]
     grid_part = (np.full(len(inner), -1, dtype=np.int64), ring_x[inner], ring_uv[inner])
     at = [None] * 4
     at[parts.index(None)] = ring[inner]
