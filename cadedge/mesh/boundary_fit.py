@@ -198,8 +198,8 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
       (:func:`cadedge.mesh.budget.filling_size`: a 14 mm seam along a blade's sharp edge had been split
       into 1 838 pieces of 0.008 mm, finer than the face's interior could follow); a line of a cylinder
       that may be meshed as a grid (:func:`cadedge.mesh.gridded.grid_faces`) is not split for it until its
-      circles are fitted, then into pieces as long as their segments (``grids``: face -> that length, or
-      None where the grid would take too many triangles and the curvature rule holds;
+      circles are fitted, then into pieces as long as the grid's columns are wide (``grids``: face -> that
+      width, or None where the grid would take too many triangles and the curvature rule holds;
       :func:`cadedge.mesh.gridded.line_pieces`);
     - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
       ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
@@ -272,8 +272,8 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
                 k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
                 k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
-            if straight and f in grids:  # a grid's rows: as tall as its circles' segments are wide
-                k_curv = line_pieces(chord, grids[f], areas[f - 1]) if grids[f] > 0 else 1
+            if straight and f in grids:  # a grid's rows: as tall as its columns are wide
+                k_curv = line_pieces(chord, grids[f]) if grids[f] > 0 else 1
             pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
                                                       nan=1).astype(int))
         if not np.any(pieces > 1):

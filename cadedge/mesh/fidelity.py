@@ -367,9 +367,9 @@ def after_generate(ctx) -> None:
     for k in range(PASSES + 1):
         late = ctx.job.deadline is not None and time.time() > ctx.job.deadline
         measured = {s: deficit(s, a) for s, a in unfolded_areas(pending).items()}
-        for s in [s for s in measured if not late and s not in floored and face_order(s)[0] == 0 and measured[s] > 0
+        for s in [s for s in measured if not late and s not in floored and measured[s] > 0
                   and face_of.get(s, s) not in no_refine and not_converging(measured[s], None, target)
-                  and measured[s] > loose.get(face_of.get(s, s), (0.0, 0.0))[1]]:
+                  and measured[s] > loose.get(face_of.get(s, s), (0.0, 0.0))[1] and face_order(s)[0] == 0]:
             f = face_of.get(s, s)  # far short on this mesh, first or finer, more than its edges' tolerances allow
             say(f"refine {f}")  # the watchdog bounds it; a hang or crash here keeps the face as first meshed
             measured[s] = other_algorithms(s, per_face.get(f, opts["face_per_circle"].get(f, n0)), measured[s],
@@ -431,9 +431,9 @@ def after_generate(ctx) -> None:
     final = {s: deficit(s, a) for s, a in unfolded_areas(ok).items()}
     level = min(max(max(map(abs, final.values()), default=0.0), COARSEN_FLOOR * target), target)
     # a face kept as Delaunay meshed it is not coarsened: coarsening meshes a face it did not coarsen again
-    # (nor a grid, whose mesh its boundary sets: cadedge.mesh.gridded)
     # as it was, by Frontal-Delaunay (sharp_blade's face 3: 4.4e-3 as Delaunay meshed it, back at 2.6e-2);
-    # leaving out every floored face cost mesh_T106_V3 at 1e-3 13 333 triangles against 8 975
+    # leaving out every floored face cost mesh_T106_V3 at 1e-3 13 333 triangles against 8 975. Nor a grid,
+    # whose mesh its boundary sets (cadedge.mesh.gridded)
     calm = [s for s in ok if face_of.get(s, s) in curved and face_of.get(s, s) not in no_refine
             and face_of.get(s, s) not in per_face and ctx.outcomes[s].strategy not in (DELAUNAY, GRID)]
     coarser = coarsen(ctx, level=level, deficit=deficit, measured={s: final[s] for s in calm},

@@ -46,8 +46,9 @@ BAND_MIN_ANGLE = 30.0
 #: quick and the face optimiser lifts its triangles to 40 degrees and more, where a band's are 30-32
 #: (the cylinder fixture's side at 1e-3, banded: 31.7 degrees against 40.7; gmsh alone gets 39.9).
 FEWEST_TRIANGLES = 50_000
-#: A grid face's lines are split no finer than for this many triangles: a grid costs gmsh nothing, but its
-#: nodes are still read back, checked and written (the 1 x 1 000 mm rod at 1e-3: 1.07 million).
+#: A face whose grid would take more triangles is left to gmsh (its lines split by the curvature rule,
+#: its sizes held to its triangle budget): a grid costs gmsh nothing, but its nodes are still read back,
+#: checked and written (the 1 x 1 000 mm rod at 1e-3: 1.07 million).
 MOST_TRIANGLES = 4_000_000
 
 
@@ -124,15 +125,13 @@ def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict
     return out
 
 
-def line_pieces(chord: np.ndarray, width: float, area: float) -> np.ndarray:
-    """Pieces to cut a grid face's line segments ``chord`` into: rows as tall as the circles' segments are
-    ``width``, at most :data:`MOST_TRIANGLES` on a face of ``area``.
+def line_pieces(chord: np.ndarray, width: float) -> np.ndarray:
+    """Pieces to cut a grid face's line segments ``chord`` into: rows as tall as its columns are ``width``.
 
-    >>> line_pieces(np.array([10.0, 0.5]), 1.0, 100.0).tolist()
+    >>> line_pieces(np.array([10.0, 0.5]), 1.0).tolist()
     [10, 1]
     """
-    tallest = 2.0 * area / (max(width, 1e-300) * MOST_TRIANGLES)
-    return np.maximum(np.minimum(np.rint(chord / width), np.floor(chord / max(tallest, 1e-300))), 1).astype(int)
+    return np.maximum(np.rint(chord / width), 1).astype(int)
 
 
 @dataclass(frozen=True)

@@ -59,7 +59,8 @@ STRATEGIES = (
 #: 1e-3), then the others; a cone narrower than :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
 GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if not s.unrolled)
 #: A cylinder between two circles whose boundary suits a grid (:func:`cadedge.mesh.gridded.layout`) is
-#: meshed as one first: its area deficit is its circles', its triangles right-angled, and gmsh's time saved.
+#: meshed as one first: its area deficit is its columns' polygon's, its triangles right-angled, and gmsh's
+#: time saved.
 GRID_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "grid") + GMSH_ORDER
 UNROLLED = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "cone")
 APEX_CONE_ORDER = GMSH_ORDER[:1] + UNROLLED + GMSH_ORDER[1:]
