@@ -149,6 +149,10 @@ def test_a_long_rod_is_a_grid_with_bands_to_its_finer_circles():
     rod = _only_grid(result, 1e-3)
     circle = next(e for e in result.grid.edges if e.curve == "Circle")
     assert len(circle.points) - 1 > 2 * polygon_count(1e-3)
+    seam = next(e for e in result.grid.edges if e.curve == "Line")  # its first and last rows cut to the
+    for row in (0, -1):  # circles' segments: each band starts from squares
+        assert seam.segment_lengths[row] == pytest.approx(circle.segment_lengths.mean(), rel=0.1)
+    assert rod.min_angle >= 33.0  # 30-32 where the bands started from the rows (the seam ungraded)
     assert 0 < rod.area_deficit <= _polygon_deficit(polygon_count(1e-3))
     rows = 60.0 / (np.pi / polygon_count(1e-3))
     assert rod.triangles == pytest.approx(2 * polygon_count(1e-3) * rows, rel=0.05)  # about the grid's alone

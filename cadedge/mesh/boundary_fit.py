@@ -112,17 +112,20 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
 def fit_grids(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[str], ratio: float = CURVATURE_RATIO):
     """``grid`` with the lines of the cylinders that may be meshed as a grid
     (:func:`cadedge.mesh.gridded.grid_faces`) split into rows as tall as the grid's columns, the fewest
-    for ``surface_ald``, are wide; or by the curvature rule where that grid would take more than
-    :data:`~cadedge.mesh.gridded.MOST_TRIANGLES`."""
+    for ``surface_ald``, are wide, the first row beside a finer circle into its segments
+    (:meth:`~cadedge.mesh.gridded.GridFit.line_pieces`); or by the curvature rule where that grid would
+    take more than :data:`~cadedge.mesh.gridded.MOST_TRIANGLES`."""
     from .gridded import MOST_TRIANGLES, grid_faces
 
     areas = np.asarray(brep_areas, dtype=float)
-    widths = grid_faces(grid, kinds, surface_ald, areas)
-    if not widths:
+    fits = grid_faces(grid, kinds, surface_ald, areas)
+    if not fits:
         return grid
-    grids = {f: w if 2.0 * areas[f - 1] / w ** 2 <= MOST_TRIANGLES else None for f, w in widths.items()}
-    return _fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit={},
-                           only=set(widths), grids=grids)[0]
+    grids = {f: g if 2.0 * areas[f - 1] / g.width ** 2 <= MOST_TRIANGLES else None for f, g in fits.items()}
+    for _ in range(2):  # cut into rows, then the first rows beside finer circles into their segments
+        grid = _fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit={},
+                               only=set(fits), grids=grids)[0]
+    return grid
 
 
 def _planes(areas: np.ndarray, kinds: list[str]) -> list[int]:
@@ -178,7 +181,7 @@ def fit_planes(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[
 
 def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[str], ratio: float,
                     credit: dict[int, float], only: set[int] | None = None,
-                    grids: dict[int, float | None] | None = None):
+                    grids: dict[int, object] | None = None):
     """A copy of ``grid`` whose edge segments suit the surface target of every face they bound (``only``:
     the edges of those faces only), and the summed unsigned sliver estimate of each face's boundary before
     the splits (index ``id - 1``; of the edges looked at).
@@ -198,9 +201,9 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
       (:func:`cadedge.mesh.budget.filling_size`: a 14 mm seam along a blade's sharp edge had been split
       into 1 838 pieces of 0.008 mm, finer than the face's interior could follow); a line of a cylinder
       that may be meshed as a grid (:func:`cadedge.mesh.gridded.grid_faces`) is not split for it until its
-      circles are fitted, then into pieces as long as the grid's columns are wide (``grids``: face -> that
-      width, or None where the grid would take too many triangles and the curvature rule holds;
-      :func:`cadedge.mesh.gridded.line_pieces`);
+      circles are fitted, then into pieces as long as the grid's columns are wide (``grids``: face -> its
+      :class:`~cadedge.mesh.gridded.GridFit`, or None where the grid would take too many triangles and
+      the curvature rule holds);
     - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
       ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
       loses nothing to the cylinder, all to a planar cap), summed over the face's boundary, must stay
@@ -218,12 +221,12 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     from ..shapegrid import with_edges
     from ..splitting import fits_curve, split_segments
     from .budget import filling_size
-    from .gridded import grid_faces, line_pieces
+    from .gridded import grid_faces
 
     topo = Topology(grid.shape)
     candidates = grid_faces(grid, kinds, surface_ald, brep_areas)
-    grids = {f: (grids or {}).get(f, 0.0) for f in candidates}  # 0: not fitted yet, None: not a grid
-    grids = {f: w for f, w in grids.items() if w is not None}
+    grids = {f: (grids or {}).get(f, 0) for f in candidates}  # 0: not fitted yet, None: not a grid
+    grids = {f: g for f, g in grids.items() if g is not None}
     areas = brep_areas
     h_factor = np.array([2.0 * np.pi / per_circle(surface_ald, k) for k in kinds])  # size = h_factor / k
     share = np.array([AIM if k == "Plane" else 1.0 - INTERIOR_SHARE for k in kinds])
@@ -273,7 +276,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
                 k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
             if straight and f in grids:  # a grid's rows: as tall as its columns are wide
-                k_curv = line_pieces(chord, grids[f]) if grids[f] > 0 else 1
+                k_curv = grids[f].line_pieces(e.points) if grids[f] else 1
             pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
                                                       nan=1).astype(int))
         if not np.any(pieces > 1):

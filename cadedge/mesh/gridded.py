@@ -16,9 +16,10 @@ its 400 000 triangle budget, 2.3e-3 off, 53 s); as a grid it is 1.07 million at 
 Where the circles carry as many nodes as the columns, about as wide as the rows are tall, the columns
 run through them. A circle split finer for a neighbour (a rod's flat end: 123 segments, three times the
 41 columns) is joined to the grid by a band of :data:`BAND_ROWS` rows that gmsh meshes in the plane on
-their boundary nodes alone (:func:`_band`). Only faces whose grid takes :data:`FEWEST_TRIANGLES` or more
+their boundary nodes alone (:func:`_band`), the lines' first row beside it cut into the circle's segments
+so that the band starts from squares (:meth:`GridFit.line_pieces`). Only faces whose grid takes :data:`FEWEST_TRIANGLES` or more
 are meshed so: on smaller ones gmsh is quick and the face optimiser lifts its triangles to 40 degrees and
-more, where a band's are 30-32.
+more, where a band's are 34-36.
 """
 
 from __future__ import annotations
@@ -43,8 +44,9 @@ BAND_ROWS = 2
 #: degrees or more, else the face is left to gmsh.
 BAND_MIN_ANGLE = 30.0
 #: A face is meshed as a grid only if that takes this many triangles or more: on smaller faces gmsh is
-#: quick and the face optimiser lifts its triangles to 40 degrees and more, where a band's are 30-32
-#: (the cylinder fixture's side at 1e-3, banded: 31.7 degrees against 40.7; gmsh alone gets 39.9).
+#: quick and the face optimiser lifts its triangles to 40 degrees and more, where a band's are 34-36
+#: (the cylinder fixture's side at 1e-3, banded from its rows: 31.7 degrees against 40.7; gmsh alone gets
+#: 39.9).
 FEWEST_TRIANGLES = 50_000
 #: A face whose grid would take more triangles is left to gmsh (its lines split by the curvature rule,
 #: its sizes held to its triangle budget): a grid costs gmsh nothing, but its nodes are still read back,
@@ -86,22 +88,53 @@ def aim(target: float | None) -> None:
     TARGET = target
 
 
-def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict[int, float]:
-    """The faces of ``grid`` that may be meshed as a grid, each with the width of its columns: cylinders
-    (``kinds``, by face id - 1) bounded by two circles and by one seam line (full circles) or two lines
-    (arcs), and nothing else. The width is the widest whose polygon is within ``target``
-    (:func:`polygon_count`), or the circles' own segments where they are as many and at most
-    :data:`ASPECT` times finer, or where the face is too short for bands between them
+@dataclass(frozen=True)
+class GridFit:
+    """What the boundary fit needs of a face meshed as a grid: the ``width`` of its columns, and each
+    circle's end points (2, 3) with its segments' mean length (``ends``)."""
+
+    width: float
+    ends: tuple[tuple[np.ndarray, float], ...]
+
+    def line_pieces(self, points: np.ndarray) -> np.ndarray:
+        """Pieces to cut the segments of a line of the face (its ``points``) into: rows as tall as the
+        columns are wide, and at an end on a circle whose segments are finer than the columns (by more
+        than :data:`ASPECT`) the first row cut into segments as long as the circle's, so that its band
+        starts from squares.
+
+        >>> fit = GridFit(1.0, ((np.zeros((2, 3)), 0.25),))
+        >>> fit.line_pieces(np.array([[0.0, 0, 0], [0, 0, 10.0]])).tolist()  # cut into rows first
+        [10]
+        >>> fit.line_pieces(np.array([[0.0, 0, 0], [0, 0, 1.0], [0, 0, 10.5]])).tolist()
+        [4, 10]
+        """
+        chord = np.linalg.norm(np.diff(points, axis=0), axis=1)
+        pieces = np.maximum(np.rint(chord / self.width), 1).astype(int)
+        tol = 1e-9 * max(float(np.ptp(points, axis=0).max()), self.width)
+        for row in (0, -1):  # a first row (not a long segment yet to be cut into rows)
+            for ends, spacing in self.ends:
+                if (spacing < self.width / ASPECT and chord[row] <= ASPECT * self.width
+                        and np.min(np.linalg.norm(ends - points[row], axis=1)) <= tol):
+                    pieces[row] = int(np.rint(chord[row] / spacing))
+        return pieces
+
+
+def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict[int, GridFit]:
+    """The faces of ``grid`` that may be meshed as a grid, with what the boundary fit needs of them
+    (:class:`GridFit`): cylinders (``kinds``, by face id - 1) bounded by two circles and by one seam line
+    (full circles) or two lines (arcs), and nothing else. The columns' width is the widest whose polygon
+    is within ``target`` (:func:`polygon_count`), or the circles' own segments where they are as many and
+    at most :data:`ASPECT` times finer, or where the face is too short for bands between them
     (:data:`BAND_ROWS`): a rod's circles split three times for its flat ends get bands, a hole's split
     twice for the plate round it carry the grid. Only faces of ``areas`` (by face id - 1) whose grid
     takes :data:`FEWEST_TRIANGLES` or more."""
-    own: dict[int, list] = {}
+    by_face: dict[int, list] = {}
     for e in grid.edges:
         if not e.degenerate:
             for f in set(e.faces):
-                own.setdefault(f, []).append(e)
+                by_face.setdefault(f, []).append(e)
     out = {}
-    for f, edges in own.items():
+    for f, edges in by_face.items():
         if not 1 <= f <= len(kinds) or kinds[f - 1] != "Cylinder":
             continue
         circles = [e for e in edges if e.curve == "Circle"]
@@ -113,25 +146,16 @@ def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict
             continue
         e = circles[0]
         turn = 2.0 * np.pi if closed[0] else float(abs(e.params[-1] - e.params[0]))
-        need = float(e.segment_lengths.sum()) / polygon_count(target, turn)
-        own = float(np.mean(np.concatenate([c.segment_lengths for c in circles])))
+        width = float(e.segment_lengths.sum()) / polygon_count(target, turn)
+        spacing = float(np.mean(np.concatenate([c.segment_lengths for c in circles])))
         tall = float(lines[0].segment_lengths.sum())
         # the circles' own segments where they are about as wide, or no band fits between them
         if len(circles[0].points) == len(circles[1].points) and (
-                own >= need / ASPECT or tall < (2 * BAND_ROWS + 2) * need):
-            need = own
-        if 2.0 * areas[f - 1] / need ** 2 >= FEWEST_TRIANGLES:
-            out[f] = need
+                spacing >= width / ASPECT or tall < (2 * BAND_ROWS + 2) * width):
+            width = spacing
+        if 2.0 * areas[f - 1] / width ** 2 >= FEWEST_TRIANGLES:
+            out[f] = GridFit(width, tuple((c.points[[0, -1]], float(c.segment_lengths.mean())) for c in circles))
     return out
-
-
-def line_pieces(chord: np.ndarray, width: float) -> np.ndarray:
-    """Pieces to cut a grid face's line segments ``chord`` into: rows as tall as its columns are ``width``.
-
-    >>> line_pieces(np.array([10.0, 0.5]), 1.0).tolist()
-    [10, 1]
-    """
-    return np.maximum(np.rint(chord / width), 1).astype(int)
 
 
 @dataclass(frozen=True)
@@ -140,8 +164,8 @@ class Layout:
     ``right`` (lines, bottom to top, as many nodes each; one seam twice), as node tags, their points and
     their surface parameters; ``angle`` the parameter round the axis (0 or 1), ``scale`` the surface's
     length per unit of each parameter; ``columns`` the grid's columns, and which circles carry them
-    (``own``: bottom, top); a circle that does not is joined to the grid by a band of
-    :data:`BAND_ROWS` rows that gmsh meshes in the plane."""
+    (``own``: bottom, top); a circle that does not is joined to the grid by a band that gmsh meshes in the
+    plane, ``bands`` rows tall (bottom, top; 0 where the circle carries the columns)."""
 
     tags: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
     xyz: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -150,6 +174,7 @@ class Layout:
     scale: np.ndarray
     columns: int
     own: tuple[bool, bool]
+    bands: tuple[int, int]
 
 
 def _chain(curve: int, surface: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -265,9 +290,15 @@ def layout(surface: int) -> Layout | str:
     fewest = polygon_count(TARGET, turn) if TARGET else min(len(bottom[0]), len(top[0])) - 1
     k = height.shape[1]
     widths = [np.linalg.norm(np.diff(c[1], axis=0), axis=1) for c in (bottom, top)]
+    # a band is the lines' first segments up to BAND_ROWS rows of the grid (the boundary fit cut the first
+    # one into the circle's segments where it is finer: grid_faces)
+    tall = height.mean(axis=0)
+    reach = BAND_ROWS * float(np.median(tall)) * (1.0 - 1e-6)
+    band = (int(np.searchsorted(np.cumsum(tall), reach)) + 1, int(np.searchsorted(np.cumsum(tall[::-1]), reach)) + 1)
     # the circles carry the columns, else one does and the other gets a band, else both get bands
     for own in ((True, True), (True, False), (False, True), (False, False)):
-        rows = height[:, BAND_ROWS * (not own[0]):k - BAND_ROWS * (not own[1])].ravel()
+        lo, hi = (0 if own[i] else band[i] for i in (0, 1))
+        rows = height[:, lo:k - hi].ravel()
         if not len(rows) or any(len(widths[i]) < fewest for i in (0, 1) if own[i]):
             continue
         if all(own) and len(widths[0]) != len(widths[1]):
@@ -281,11 +312,12 @@ def layout(surface: int) -> Layout | str:
         if np.degrees(np.arctan(min(width.min() / rows.max(), rows.min() / width.max()))) >= MIN_ANGLE:
             break
     else:
-        return (f"its cells would give triangles under {MIN_ANGLE:g} degrees" if k > 2 * BAND_ROWS
+        return (f"its cells would give triangles under {MIN_ANGLE:g} degrees" if k > sum(band)
                 else "too short for a grid between bands")
     if 2 * columns * k < FEWEST_TRIANGLES:
         return f"under {FEWEST_TRIANGLES} triangles as a grid: gmsh meshes it as well"
-    return Layout(tuple(c[0] for c in chains), tuple(c[1] for c in chains), tuple(uv), angle, scale, columns, own)
+    return Layout(tuple(c[0] for c in chains), tuple(c[1] for c in chains), tuple(uv), angle, scale, columns, own,
+                  (lo, hi))
 
 
 def _scale(surface: int, uv: np.ndarray) -> np.ndarray:
@@ -311,7 +343,7 @@ def mesh_grid(surface: int) -> str | None:
         return lay
     (bottom, top, left, right), (bx, tx, lx, rx), (buv, tuv, luv, ruv) = lay.tags, lay.xyz, lay.uv
     a, h = lay.angle, 1 - lay.angle
-    lo, hi = (BAND_ROWS * (not own) for own in lay.own)
+    lo, hi = lay.bands
     k = len(left) - 1
     rows = np.arange(lo, k - hi + 1)
     m = lay.columns
@@ -370,7 +402,7 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
           first: int) -> tuple | str:
     """The band between circle ``end`` (0 bottom, 1 top) and the grid's row next to it (``ring``: its
     nodes' rows in the grid's node list, their points and parameters), along the lines' last
-    :data:`BAND_ROWS` segments: laid flat (a cylinder unrolls without stretching), meshed by gmsh's
+    ``lay.bands[end]`` segments: laid flat (a cylinder unrolls without stretching), meshed by gmsh's
     Frontal-Delaunay on those boundary nodes alone (:func:`cadedge.mesh.flat.mesh_plane`), rolled back up.
     Returns the nodes it adds (tags, -1 for new ones; points; parameters; rows from ``first`` on) and its
     triangles (rows of the grid's node list and of those), or why not."""
@@ -383,11 +415,11 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
     k = len(left) - 1
     inner = np.arange(len(ring) - 2, 0, -1)  # the ring's own nodes, right to left (its ends are the lines')
     if end == 0:  # circle left to right, right line up to the ring, ring right to left, left line down
-        up = np.arange(1, BAND_ROWS + 1)
+        up = np.arange(1, lay.bands[0] + 1)
         down = up[::-1]
         parts = [(lay.tags[0], bx, buv), (right[up], rx[up], ruv[up]), None, (left[down], lx[down], luv[down])]
     else:  # left line up from the ring, circle left to right, right line down to the ring, ring right to left
-        up = np.arange(k - BAND_ROWS, k)
+        up = np.arange(k - lay.bands[1], k)
         down = up[::-1]
         parts = [(left[up], lx[up], luv[up]), (lay.tags[1], tx, tuv), (right[down], rx[down], ruv[down]), None]
     grid_part = (np.full(len(inner), -1, dtype=np.int64), ring_x[inner], ring_uv[inner])
