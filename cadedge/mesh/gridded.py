@@ -11,7 +11,7 @@ of the circle's (:func:`polygon_deficit`). So the columns are the fewest the fac
 tall as the columns are wide (:func:`cadedge.mesh.boundary_fit.fit_grids`), and the triangles are right
 triangles of about 45 degrees. gmsh sizes a cylinder for triangles at any slant, 57 to the circle at 1e-3,
 and meshes about 20 000 triangles a second: a 1 x 1 000 mm rod asked 2.4 million triangles of it (held to
-its 400 000 triangle budget, 2.3e-3 off, 53 s); as a grid it is 1.07 million at 9.8e-4, in 15 s.
+its 400 000 triangle budget, 2.3e-3 off, 53 s); as a grid it is 1.07 million at 9.8e-4, in 14 s.
 
 Where the circles carry as many nodes as the columns, about as wide as the rows are tall, the columns
 run through them. A circle split finer for a neighbour (a rod's flat end: 123 segments, three times the
