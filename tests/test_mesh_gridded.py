@@ -12,10 +12,12 @@ gmsh = pytest.importorskip("gmsh")
 
 @pytest.fixture
 def small_grids(monkeypatch):
-    """Grids of any size in this process (the gmsh-level tests' cylinders take hundreds of triangles)."""
+    """Grids of any size in this process (the gmsh-level tests' cylinders take hundreds of triangles), and
+    no area target left from a job run in it: the columns are the circles' fewest."""
     from cadedge.mesh import gridded
 
     monkeypatch.setattr(gridded, "FEWEST_TRIANGLES", 0)
+    monkeypatch.setattr(gridded, "TARGET", None)
 
 
 def _polygon_deficit(n: int, turn: float = 2.0 * np.pi) -> float:

@@ -348,8 +348,8 @@ def mesh_grid(surface: int) -> str | None:
     rows = np.arange(lo, k - hi + 1)
     m = lay.columns
     span = buv[-1, a] - buv[0, a]
-    own = buv if lay.own[0] else tuv if lay.own[1] else None
-    sigma = np.linspace(0.0, 1.0, m + 1) if own is None else (own[:, a] - own[0, a]) / span
+    carrier = buv if lay.own[0] else tuv if lay.own[1] else None  # the circle the columns run through
+    sigma = np.linspace(0.0, 1.0, m + 1) if carrier is None else (carrier[:, a] - carrier[0, a]) / span
     tau = (luv[rows, h] - luv[0, h]) / (luv[-1, h] - luv[0, h])
     uv = np.empty((m + 1, len(rows), 2))
     if all(lay.own):  # both circles carry the columns: blended between them
