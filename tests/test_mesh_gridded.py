@@ -210,3 +210,28 @@ def test_a_grid_is_meshed_before_gmshs_batches(small_grids):
     assert events[0] == ("start", side)
     assert events[1][0] == "batch" and side not in events[1][1]
     assert out[side].strategy == NAME and all(o.ok for o in out.values())
+
+
+def test_a_straight_bspline_seam_counts_as_a_line():
+    """STEP files carry lines as B-splines (11752.stp's rods): a seam whose one segment is as long as its
+    curve bounds a grid face as a line does; a curved one does not."""
+    import dataclasses
+
+    cq = pytest.importorskip("cadquery")
+    import cadedge
+    from cadedge.mesh.fidelity import brep_face_areas, meshed_kinds
+    from cadedge.mesh.gridded import grid_faces
+    from cadedge.shapegrid import with_edges
+
+    grid = cadedge.refine_shape(cq.Solid.makeCylinder(0.5, 60.0), ald=1e-3)
+    kinds, areas = meshed_kinds(grid.shape), brep_face_areas(grid.shape)
+    (side,) = [f for f in range(1, grid.faces + 1) if kinds[f - 1] == "Cylinder"]
+    assert side in grid_faces(grid, kinds, 1e-3, areas)
+
+    def seam_as(ald: float):
+        edges = [dataclasses.replace(e, curve="BSplineCurve", ald_estimate=ald) if e.curve == "Line" else e
+                 for e in grid.edges]
+        return with_edges(grid, edges)
+
+    assert side in grid_faces(seam_as(0.0), kinds, 1e-3, areas)
+    assert side not in grid_faces(seam_as(1e-4), kinds, 1e-3, areas)

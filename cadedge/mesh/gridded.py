@@ -43,6 +43,9 @@ BAND_ROWS = 2
 #: Triangles of a band (gmsh's, graded from the circle's segments to the grid's) are kept at this many
 #: degrees or more, else the face is left to gmsh.
 BAND_MIN_ANGLE = 30.0
+#: An edge whose polyline is as long as its curve to this share is a line: STEP files carry lines as
+#: B-splines (11752.stp's 2 mm rods, 1 239 mm long, have B-spline seams).
+STRAIGHT_ALD = 1e-12
 #: A face is meshed as a grid only if that takes this many triangles or more: on smaller faces gmsh is
 #: quick and the face optimiser lifts its triangles to 40 degrees and more, where a band's are 34-36
 #: (the cylinder fixture's side at 1e-3, banded from its rows: 31.7 degrees against 40.7; gmsh alone gets
@@ -122,7 +125,7 @@ class GridFit:
 def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict[int, GridFit]:
     """The faces of ``grid`` that may be meshed as a grid, with what the boundary fit needs of them
     (:class:`GridFit`): cylinders (``kinds``, by face id - 1) bounded by two circles and by one seam line
-    (full circles) or two lines (arcs), and nothing else. The columns' width is the widest whose polygon
+    (full circles) or two lines (arcs; straight B-splines too, :data:`STRAIGHT_ALD`), and nothing else. The columns' width is the widest whose polygon
     is within ``target`` (:func:`polygon_count`), or the circles' own segments where they are as many and
     at most :data:`ASPECT` times finer, or where the face is too short for bands between them
     (:data:`BAND_ROWS`): a rod's circles split three times for its flat ends get bands, a hole's split
@@ -138,7 +141,7 @@ def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict
         if not 1 <= f <= len(kinds) or kinds[f - 1] != "Cylinder":
             continue
         circles = [e for e in edges if e.curve == "Circle"]
-        lines = [e for e in edges if e.curve == "Line"]
+        lines = [e for e in edges if e.curve == "Line" or e.ald_estimate <= STRAIGHT_ALD]
         if len(circles) != 2 or len(circles) + len(lines) != len(edges):
             continue
         closed = [bool(np.allclose(e.points[0], e.points[-1])) for e in circles]
