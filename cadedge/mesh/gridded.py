@@ -17,9 +17,9 @@ Where the circles carry as many nodes as the columns, about as wide as the rows 
 run through them. A circle split finer for a neighbour (a rod's flat end: 123 segments, three times the
 41 columns) is joined to the grid by a band of :data:`BAND_ROWS` rows that gmsh meshes in the plane on
 their boundary nodes alone (:func:`_band`), the lines' first row beside it cut into the circle's segments
-so that the band starts from squares (:meth:`GridFit.line_pieces`). Only faces whose grid takes :data:`FEWEST_TRIANGLES` or more
-are meshed so: on smaller ones gmsh is quick and the face optimiser lifts its triangles to 40 degrees and
-more, where a band's are 34-36.
+so that the band starts from squares (:meth:`GridFit.line_pieces`). Only faces whose grid takes
+:data:`FEWEST_TRIANGLES` or more are meshed so: on smaller ones gmsh is quick and the face optimiser lifts
+its triangles to 40 degrees and more, where a band's are 34-36.
 """
 
 from __future__ import annotations
@@ -125,9 +125,10 @@ class GridFit:
 def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict[int, GridFit]:
     """The faces of ``grid`` that may be meshed as a grid, with what the boundary fit needs of them
     (:class:`GridFit`): cylinders (``kinds``, by face id - 1) bounded by two circles and by one seam line
-    (full circles) or two lines (arcs; straight B-splines too, :data:`STRAIGHT_ALD`), and nothing else. The columns' width is the widest whose polygon
-    is within ``target`` (:func:`polygon_count`), or the circles' own segments where they are as many and
-    at most :data:`ASPECT` times finer, or where the face is too short for bands between them
+    (full circles) or two lines (arcs; straight B-splines too, :data:`STRAIGHT_ALD`), and nothing else.
+    The columns' width is the widest whose polygon is within ``target`` (:func:`polygon_count`), or the
+    circles' own segments where they are as many and at most :data:`ASPECT` times finer, or where the
+    face is too short for bands between them
     (:data:`BAND_ROWS`): a rod's circles split three times for its flat ends get bands, a hole's split
     twice for the plate round it carry the grid. Only faces of ``areas`` (by face id - 1) whose grid
     takes :data:`FEWEST_TRIANGLES` or more."""
