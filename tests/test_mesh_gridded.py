@@ -18,6 +18,7 @@ def small_grids(monkeypatch):
 
     monkeypatch.setattr(gridded, "FEWEST_TRIANGLES", 0)
     monkeypatch.setattr(gridded, "TARGET", None)
+    monkeypatch.setattr(gridded, "SURFACES", frozenset())
 
 
 def _polygon_deficit(n: int, turn: float = 2.0 * np.pi) -> float:
@@ -27,7 +28,10 @@ def _polygon_deficit(n: int, turn: float = 2.0 * np.pi) -> float:
 
 def _gmsh_cylinder(around: int, along: int, top: int | None = None, height: float = 4.0):
     """A gmsh cylinder of radius 1 and ``height`` (OCC kernel), its circles cut in ``around`` (the top one
-    in ``top``) and its seam in ``along`` segments; returns its side surface."""
+    in ``top``) and its seam in ``along`` segments; returns its side surface, marked as a grid face as the
+    boundary fit would (:func:`cadedge.mesh.gridded.aim`)."""
+    from cadedge.mesh.gridded import aim
+
     gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, height, 1.0)
     gmsh.model.occ.synchronize()
     (side,) = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) == "Cylinder"]
@@ -38,6 +42,7 @@ def _gmsh_cylinder(around: int, along: int, top: int | None = None, height: floa
     gmsh.model.mesh.setTransfiniteCurve(circles[1], (top or around) + 1)
     gmsh.model.mesh.setTransfiniteCurve(seam, along + 1)
     gmsh.model.mesh.generate(1)
+    aim(None, [side])
     return side
 
 
@@ -235,3 +240,28 @@ def test_a_straight_bspline_seam_counts_as_a_line():
 
     assert side in grid_faces(seam_as(0.0), kinds, 1e-3, areas)
     assert side not in grid_faces(seam_as(1e-4), kinds, 1e-3, areas)
+
+
+def test_a_trimmed_cylinder_alone_is_a_grid():
+    """STEP files carry cylinders trimmed to a rectangle of their parameters (11752.stp's 420 rods): gmsh
+    calls their surface "Unknown", OCCT a cylinder, and OCCT's type decides. A quarter cylinder 0.5 x 200
+    so made, alone (no planar face: its lines are still cut into rows before the other boundary passes
+    split them unevenly), is a grid on the 11 columns the target needs, its rows as tall."""
+    pytest.importorskip("OCP")
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.Geom import Geom_CylindricalSurface, Geom_RectangularTrimmedSurface
+    from OCP.gp import gp_Ax3, gp_Dir, gp_Pnt
+
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.gridded import polygon_count
+
+    surface = Geom_CylindricalSurface(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 0.5)
+    face = BRepBuilderAPI_MakeFace(Geom_RectangularTrimmedSurface(surface, 0.0, np.pi / 2, 0.0, 200.0), 1e-7).Face()
+    result = mesh_shape(face, ald=1e-3)
+    quarter = _only_grid(result, 1e-3)
+    columns = polygon_count(1e-3, np.pi / 2)
+    width = (np.pi / 4) / columns
+    line = next(e for e in result.grid.edges if e.curve == "Line")
+    assert np.allclose(line.segment_lengths, width, rtol=0.01)
+    assert quarter.area_deficit == pytest.approx(_polygon_deficit(columns, np.pi / 2), rel=1e-6)
+    assert quarter.min_angle >= 44.0

@@ -174,6 +174,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
     from .boundary_fit import fit_grids, fit_planes
     from .fidelity import HOOKS, prepare
+    from .gridded import grid_face_ids
 
     if surface_ald is not None and not surface_ald > 0:
         raise InputError(f"surface_ald must be a positive number, got {surface_ald!r}")
@@ -211,6 +212,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # and the circles of
                          kinds=fidelity["meshed_kinds"])  # cylinders meshed as grids: their rows again
         max_size = cap
+    fidelity["grid_faces"] = grid_face_ids(grid, fidelity["meshed_kinds"], surface_ald,  # the boundary's
+                                           fidelity["brep_areas"])  # last word: which faces are grids
     field_ = make_field(grid)
     result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
                        job_options=job_options, say=say, workers=workers)

@@ -87,8 +87,8 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
         return _fit_boundaries(g, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=credit)
 
     fitted, gross = fit(grid, {})
-    if not planes:
-        return fitted
+    if not planes:  # the grids' rows still: cut before other passes split the lines unevenly
+        return fit_grids(fitted, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio)
     before = net(grid)
     credit = {f: 0.5 * gross[f - 1] / max(d * areas[f - 1], 1e-300) for f, d in before.items()}
     credit = {f: c for f, c in credit.items() if c > 1.0}
@@ -121,7 +121,7 @@ def fit_grids(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[s
     fits = grid_faces(grid, kinds, surface_ald, areas)
     if not fits:
         return grid
-    grids = {f: g if 2.0 * areas[f - 1] / g.width ** 2 <= MOST_TRIANGLES else None for f, g in fits.items()}
+    grids = {f: g if g.triangles(areas[f - 1]) <= MOST_TRIANGLES else None for f, g in fits.items()}
     for _ in range(2):  # cut into rows, then the first rows beside finer circles into their segments
         grid = _fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit={},
                                only=set(fits), grids=grids)[0]

@@ -83,12 +83,17 @@ def polygon_count(target: float, turn: float = 2.0 * np.pi) -> int:
 #: The area target of the faces meshed in this process (set by :func:`aim` for each gmsh job): a grid's
 #: columns are at least :func:`polygon_count` of it.
 TARGET: float | None = None
+#: The gmsh surfaces of the job in this process that the boundary fit made grids of (:func:`grid_face_ids`,
+#: set by :func:`aim`): only they are laid out. The caller's OCCT types decide, not gmsh's: gmsh calls a
+#: cylinder trimmed to a rectangle of its parameters, as STEP files carry them (11752.stp's 420 rods),
+#: "Unknown".
+SURFACES: frozenset[int] = frozenset()
 
 
-def aim(target: float | None) -> None:
-    """Set :data:`TARGET` for the gmsh job starting in this process."""
-    global TARGET
-    TARGET = target
+def aim(target: float | None, surfaces=()) -> None:
+    """Set :data:`TARGET` and :data:`SURFACES` for the gmsh job starting in this process."""
+    global TARGET, SURFACES
+    TARGET, SURFACES = target, frozenset(surfaces)
 
 
 @dataclass(frozen=True)
@@ -98,6 +103,10 @@ class GridFit:
 
     width: float
     ends: tuple[tuple[np.ndarray, float], ...]
+
+    def triangles(self, area: float) -> float:
+        """About how many triangles the grid of a face of B-rep ``area`` takes."""
+        return 2.0 * area / self.width ** 2
 
     def line_pieces(self, points: np.ndarray) -> np.ndarray:
         """Pieces to cut the segments of a line of the face (its ``points``) into: rows as tall as the
@@ -157,9 +166,17 @@ def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict
         if len(circles[0].points) == len(circles[1].points) and (
                 spacing >= width / ASPECT or tall < (2 * BAND_ROWS + 2) * width):
             width = spacing
-        if 2.0 * areas[f - 1] / width ** 2 >= FEWEST_TRIANGLES:
-            out[f] = GridFit(width, tuple((c.points[[0, -1]], float(c.segment_lengths.mean())) for c in circles))
+        fit = GridFit(width, tuple((c.points[[0, -1]], float(c.segment_lengths.mean())) for c in circles))
+        if fit.triangles(areas[f - 1]) >= FEWEST_TRIANGLES:
+            out[f] = fit
     return out
+
+
+def grid_face_ids(grid, kinds: list[str], target: float, areas: np.ndarray) -> list[int]:
+    """The faces of ``grid`` the mesher lays out as grids (:data:`SURFACES`): those of :func:`grid_faces`
+    whose grid takes no more than :data:`MOST_TRIANGLES`."""
+    return sorted(f for f, fit in grid_faces(grid, kinds, target, areas).items()
+                  if fit.triangles(areas[f - 1]) <= MOST_TRIANGLES)
 
 
 @dataclass(frozen=True)
@@ -235,8 +252,8 @@ def layout(surface: int) -> Layout | str:
 
     from .gmsh_model import surface_curve_uses
 
-    if gmsh.model.getType(2, surface) != "Cylinder":
-        return "not a cylinder"
+    if surface not in SURFACES:
+        return "not a long cylinder between two circles (the boundary fit's grid faces)"
     uses = surface_curve_uses(surface)
     if any(len(gmsh.model.mesh.getElementsByType(1, c)[1]) == 0 for c in uses):
         return "a boundary curve carries no nodes"
