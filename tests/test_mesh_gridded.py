@@ -146,8 +146,8 @@ def _only_grid(result, eps: float):
 
 def test_a_long_rod_is_a_grid_with_bands_to_its_finer_circles():
     """A rod 1 mm across and 60 mm long at 1e-3: its circles are split three times for its flat ends
-    (123 segments), the grid has the 41 columns the target needs and a band at each end; its deficit is
-    the 41-gon's or less."""
+    (123 segments), the grid has the 41 columns the target needs and a band at each end, its seam graded
+    from the circles' segments to the rows; its deficit is the 41-gon's or less."""
     cq = pytest.importorskip("cadquery")
     from cadedge.mesh import mesh_shape
     from cadedge.mesh.gridded import polygon_count
@@ -156,9 +156,11 @@ def test_a_long_rod_is_a_grid_with_bands_to_its_finer_circles():
     rod = _only_grid(result, 1e-3)
     circle = next(e for e in result.grid.edges if e.curve == "Circle")
     assert len(circle.points) - 1 > 2 * polygon_count(1e-3)
-    seam = next(e for e in result.grid.edges if e.curve == "Line")  # its first and last rows cut to the
-    for row in (0, -1):  # circles' segments: each band starts from squares
-        assert seam.segment_lengths[row] == pytest.approx(circle.segment_lengths.mean(), rel=0.1)
+    seam = next(e for e in result.grid.edges if e.curve == "Line")  # graded from the circles' segments
+    spacing = circle.segment_lengths.mean()  # to the rows at each end: each band grows smoothly
+    for lengths in (seam.segment_lengths, seam.segment_lengths[::-1]):
+        assert spacing <= lengths[0] <= 1.5 * spacing
+        assert np.all(lengths[1:10] / lengths[:9] <= 1.5)
     assert rod.min_angle >= 33.0  # 30-32 where the bands started from the rows (the seam ungraded)
     assert 0 < rod.area_deficit <= _polygon_deficit(polygon_count(1e-3))
     rows = 60.0 / (np.pi / polygon_count(1e-3))
@@ -265,3 +267,27 @@ def test_a_trimmed_cylinder_alone_is_a_grid():
     assert np.allclose(line.segment_lengths, width, rtol=0.01)
     assert quarter.area_deficit == pytest.approx(_polygon_deficit(columns, np.pi / 2), rel=1e-6)
     assert quarter.min_angle >= 44.0
+
+
+def test_a_thin_tubes_cylinders_are_grids_graded_from_their_finer_circles():
+    """A tube 2 mm across with a 0.1 mm wall, 1 000 mm long, at 1e-2: its planar rings split both circles
+    8 times finer than the 13 columns the target needs, and each cylinder is a grid whose lines are graded
+    from those segments to the rows (steps of 1.5 at most), joined to the circles by bands of 30 degrees
+    or more (one gave 26 where the lines stepped from the circles' segments to the rows at once)."""
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.gridded import BAND_MIN_ANGLE, NAME, polygon_count
+
+    result = mesh_shape(cq.Workplane().circle(1.0).circle(0.9).extrude(1000.0).val(), ald=1e-2)
+    assert result.ok, result.problems()
+    tubes = _face_by_kind(result, "Cylinder")
+    assert len(tubes) == 2 and all(abs(f.area_deficit) <= 1e-2 for f in result.report.faces)
+    for face in tubes:
+        assert next(o for o in result.faces if o.face == face.face).strategy == NAME
+        assert face.min_angle >= BAND_MIN_ANGLE
+        circle = next(e for e in result.grid.edges if e.curve == "Circle" and face.face in e.faces)
+        assert len(circle.points) - 1 >= 6 * polygon_count(1e-2)
+        seam = next(e for e in result.grid.edges if e.curve == "Line" and face.face in e.faces)
+        for lengths in (seam.segment_lengths, seam.segment_lengths[::-1]):
+            assert lengths[0] <= 1.5 * circle.segment_lengths.mean()
+            assert np.all(lengths[1:12] / lengths[:11] <= 1.5)

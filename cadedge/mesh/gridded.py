@@ -15,9 +15,9 @@ its 400 000 triangle budget, 2.3e-3 off, 53 s); as a grid it is 1.07 million at 
 
 Where the circles carry as many nodes as the columns, about as wide as the rows are tall, the columns
 run through them. A circle split finer for a neighbour (a rod's flat end: 123 segments, three times the
-41 columns) is joined to the grid by a band of :data:`BAND_ROWS` rows that gmsh meshes in the plane on
-their boundary nodes alone (:func:`_band`), the lines' first row beside it cut into the circle's segments
-so that the band starts from squares (:meth:`GridFit.line_pieces`). Only faces whose grid takes
+41 columns) is joined to the grid by a band that gmsh meshes in the plane (:func:`_band`), its sizes
+growing from the circle's segments to the columns (:data:`BAND_GROWTH`), the lines' segments beside it
+graded alike (:meth:`GridFit.line_params`). Only faces whose grid takes
 :data:`FEWEST_TRIANGLES` or more are meshed so: on smaller ones gmsh is quick and the face optimiser lifts
 its triangles to 40 degrees and more, where a band's are 34-36.
 """
@@ -38,8 +38,20 @@ MIN_ANGLE = 40.0
 #: of :data:`MIN_ANGLE` degrees or more.
 ASPECT = float(1.0 / np.tan(np.radians(MIN_ANGLE)))
 #: A circle with other nodes than the grid's columns (a rod's circle split three times finer for its
-#: flat end) is joined to the grid by a band this many rows tall, meshed by gmsh in the plane.
+#: flat end) is joined to the grid by a band at least this many rows tall (:func:`band_reach`), meshed by
+#: gmsh in the plane.
 BAND_ROWS = 2
+#: A band's sizes grow from its circle's segments by this share of the distance to the circle, to the
+#: grid's columns (its lines' segments are cut to match, :meth:`GridFit.line_params`; gmsh meshes it to
+#: a size field of the same): 33-35 degrees for circles 3, 6 and 9 times finer than the columns, where
+#: 0.5 gave 24-33.
+BAND_GROWTH = 0.3
+#: How a band is meshed, in turn until one reaches :data:`BAND_GOOD` degrees (else the best is kept):
+#: gmsh's 2-D algorithm (6 Frontal-Delaunay, 5 Delaunay) and whether its sizes come from a field growing
+#: from the circle by :data:`BAND_GROWTH` or from its boundary. Each alone fell to 26-28 degrees on some
+#: of the bands of circles 2-9 times finer than 11, 13 and 41 columns; the best of them was 33-38.6 on all.
+BAND_VARIANTS = ((6, False), (5, True), (6, True), (5, False))
+BAND_GOOD = 33.0
 #: Triangles of a band (gmsh's, graded from the circle's segments to the grid's) are kept at this many
 #: degrees or more, else the face is left to gmsh.
 BAND_MIN_ANGLE = 30.0
@@ -96,6 +108,17 @@ def aim(target: float | None, surfaces=()) -> None:
     TARGET, SURFACES = target, frozenset(surfaces)
 
 
+def band_reach(row: float, spacing: float) -> float:
+    """How far from a circle whose segments are ``spacing`` long the band joining it to a grid of
+    ``row``-wide columns reaches: sizes growing by :data:`BAND_GROWTH` to the columns' width, then one
+    row; at least :data:`BAND_ROWS` rows.
+
+    >>> round(band_reach(1.0, 0.25), 6)  # 2.5 rows of graded sizes, then a row
+    3.5
+    """
+    return max(BAND_ROWS * row, max(row - spacing, 0.0) / BAND_GROWTH + row)
+
+
 @dataclass(frozen=True)
 class GridFit:
     """What the boundary fit needs of a face meshed as a grid: the ``width`` of its columns, and each
@@ -108,27 +131,43 @@ class GridFit:
         """About how many triangles the grid of a face of B-rep ``area`` takes."""
         return 2.0 * area / self.width ** 2
 
-    def line_pieces(self, points: np.ndarray) -> np.ndarray:
-        """Pieces to cut the segments of a line of the face (its ``points``) into: rows as tall as the
-        columns are wide, and at an end on a circle whose segments are finer than the columns (by more
-        than :data:`ASPECT`) the first row cut into segments as long as the circle's, so that its band
-        starts from squares.
+    def line_params(self, params: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """The parameters of a line of the face (its grid's ``params`` and ``points``, which all stay) cut
+        into rows as tall as the columns are wide, and graded from each end on a circle whose segments
+        are finer (by more than :data:`ASPECT`): sizes ``spacing + BAND_GROWTH * distance`` up to the
+        columns' width, so that the band joining that circle to the grid (:func:`_band`) grows smoothly.
+        Each segment is cut in as many pieces as the sizes ask (at least one), graded within it; new
+        parameters are spaced as their distances along the line.
 
         >>> fit = GridFit(1.0, ((np.zeros((2, 3)), 0.25),))
-        >>> fit.line_pieces(np.array([[0.0, 0, 0], [0, 0, 10.0]])).tolist()  # cut into rows first
-        [10]
-        >>> fit.line_pieces(np.array([[0.0, 0, 0], [0, 0, 1.0], [0, 0, 10.5]])).tolist()
-        [4, 10]
+        >>> line = np.array([[0.0, 0, 0], [0, 0, 10.0]])
+        >>> np.round(np.diff(fit.line_params(np.array([0.0, 10.0]), line)), 2).tolist()
+        [0.29, 0.4, 0.54, 0.73, 0.96, 1.01, 1.01, 1.01, 1.01, 1.01, 1.01, 1.01]
+        >>> np.diff(GridFit(1.0, ()).line_params(np.array([0.0, 10.0]), line)).tolist() == [1.0] * 10
+        True
         """
         chord = np.linalg.norm(np.diff(points, axis=0), axis=1)
-        pieces = np.maximum(np.rint(chord / self.width), 1).astype(int)
+        along = np.concatenate([[0.0], np.cumsum(chord)])
+        total = float(along[-1])
         tol = 1e-9 * max(float(np.ptp(points, axis=0).max()), self.width)
-        for row in (0, -1):  # a first row (not a long segment yet to be cut into rows)
-            for ends, spacing in self.ends:
-                if (spacing < self.width / ASPECT and chord[row] <= ASPECT * self.width
-                        and np.min(np.linalg.norm(ends - points[row], axis=1)) <= tol):
-                    pieces[row] = int(np.rint(chord[row] / spacing))
-        return pieces
+        # (distance from the start of the line where the size is `spacing`, `spacing`, the way it grows)
+        graded = [(0.0 if row == 0 else total, spacing, 1.0 if row == 0 else -1.0)
+                  for row in (0, -1) for ends, spacing in self.ends
+                  if spacing < self.width / ASPECT and np.min(np.linalg.norm(ends - points[row], axis=1)) <= tol]
+        d = np.unique(np.concatenate([along] + [
+            np.clip(at + way * np.linspace(0.0, band_reach(self.width, spacing), 256), 0.0, total)
+            for at, spacing, way in graded]))
+        size = np.full(len(d), self.width)
+        for at, spacing, _ in graded:
+            size = np.minimum(size, spacing + BAND_GROWTH * np.abs(d - at))
+        count = np.concatenate([[0.0], np.cumsum(np.diff(d) * 0.5 * (1.0 / size[1:] + 1.0 / size[:-1]))])
+        at_nodes = np.interp(along, d, count)
+        pieces = np.maximum(np.rint(np.diff(at_nodes)), 1).astype(int)
+        steps = np.concatenate([np.arange(1, k) / k for k in pieces])
+        first = np.repeat(np.arange(len(pieces)), pieces - 1)
+        cut = at_nodes[first] + steps * (at_nodes[first + 1] - at_nodes[first])
+        new = np.interp(np.interp(cut, count, d), along, params)
+        return np.sort(np.concatenate([params, new]))
 
 
 def grid_faces(grid, kinds: list[str], target: float, areas: np.ndarray) -> dict[int, GridFit]:
@@ -311,15 +350,18 @@ def layout(surface: int) -> Layout | str:
     fewest = polygon_count(TARGET, turn) if TARGET else min(len(bottom[0]), len(top[0])) - 1
     k = height.shape[1]
     widths = [np.linalg.norm(np.diff(c[1], axis=0), axis=1) for c in (bottom, top)]
-    # a band is the lines' first segments up to BAND_ROWS rows of the grid (the boundary fit cut the first
-    # one into the circle's segments where it is finer: grid_faces)
+    # a band is the lines' segments up to band_reach() (the boundary fit graded them from a finer circle to
+    # the grid's rows: GridFit.line_params)
     tall = height.mean(axis=0)
-    reach = BAND_ROWS * float(np.median(tall)) * (1.0 - 1e-6)
-    band = (int(np.searchsorted(np.cumsum(tall), reach)) + 1, int(np.searchsorted(np.cumsum(tall[::-1]), reach)) + 1)
+    row = float(np.median(tall))
+    reach = [band_reach(row, float(np.mean(w))) * (1.0 - 1e-6) for w in widths]
+    band = (int(np.searchsorted(np.cumsum(tall), reach[0])) + 1,
+            int(np.searchsorted(np.cumsum(tall[::-1]), reach[1])) + 1)
     # the circles carry the columns, else one does and the other gets a band, else both get bands
+    why = "too short for a grid between bands"
     for own in ((True, True), (True, False), (False, True), (False, False)):
         lo, hi = (0 if own[i] else band[i] for i in (0, 1))
-        rows = height[:, lo:k - hi].ravel()
+        rows = height[:, lo:max(k - hi, lo)].ravel()
         if not len(rows) or any(len(widths[i]) < fewest for i in (0, 1) if own[i]):
             continue
         if all(own) and len(widths[0]) != len(widths[1]):
@@ -332,9 +374,9 @@ def layout(surface: int) -> Layout | str:
             width = np.full(1, turn * scale[angle] / columns)
         if np.degrees(np.arctan(min(width.min() / rows.max(), rows.min() / width.max()))) >= MIN_ANGLE:
             break
+        why = f"its cells would give triangles under {MIN_ANGLE:g} degrees"
     else:
-        return (f"its cells would give triangles under {MIN_ANGLE:g} degrees" if k > sum(band)
-                else "too short for a grid between bands")
+        return why
     if 2 * columns * k < FEWEST_TRIANGLES:
         return f"under {FEWEST_TRIANGLES} triangles as a grid: gmsh meshes it as well"
     return Layout(tuple(c[0] for c in chains), tuple(c[1] for c in chains), tuple(uv), angle, scale, columns, own,
@@ -424,12 +466,14 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
     """The band between circle ``end`` (0 bottom, 1 top) and the grid's row next to it (``ring``: its
     nodes' rows in the grid's node list, their points and parameters), along the lines' last
     ``lay.bands[end]`` segments: laid flat (a cylinder unrolls without stretching), meshed by gmsh's
-    Frontal-Delaunay on those boundary nodes alone (:func:`cadedge.mesh.flat.mesh_plane`), rolled back up.
+    Frontal-Delaunay on those boundary nodes and sizes growing from the circle (:data:`BAND_GROWTH`;
+    :func:`cadedge.mesh.flat.mesh_plane`), rolled back up.
     Returns the nodes it adds (tags, -1 for new ones; points; parameters; rows from ``first`` on) and its
     triangles (rows of the grid's node list and of those), or why not."""
     import gmsh
 
     from .flat import boundary_sizes, mesh_plane
+    from .quality import min_angles
 
     (_, _, left, right), (bx, tx, lx, rx), (buv, tuv, luv, ruv) = lay.tags, lay.xyz, lay.uv
     a, h = lay.angle, 1 - lay.angle
@@ -453,8 +497,36 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
     scale = np.array([lay.scale[a], lay.scale[h]]) * np.sign([buv[-1, a] - buv[0, a], luv[-1, h] - luv[0, h]])
     plane = (loop_uv[:, [a, h]] - origin) * scale
     segments = [(i, (i + 1) % len(plane)) for i in range(len(plane))]
-    got = mesh_plane(plane, segments, boundary_sizes(plane, segments), 6, lambda: None,
-                     {"Mesh.MeshSizeFromCurvature": 0})
+    # sizes growing from the circle's segments to the grid's columns, as the lines were graded
+    # (GridFit.line_params)
+    start = 0 if end == 0 else len(parts[0][0])  # the circle's rows in the loop
+    circle = plane[start:start + len(lay.tags[end])]
+    spacing = float(np.mean(np.linalg.norm(np.diff(circle, axis=0), axis=1)))
+    width = float(np.mean(np.linalg.norm(np.diff(ring_x, axis=0), axis=1)))
+    grow = f"Min({width!r}, {spacing!r} + {BAND_GROWTH!r} * Abs(y - {float(np.mean(circle[:, 1]))!r}))"
+
+    def sizing(field: bool):
+        def set_field() -> None:
+            if field:
+                tag = gmsh.model.mesh.field.add("MathEval")
+                gmsh.model.mesh.field.setString(tag, "F", grow)
+                gmsh.model.mesh.field.setAsBackgroundMesh(tag)
+        return set_field
+
+    best, got = -1.0, "gmsh made no band"
+    for algorithm, field in BAND_VARIANTS:
+        options = {"Mesh.MeshSizeFromCurvature": 0}
+        if field:  # the field's sizes alone, not the boundary's carried inwards
+            options.update({"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0})
+        trial = mesh_plane(plane, segments, boundary_sizes(plane, segments), algorithm, sizing(field), options)
+        if isinstance(trial, str):
+            got = got if best >= 0 else trial
+            continue
+        angle = float(min_angles(np.column_stack([trial[0], np.zeros(len(trial[0]))]), trial[1]).min())
+        if angle > best:
+            best, got = angle, trial
+        if best >= BAND_GOOD:
+            break
     if isinstance(got, str):
         return f"its band: {got}"
     points, tri = got
