@@ -465,9 +465,9 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
           first: int) -> tuple | str:
     """The band between circle ``end`` (0 bottom, 1 top) and the grid's row next to it (``ring``: its
     nodes' rows in the grid's node list, their points and parameters), along the lines' last
-    ``lay.bands[end]`` segments: laid flat (a cylinder unrolls without stretching), meshed by gmsh's
-    Frontal-Delaunay on those boundary nodes and sizes growing from the circle (:data:`BAND_GROWTH`;
-    :func:`cadedge.mesh.flat.mesh_plane`), rolled back up.
+    ``lay.bands[end]`` segments: laid flat (a cylinder unrolls without stretching), meshed by gmsh on
+    those boundary nodes (:func:`cadedge.mesh.flat.mesh_plane`) the best of :data:`BAND_VARIANTS` ways,
+    rolled back up.
     Returns the nodes it adds (tags, -1 for new ones; points; parameters; rows from ``first`` on) and its
     triangles (rows of the grid's node list and of those), or why not."""
     import gmsh
@@ -505,20 +505,18 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
     width = float(np.mean(np.linalg.norm(np.diff(ring_x, axis=0), axis=1)))
     grow = f"Min({width!r}, {spacing!r} + {BAND_GROWTH!r} * Abs(y - {float(np.mean(circle[:, 1]))!r}))"
 
-    def sizing(field: bool):
-        def set_field() -> None:
-            if field:
-                tag = gmsh.model.mesh.field.add("MathEval")
-                gmsh.model.mesh.field.setString(tag, "F", grow)
-                gmsh.model.mesh.field.setAsBackgroundMesh(tag)
-        return set_field
+    def growing() -> None:
+        tag = gmsh.model.mesh.field.add("MathEval")
+        gmsh.model.mesh.field.setString(tag, "F", grow)
+        gmsh.model.mesh.field.setAsBackgroundMesh(tag)
 
     best, got = -1.0, "gmsh made no band"
     for algorithm, field in BAND_VARIANTS:
         options = {"Mesh.MeshSizeFromCurvature": 0}
         if field:  # the field's sizes alone, not the boundary's carried inwards
             options.update({"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0})
-        trial = mesh_plane(plane, segments, boundary_sizes(plane, segments), algorithm, sizing(field), options)
+        trial = mesh_plane(plane, segments, boundary_sizes(plane, segments), algorithm,
+                           growing if field else lambda: None, options)
         if isinstance(trial, str):
             got = got if best >= 0 else trial
             continue
