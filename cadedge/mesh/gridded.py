@@ -19,11 +19,12 @@ run through them. A circle split finer for a neighbour (a rod's flat end: 123 se
 growing from the circle's segments to the columns (:data:`BAND_GROWTH`), the lines' segments beside it
 graded alike (:meth:`GridFit.line_params`). Only faces whose grid takes
 :data:`FEWEST_TRIANGLES` or more are meshed so: on smaller ones gmsh is quick and the face optimiser lifts
-its triangles to 40 degrees and more, where a band's are 34-36.
+its triangles to 40 degrees and more, where a band's are 32-36.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,7 +103,7 @@ TARGET: float | None = None
 SURFACES: frozenset[int] = frozenset()
 
 
-def aim(target: float | None, surfaces=()) -> None:
+def aim(target: float | None, surfaces: Iterable[int] = ()) -> None:
     """Set :data:`TARGET` and :data:`SURFACES` for the gmsh job starting in this process."""
     global TARGET, SURFACES
     TARGET, SURFACES = target, frozenset(surfaces)
@@ -163,9 +164,9 @@ class GridFit:
         count = np.concatenate([[0.0], np.cumsum(np.diff(d) * 0.5 * (1.0 / size[1:] + 1.0 / size[:-1]))])
         at_nodes = np.interp(along, d, count)
         pieces = np.maximum(np.rint(np.diff(at_nodes)), 1).astype(int)
-        steps = np.concatenate([np.arange(1, k) / k for k in pieces])
-        first = np.repeat(np.arange(len(pieces)), pieces - 1)
-        cut = at_nodes[first] + steps * (at_nodes[first + 1] - at_nodes[first])
+        first = np.repeat(np.arange(len(pieces)), pieces - 1)  # the segment of each new node, and its rank
+        rank = np.arange(len(first)) - np.repeat(np.cumsum(pieces - 1) - (pieces - 1), pieces - 1) + 1
+        cut = at_nodes[first] + rank / pieces[first] * (at_nodes[first + 1] - at_nodes[first])
         new = np.interp(np.interp(cut, count, d), along, params)
         return np.sort(np.concatenate([params, new]))
 
