@@ -11,7 +11,7 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS_Shape
 
 from .compat import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
-from .topology import _indexed, _shapes
+from .topology import indexed, list_items
 
 
 def merge_vertices(shape: TopoDS_Shape, into: dict[int, int]) -> tuple[TopoDS_Shape, dict[int, int]]:
@@ -23,7 +23,7 @@ def merge_vertices(shape: TopoDS_Shape, into: dict[int, int]) -> tuple[TopoDS_Sh
     comes back unchanged with no replacement (the caller meshes it as it was)."""
     if not into:
         return shape, {}
-    vertices = _indexed(shape, TopAbs_VERTEX)
+    vertices = indexed(shape, TopAbs_VERTEX)
     reshape = BRepTools_ReShape()
     for old, new in sorted(into.items()):
         reshape.Replace(vertices.FindKey(old).Oriented(TopAbs_FORWARD),
@@ -33,14 +33,14 @@ def merge_vertices(shape: TopoDS_Shape, into: dict[int, int]) -> tuple[TopoDS_Sh
     except Standard_Failure:
         return shape, {}
     kept = [vertices.FindKey(i) for i in range(1, vertices.Size() + 1) if i not in into]
-    after = _indexed(merged, TopAbs_VERTEX)
+    after = indexed(merged, TopAbs_VERTEX)
     if after.Size() != len(kept) or any(after.FindIndex(v) != k for k, v in enumerate(kept, start=1)):
         return shape, {}
     ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
     TopExp.MapShapesAndAncestors_s(merged, TopAbs_VERTEX, TopAbs_FACE, ancestors)
     faces = TopTools_IndexedMapOfShape()
     for new in set(into.values()):
-        for face in _shapes(ancestors.FindFromKey(vertices.FindKey(new))):
+        for face in list_items(ancestors.FindFromKey(vertices.FindKey(new))):
             faces.Add(face)
     try:
         if not all(BRepCheck_Analyzer(faces.FindKey(i)).IsValid() for i in range(1, faces.Size() + 1)):
