@@ -345,9 +345,8 @@ def after_generate(ctx) -> None:
     say("measure")
     full: set[int] = set()  # surfaces over the target at their triangle budget: not meshed again
 
-    def at_budget(s: int) -> bool:  # or its curvature sizes held to the budget already (use_per_circle)
-        return (len(gmsh.model.mesh.getElementsByType(2, s)[0]) >= AT_BUDGET * MAX_FACE_TRIANGLES
-                or (s not in SIZES.faces and SIZES.per_circle.get(s, 0.0) >= SIZES.cap(s)))
+    def at_budget(s: int) -> bool:  # or its curvature sizes held to the budget already
+        return len(gmsh.model.mesh.getElementsByType(2, s)[0]) >= AT_BUDGET * MAX_FACE_TRIANGLES or SIZES.held(s)
 
     best: dict[int, tuple] = {}  # floored surface -> its smallest deficit so far, that mesh, outcome, count
 

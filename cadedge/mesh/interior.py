@@ -129,6 +129,11 @@ class InteriorSizes:
         face.sizes = root_sizes(face.k, face.da, per_circle) if per_circle > 0 else None
         return True
 
+    def held(self, surface: int) -> bool:
+        """Whether gmsh's curvature sizes on ``surface`` are held to its triangle budget (:meth:`cap`, as
+        :func:`use_per_circle` set them); never on a sampled face."""
+        return surface not in self.faces and self.per_circle.get(surface, 0.0) >= self.cap(surface)
+
     def cap(self, surface: int) -> float:
         """The most triangles per ``2 pi`` gmsh's curvature sizes are given on ``surface``: the largest count
         whose sizes put about :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES` on it
