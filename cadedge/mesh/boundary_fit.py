@@ -228,8 +228,8 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     from .gridded import grid_faces
 
     topo = Topology(grid.shape)
-    candidates = grid_faces(grid, kinds, surface_ald, brep_areas)
-    grids = {f: (grids or {}).get(f, 0) for f in candidates}  # 0: not fitted yet, None: not a grid
+    if grids is None:  # 0: not fitted yet (fit_grids passes the faces it found, None: not a grid)
+        grids = dict.fromkeys(grid_faces(grid, kinds, surface_ald, brep_areas), 0)
     grids = {f: g for f, g in grids.items() if g is not None}
     areas = brep_areas
     h_factor = np.array([2.0 * np.pi / per_circle(surface_ald, k) for k in kinds])  # size = h_factor / k
