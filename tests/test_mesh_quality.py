@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from cadedge.mesh.collapse import collapse_edges
-from cadedge.mesh.optimize import climb_nodes, flip_edges, smooth_nodes
+from cadedge.mesh.optimize import climb_nodes, flip_edges, improve_plane, smooth_nodes
 from cadedge.mesh.quality import flat_triangles, triangle_angles
 
 from conftest import FIXTURES
@@ -52,6 +52,29 @@ def test_movers_raise_the_worst_angle_and_keep_boundary_nodes(mover):
     assert np.array_equal(out[~inner], bad[~inner])
     moved = ~np.isnan(params[:, 0])
     assert moved.any() and np.allclose(params[moved], out[inner][moved, :2])
+
+
+def test_improve_plane_lifts_a_plane_mesh_and_keeps_its_boundary():
+    """A grid's band is improved in the plane (cadedge.mesh.gridded): a perturbed grid's triangles rise
+    well past where they were, boundary nodes stay, no triangle turns over, the region stays covered
+    (same area), and as many nodes and triangles come back."""
+    x, tri, inner = _grid(7)
+    bad = x[:, :2].copy()
+    bad[inner] += np.random.default_rng(3).uniform(-0.06, 0.06, size=(inner.sum(), 2))
+    boundary = {(min(i, j), max(i, j)) for i, j in tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).tolist()
+                if not (inner[i] or inner[j])}
+    out, new = improve_plane(bad, tri, inner, boundary)
+    flat = np.column_stack([out, np.zeros(len(out))])
+    before = triangle_angles(np.column_stack([bad, np.zeros(len(bad))]), tri).min()
+    assert triangle_angles(flat, new).min() > before + 10
+    assert out.shape == bad.shape and new.shape == tri.shape
+    assert np.array_equal(out[~inner], bad[~inner])
+    e1, e2 = out[new[:, 1]] - out[new[:, 0]], out[new[:, 2]] - out[new[:, 0]]
+    signed = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    assert np.all(signed > 0) and signed.sum() == pytest.approx(1.0)
+    good, same = improve_plane(x[:, :2], tri, inner, boundary, below=30.0)  # nothing under 30 degrees
+    assert np.array_equal(good, x[:, :2])
+    assert np.array_equal(same, tri)
 
 
 def _crowded_hexagon() -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -17,9 +17,10 @@ Where the circles carry as many nodes as the columns, about as wide as the rows 
 run through them. A circle split finer for a neighbour (a rod's flat end: 123 segments, three times the
 41 columns) is joined to the grid by a band that gmsh meshes in the plane (:func:`_band`), its sizes
 growing from the circle's segments to the columns (:data:`BAND_GROWTH`), the lines' segments beside it
-graded alike (:meth:`GridFit.line_params`). Only faces whose grid takes
-:data:`FEWEST_TRIANGLES` or more are meshed so: on smaller ones gmsh is quick and the face optimiser lifts
-its triangles to 40 degrees and more, where a band's are 32-37.
+graded alike (:meth:`GridFit.line_params`), and its triangles improved in the plane by the face
+optimiser's moves (:func:`cadedge.mesh.optimize.improve_plane`: 38-40 degrees, from gmsh's 31-35). Only
+faces whose grid takes :data:`FEWEST_TRIANGLES` or more are meshed so: on smaller ones gmsh is quick and
+the face optimiser lifts its triangles to 40 degrees and more.
 """
 
 from __future__ import annotations
@@ -47,14 +48,18 @@ BAND_ROWS = 2
 #: a size field of the same): 33-35 degrees for circles 3, 6 and 9 times finer than the columns, where
 #: 0.5 gave 24-33.
 BAND_GROWTH = 0.3
-#: How a band is meshed, in turn until one reaches :data:`BAND_GOOD` degrees (else the best is kept):
-#: gmsh's 2-D algorithm (6 Frontal-Delaunay, 5 Delaunay) and whether its sizes come from a field growing
-#: from the circle by :data:`BAND_GROWTH` or from its boundary. Each alone fell to 26-28 degrees on some
-#: of the bands of circles 2-9 times finer than 11, 13 and 41 columns; the best of them was 33-38.6 on all.
+#: How a band is meshed, in turn until one reaches :data:`BAND_GOOD` degrees once improved in the plane
+#: (:func:`cadedge.mesh.optimize.improve_plane`, moving nodes near triangles under :data:`MIN_ANGLE`;
+#: else the best is kept): gmsh's 2-D algorithm (6 Frontal-Delaunay, 5 Delaunay) and whether its sizes
+#: come from a field growing from the circle by :data:`BAND_GROWTH` or from its boundary. As gmsh made
+#: them, each alone fell to 26-28 degrees on some of the bands of circles 2-9 times finer than 11, 13 and
+#: 41 columns (the best of them 33-38.6 on all).
 BAND_VARIANTS = ((6, False), (5, True), (6, True), (5, False))
-#: A band this good ends the tries: at 33 the rod of 1 x 1 000 mm kept 33.4 degrees at 1e-2 where
-#: Delaunay on the field gives 36.6; 11752.stp's 176 bands took 8.2 s for 2.2 (13 ms a try).
-BAND_GOOD = 35.0
+#: A band this good ends the tries (gmsh alone meshes such cylinders at 35.6-37.8 degrees): the first way
+#: reaches it on 11752.stp's 176 bands (33.1-34.8 degrees as gmsh made them, 38.6-40.2 improved), a thin
+#: tube's four (31.6-32.3, 38.1-40.2) and a rod's two (34.1, 38.9-39). A try takes about 13 ms of gmsh
+#: and 45 ms of improving.
+BAND_GOOD = 38.0
 #: Triangles of a band (gmsh's, graded from the circle's segments to the grid's) are kept at this many
 #: degrees or more, else the face is left to gmsh.
 BAND_MIN_ANGLE = 30.0
@@ -62,9 +67,9 @@ BAND_MIN_ANGLE = 30.0
 #: B-splines (11752.stp's 2 mm rods, 1 239 mm long, have B-spline seams).
 STRAIGHT_ALD = 1e-12
 #: A face is meshed as a grid only if that takes this many triangles or more: on smaller faces gmsh is
-#: quick and the face optimiser lifts its triangles to 40 degrees and more, where a band's are 34-36
-#: (the cylinder fixture's side at 1e-3, banded from its rows: 31.7 degrees against 40.7; gmsh alone gets
-#: 39.9).
+#: quick and the face optimiser lifts its triangles to 40 degrees and more, where a grid with bands gets
+#: 38-40 (the cylinder fixture's side at 1e-3 as a grid: 38.8 degrees, against 40.7 as gmsh and the
+#: optimiser mesh it; gmsh alone gets 39.9).
 FEWEST_TRIANGLES = 50_000
 #: A face whose grid would take more triangles is left to gmsh (its lines split by the curvature rule,
 #: its sizes held to its triangle budget): a grid costs gmsh nothing, but its nodes are still read back,
@@ -476,6 +481,7 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
     import gmsh
 
     from .flat import boundary_sizes, mesh_plane
+    from .optimize import improve_plane
     from .quality import min_angles
 
     (_, _, left, right), (bx, tx, lx, rx), (buv, tuv, luv, ruv) = lay.tags, lay.xyz, lay.uv
@@ -513,6 +519,7 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
         gmsh.model.mesh.field.setString(tag, "F", grow)
         gmsh.model.mesh.field.setAsBackgroundMesh(tag)
 
+    fixed = {(min(i, j), max(i, j)) for i, j in segments}
     best, got = -1.0, "gmsh made no band"
     for algorithm, field in BAND_VARIANTS:
         options = {"Mesh.MeshSizeFromCurvature": 0}
@@ -523,6 +530,7 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
         if isinstance(trial, str):
             got = got if best >= 0 else trial
             continue
+        trial = improve_plane(*trial, np.arange(len(trial[0])) >= len(plane), fixed, below=MIN_ANGLE)
         angle = float(min_angles(np.column_stack([trial[0], np.zeros(len(trial[0]))]), trial[1]).min())
         if angle > best:
             best, got = angle, trial

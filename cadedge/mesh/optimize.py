@@ -213,6 +213,31 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
     return _Face(x, tri, movable, uv, moved, up)
 
 
+def improve_plane(points: np.ndarray, tri: np.ndarray, movable: np.ndarray, fixed: set[tuple[int, int]], *,
+                  below: float = CLIMB_BELOW, passes: int = PASSES) -> tuple[np.ndarray, np.ndarray]:
+    """Plane triangles ``tri`` (rows of ``points`` (n, 2)) improved as a face's are: :func:`_improve`, then
+    up to :data:`STAGE_ROUNDS` - 1 rounds of it on the nodes near the worst triangles (:data:`FOCUS`)
+    while they lift the worst angles (:meth:`_Face.better_than`); only the ``movable`` nodes near
+    triangles under ``below`` degrees move, and no segment of ``fixed`` (sorted row pairs) is swapped.
+    Returns the points and triangles, as many as given (the same boundary rows). For a grid's bands
+    (:mod:`cadedge.mesh.gridded`), plane when unrolled, which the face optimiser leaves alone."""
+
+    def project(p: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        flat = np.column_stack([p[:, :2], np.zeros(len(p))])
+        return flat, flat[:, :2].copy()
+
+    x = np.column_stack([points, np.zeros(len(points))])
+    best = start = _Face(x, np.asarray(tri, dtype=np.int64), np.asarray(movable, dtype=bool).copy(),
+                         x[:, :2].copy(), np.zeros(len(x), dtype=bool), None)
+    for round_ in range(STAGE_ROUNDS):
+        more = _improve(best, fixed, project, passes if not round_ else LATER_STAGES[-1][0], lambda: False,
+                        below=below if not round_ else min(below, best.min_angle() + FOCUS))
+        if not more.better_than(best):
+            break
+        best = more
+    return (best.x[:, :2], best.tri) if best is not start else (points, tri)
+
+
 def _start(surface: int, mesh) -> _Face:
     """The :class:`_Face` of gmsh surface ``surface`` as gmsh holds it (``mesh``, its
     :class:`~cadedge.mesh.facemesh.FaceMesh`), no node moved yet; its nodes' surface normals left out
