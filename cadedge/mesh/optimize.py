@@ -100,7 +100,10 @@ FACE_SHARE = 0.5
 #: ``focus_first``) before any pass over a whole face: such a pass over a plane's 80 000 triangles takes
 #: about 6 s of CPU, and the budget bound first (the 1 000 mm I-beam at 1e-2, 7 such planes a process:
 #: 23.6 degrees on the planes reached last; 35.1 with no budget, in 285 s against 68), where focused
-#: rounds lift such a plane from 24 to 31-33 degrees in 2 s (the I-beam: 29.6-30.0 in the same time).
+#: rounds lift such a plane from 24 to 31-33 degrees in 2 s (the I-beam: 29.6-30.0 in the same time; 29.8
+#: at 1e-3, where it had 20.7). On 11752.stp's 800 small gmsh faces, its optimiser bound by the clock,
+#: about even (faces' smallest angles, two runs each: mean 36.5-37.1 -> 36.9-37.6, under 35 degrees
+#: 191-287 -> 157, under 30 98 -> 105); a sweep of only its 71 faces of 20 000 triangles or more took the whole window (under 30: 201).
 #: Smaller jobs keep the order that reaches higher angles when the budget allows (a pass first, its
 #: smoothing spread over the face).
 FOCUS_FIRST = 300_000
@@ -153,7 +156,8 @@ class _Face:
 def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, late, *,
              collapse: bool = False, below: float = CLIMB_BELOW, collapse_below: float = COLLAPSE_BELOW) -> _Face:
     """``passes`` times: edge swaps, edge collapses and edge splits (with ``collapse``; see
-    :mod:`cadedge.mesh.collapse` and :mod:`cadedge.mesh.corners`) and swaps again, then smoothing and the local search of the nodes near bad triangles. Returns a new
+    :mod:`cadedge.mesh.collapse` and :mod:`cadedge.mesh.corners`) and swaps again, then smoothing and the
+    local search of the nodes near bad triangles. Returns a new
     :class:`_Face` (``face`` is left as it is); only nodes near triangles under ``below`` degrees move,
     and only edges of triangles under ``collapse_below`` collapse; stops when ``late()``."""
     x, tri, movable = face.x, face.tri, face.movable.copy()
@@ -281,8 +285,8 @@ def _unfold(face: _Face, project: Projector) -> _Face:
 
 
 def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = None, slack: float = 0.0,
-                own_slack: float = 0.0, passes: int = PASSES, rounds: int = STAGE_ROUNDS, focus_first: bool = False,
-                deadline: float | None = None, cpu_deadline: float | None = None) -> bool:
+                own_slack: float = 0.0, passes: int = PASSES, rounds: int = STAGE_ROUNDS,
+                focus_first: bool = False, deadline: float | None = None, cpu_deadline: float | None = None) -> bool:
     """Improve one meshed gmsh surface: ``passes`` times edge swaps (:func:`flip_edges`, never a curve
     segment) then smoothing of its interior nodes (:func:`smooth_nodes`, :func:`climb_nodes`); then the
     :data:`LATER_STAGES` (with edge collapses while its smallest angle is under
@@ -291,8 +295,9 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     (``passes=0``: the later stages only). With ``focus_first`` (:data:`FOCUS_FIRST`), up to
     :data:`STAGE_ROUNDS` passes on the nodes near its worst triangles (:data:`FOCUS`) come first, while
     they improve it, and the passes over the whole face are kept after them only if they improve it
-    too. A result replaces the face's mesh only if its smallest angle does not fall and its area deficit (against ``brep_area``) stays within ``target`` or
-    does not grow (by more than ``slack`` or ``own_slack`` times its deficit as gmsh meshed it); a face
+    too. A result replaces the face's mesh only if its smallest angle does not fall and its area deficit
+    (against ``brep_area``) stays within ``target`` or does not grow (by more than ``slack`` or
+    ``own_slack`` times its deficit as gmsh meshed it); a face
     that lost nodes is written again (its interior nodes and triangles; its curves'
     nodes stay). No pass or move starts after ``deadline`` (``time.time()``) or ``cpu_deadline``
     (``time.process_time()``). Returns whether the face's mesh changed."""
