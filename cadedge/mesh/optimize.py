@@ -103,9 +103,9 @@ FACE_SHARE = 0.5
 #: rounds lift such a plane from 24 to 31-33 degrees in 2 s (the I-beam: 29.6-30.0 in the same time; 29.8
 #: at 1e-3, where it had 20.7). On 11752.stp's 800 small gmsh faces, its optimiser bound by the clock,
 #: about even (faces' smallest angles, two runs each: mean 36.5-37.1 -> 36.9-37.6, under 35 degrees
-#: 191-287 -> 157, under 30 98 -> 105); a sweep of only its 71 faces of 20 000 triangles or more took the whole window (under 30: 201).
-#: Smaller jobs keep the order that reaches higher angles when the budget allows (a pass first, its
-#: smoothing spread over the face).
+#: 191-287 -> 157, under 30 98 -> 105); a sweep of only its 71 faces of 20 000 triangles or more took
+#: the whole window (under 30: 201). Smaller jobs keep the order that reaches higher angles when the
+#: budget allows (a pass first, its smoothing spread over the face).
 FOCUS_FIRST = 300_000
 
 
@@ -438,13 +438,13 @@ def after_generate(ctx) -> None:
     say = ctx.progress or (lambda line: None)
     # a grid's right triangles are as its boundary nodes set them (cadedge.mesh.gridded): nothing to move
     todo = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok and outcome.strategy != GRID]
-    many = sum(len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo) > FOCUS_FIRST
+    size = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo}  # triangles, kept up to date
+    many = sum(size.values()) > FOCUS_FIRST
     # (passes, rounds, focused rounds first): with many triangles, a sweep of every face's worst ones first
     for passes, rounds, focus_first in [(0, 0, True)] * many + [(PASSES, 1, False), (0, STAGE_ROUNDS - 1, False)]:
         worst = {s: _face_min_angle(s) for s in todo}
         todo = [s for s in sorted(todo, key=lambda s: worst[s]) if worst[s] < CLIMB_BELOW]
-        size = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo}
-        left = sum(size.values())
+        left = sum(size[s] for s in todo)
         tried = []
         for s in todo:  # worst smallest angle first; faces without a triangle worth moving are left alone
             cpu = time.process_time()
@@ -462,7 +462,7 @@ def after_generate(ctx) -> None:
                            passes=passes, rounds=rounds, focus_first=focus_first,
                            deadline=end, cpu_deadline=cpu + share * (cpu_end - cpu)):
                 kept.append(f)
-                ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
+                size[s] = ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
                 deliver(2, f, element_corners(2, s))  # a child killed at the hard timeout hands this face over
         if passes:  # the later rounds go to the faces that set the mesh's smallest angle
             floor = min((_face_min_angle(s) for s, o in ctx.outcomes.items() if o.ok), default=180.0)
