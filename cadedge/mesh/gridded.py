@@ -520,13 +520,13 @@ def _band(surface: int, lay: Layout, end: int, ring: np.ndarray, ring_x: np.ndar
         gmsh.model.mesh.field.setAsBackgroundMesh(tag)
 
     fixed = {(min(i, j), max(i, j)) for i, j in segments}
+    near = boundary_sizes(plane, segments)
     best, got = -1.0, "gmsh made no band"
     for algorithm, field in BAND_VARIANTS:
         options = {"Mesh.MeshSizeFromCurvature": 0}
         if field:  # the field's sizes alone, not the boundary's carried inwards
             options.update({"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0})
-        trial = mesh_plane(plane, segments, boundary_sizes(plane, segments), algorithm,
-                           growing if field else lambda: None, options)
+        trial = mesh_plane(plane, segments, near, algorithm, growing if field else lambda: None, options)
         if isinstance(trial, str):
             got = got if best >= 0 else trial
             continue

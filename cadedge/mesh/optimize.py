@@ -438,11 +438,12 @@ def after_generate(ctx) -> None:
     say = ctx.progress or (lambda line: None)
     # a grid's right triangles are as its boundary nodes set them (cadedge.mesh.gridded): nothing to move
     todo = [s for s, outcome in sorted(ctx.outcomes.items()) if outcome.ok and outcome.strategy != GRID]
-    size = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo}  # triangles, kept up to date
+    # each face's triangles and smallest angle, kept up to date as faces change
+    size = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo}
+    worst = {s: _face_min_angle(s) for s in todo}
     many = sum(size.values()) > FOCUS_FIRST
     # (passes, rounds, focused rounds first): with many triangles, a sweep of every face's worst ones first
     for passes, rounds, focus_first in [(0, 0, True)] * many + [(PASSES, 1, False), (0, STAGE_ROUNDS - 1, False)]:
-        worst = {s: _face_min_angle(s) for s in todo}
         todo = [s for s in sorted(todo, key=lambda s: worst[s]) if worst[s] < CLIMB_BELOW]
         left = sum(size[s] for s in todo)
         tried = []
@@ -463,8 +464,9 @@ def after_generate(ctx) -> None:
                            deadline=end, cpu_deadline=cpu + share * (cpu_end - cpu)):
                 kept.append(f)
                 size[s] = ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
+                worst[s] = _face_min_angle(s)
                 deliver(2, f, element_corners(2, s))  # a child killed at the hard timeout hands this face over
         if passes:  # the later rounds go to the faces that set the mesh's smallest angle
             floor = min((_face_min_angle(s) for s, o in ctx.outcomes.items() if o.ok), default=180.0)
-            todo = [s for s in tried if _face_min_angle(s) < min(floor + SWEEP_MARGIN, COLLAPSE_BELOW)]
+            todo = [s for s in tried if worst[s] < min(floor + SWEEP_MARGIN, COLLAPSE_BELOW)]
     ctx.smoothed = sorted(set(kept))
