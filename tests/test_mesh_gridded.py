@@ -292,3 +292,66 @@ def test_a_thin_tubes_cylinders_are_grids_graded_from_their_finer_circles():
         for lengths in (seam.segment_lengths, seam.segment_lengths[::-1]):
             assert lengths[0] <= 1.5 * circle.segment_lengths.mean()
             assert np.all(lengths[1:12] / lengths[:11] <= 1.5)
+
+
+def _filleted_disk(radius: float = 12.0, fillet: float = 0.2):
+    """A disk of ``radius`` mm, 3 mm thick, its top edge filleted: a torus face round the whole ring
+    between two parallels (on the top plane and on the side cylinder), joined by one quarter arc of its
+    tube."""
+    cq = pytest.importorskip("cadquery")
+    return cq.Workplane().circle(radius).extrude(3.0).edges(">Z").fillet(fillet).val()
+
+
+def test_a_fillet_round_a_disk_is_fitted_for_a_torus_grid():
+    """The boundary fit cuts a grid torus's parallels into as many columns each, evenly round the ring
+    (no other face's rule splits them first) and at the same angles, and its tube arc into the rows the
+    target needs (:func:`cadedge.mesh.gridded.torus_rows`), the rows about as tall as the columns are
+    wide."""
+    import cadedge
+    from cadedge.mesh.fidelity import brep_face_areas, meshed_kinds
+    from cadedge.mesh.boundary_fit import fit_boundaries
+    from cadedge.mesh.gridded import grid_faces, torus_rows
+
+    grid = cadedge.refine_shape(_filleted_disk(), ald=1e-3)
+    kinds, areas = meshed_kinds(grid.shape), brep_face_areas(grid.shape)
+    (torus,) = [f for f in range(1, grid.faces + 1) if kinds[f - 1] == "Torus"]
+    assert torus in grid_faces(grid, kinds, 1e-3, areas)
+    fitted = fit_boundaries(grid, 1e-3, brep_areas=areas, kinds=kinds)
+    edges = [e for e in fitted.edges if torus in e.faces]
+    rings = [e for e in edges if np.allclose(e.points[0], e.points[-1])]
+    (arc,) = [e for e in edges if not np.allclose(e.points[0], e.points[-1])]
+    assert len(rings) == 2 and len(rings[0].points) == len(rings[1].points)
+    rows = len(arc.points) - 1
+    assert rows == torus_rows(1e-3, np.pi / 2, 0.2, 11.8)
+    tall = arc.segment_lengths.mean()
+    for ring in rings:
+        assert np.ptp(ring.segment_lengths) <= 0.1 * ring.segment_lengths.mean()
+        assert ring.segment_lengths.mean() == pytest.approx(tall, rel=0.03)
+    # node i of one parallel within a column of node i of the other, all the way round (rounding each
+    # segment's pieces alone drifted 14 columns apart on a larger ring)
+    angles = [np.unwrap(np.arctan2(r.points[:, 1], r.points[:, 0])) for r in rings]
+    angles = [(a - a[0]) * np.sign(a[-1] - a[0]) for a in angles]
+    assert np.abs(angles[0] - angles[1]).max() <= 2.0 * np.pi / (len(rings[0].points) - 1)
+
+
+def test_a_fillet_round_a_disk_is_a_torus_grid():
+    """The same disk meshed at 1e-3: the fillet is a grid of right triangles of about 45 degrees, its area
+    deficit that of the rows' polygon on its tube arc (flat cells on a torus lose a little more, within
+    the share :func:`~cadedge.mesh.gridded.torus_rows` allows for it), 2 x columns x rows triangles; the planar top, bounded by the fine circle, is graded inwards (Delaunay
+    where Frontal-Delaunay fans), every face within the target."""
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.gridded import NAME
+
+    result = mesh_shape(_filleted_disk(), ald=1e-3)
+    assert result.ok, result.problems()
+    assert all(abs(f.area_deficit) <= 1e-3 for f in result.report.faces)
+    (torus,) = _face_by_kind(result, "Torus")
+    assert next(o for o in result.faces if o.face == torus.face).strategy == NAME
+    arc = next(e for e in result.grid.edges if torus.face in e.faces and not np.allclose(e.points[0], e.points[-1]))
+    ring = next(e for e in result.grid.edges if torus.face in e.faces and np.allclose(e.points[0], e.points[-1]))
+    rows, columns = len(arc.points) - 1, len(ring.points) - 1
+    assert torus.triangles == 2 * rows * columns
+    rows_deficit = _polygon_deficit(rows, np.pi / 2)  # flat cells inside a torus lose up to 2 r / rho more
+    assert rows_deficit < torus.area_deficit <= rows_deficit * (1.0 + 2.0 * 0.2 / 11.8)
+    assert torus.min_angle >= 42.0 and result.report.folded == 0
+    assert min(f.min_angle for f in result.report.faces) >= 30.0

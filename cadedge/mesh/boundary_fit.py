@@ -113,10 +113,13 @@ def fit_grids(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[s
     """``grid`` with the lines of the cylinders that may be meshed as a grid
     (:func:`cadedge.mesh.gridded.grid_faces`) split into rows as tall as the grid's columns, the fewest
     for ``surface_ald``, are wide, graded from a finer circle at an end
-    (:meth:`~cadedge.mesh.gridded.GridFit.line_params`); or by the curvature rule where that grid would
-    take more than :data:`~cadedge.mesh.gridded.MOST_TRIANGLES`. The faces' other edges first, the lines
-    held: their circles may be split further (for a planar ring beside them), and a line graded from a
-    circle's coarser segments keeps those nodes (a thin tube's: 3x steps where 1.3x were asked)."""
+    (:meth:`~cadedge.mesh.gridded.GridFit.line_params`), and the parallels and tube arc of such tori cut
+    into their columns and rows (:meth:`~cadedge.mesh.gridded.GridFit.ring_params`,
+    :meth:`~cadedge.mesh.gridded.GridFit.rows`); or by the curvature rule
+    where that grid would take more than :data:`~cadedge.mesh.gridded.MOST_TRIANGLES`. The faces' other
+    edges first, the grids' held: their circles may be split further (for a planar ring beside them), and
+    a line graded from a circle's coarser segments keeps those nodes (a thin tube's: 3x steps where 1.3x
+    were asked)."""
     from .gridded import MOST_TRIANGLES, grid_faces
 
     areas = np.asarray(brep_areas, dtype=float)
@@ -207,7 +210,11 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
       circles are fitted, then into rows as tall as the grid's columns are wide, graded from a finer
       circle (``grids``: face -> its :class:`~cadedge.mesh.gridded.GridFit`, whose
       :meth:`~cadedge.mesh.gridded.GridFit.line_params` cuts it after the other rules; or None where the
-      grid would take too many triangles and the curvature rule holds);
+      grid would take too many triangles and the curvature rule holds); a grid torus's parallels and tube
+      arc are not split at all until then (for no face: its equal columns, finer than any other rule asks
+      of its parallels, are what its neighbours get), then into its rows
+      (:meth:`~cadedge.mesh.gridded.GridFit.rows`, or finer where another rule asks) and columns, both
+      parallels at the same angles (:meth:`~cadedge.mesh.gridded.GridFit.ring_params`);
     - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
       ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
       loses nothing to the cylinder, all to a planar cap), summed over the face's boundary, must stay
@@ -270,6 +277,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
         edge_ratio = min(ratio, STRAIGHT_RATIO) if straight else ratio
         pieces = np.ones(len(chord), dtype=int)
         rows = None  # the GridFit of a grid face this edge is a line of
+        torus = None  # the GridFit of a grid torus this edge bounds (0: held until fit_grids cuts it)
         for f, normals, curv in probed:
             tangential = sagitta - np.sum(sagitta * normals, axis=1)[:, None] * normals
             sliver = 2.0 / 3.0 * chord * np.linalg.norm(tangential, axis=1)
@@ -280,13 +288,27 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
                 k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
                 k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
-            if straight and f in grids:  # a grid's rows, cut below (not by the curvature rule)
+            if f in grids and kinds[f - 1] == "Torus":  # its columns and rows, cut below
+                k_curv, torus = 1, grids[f]
+            elif straight and f in grids:  # a grid's rows, cut below (not by the curvature rule)
                 k_curv, rows = 1, grids[f] or rows
             pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
                                                       nan=1).astype(int))
+        if torus is not None and not torus:  # uncut: the torus's columns, cut later, suit its neighbours too
+            continue
+        cut = torus.ring_params(e.id, e.params) if torus else None  # a parallel: the grid's columns, finer
+        if cut is not None:  # than any other rule asks
+            pieces[:] = 1
+        elif torus:  # the tube's arc: rows no taller than the grid's, or as the other rules ask
+            pieces = np.maximum(pieces, torus.rows(e.points))
         params, points = e.params, e.points
         if np.any(pieces > 1):
             params, points = split_segments(params, points, pieces, curve.evaluate, spacing="parameter")
+        if cut is not None:
+            kept = np.isin(cut, params)
+            new_points = np.empty((len(cut), 3))
+            new_points[kept], new_points[~kept] = points, curve.evaluate(cut[~kept])
+            params, points = cut, new_points
         if rows is not None:  # as tall as the grid's columns are wide, graded from a finer circle
             graded = rows.line_params(params, points)
             if len(graded) > len(params):

@@ -227,9 +227,10 @@ def before_generate(ctx) -> None:
     from .sizes import configure_curvature_sizes
 
     opts = ctx.job.options.get("fidelity")
-    # cylinders meshed as grids: which (the caller's), and their columns for the target
-    aim(opts["surface_ald"] if opts else None,
-        [ctx.emap.faces[f] for f in (opts or {}).get("grid_faces", ()) if f in ctx.emap.faces])
+    # cylinders and tori meshed as grids: which (the caller's), and their columns for the target
+    grids = [f for f in (opts or {}).get("grid_faces", ()) if f in ctx.emap.faces]
+    aim(opts["surface_ald"] if opts else None, [ctx.emap.faces[f] for f in grids],
+        [ctx.emap.faces[f] for f in grids if opts["meshed_kinds"][f - 1] == "Torus"])
     if opts:
         min_size = MIN_SIZE_SHARE * ctx.job.field.min_size
         configure_curvature_sizes(opts["per_circle"], min_size)

@@ -51,7 +51,7 @@ STRATEGIES = (
     Strategy("unrolled cone, Frontal-Delaunay", 6, unrolled="cone"),
     Strategy("unrolled extrusion, Frontal-Delaunay", 6, unrolled="extrusion"),
     Strategy("unrolled extrusion, MeshAdapt", 1, unrolled="extrusion"),
-    Strategy("cylinder grid", 0, unrolled="grid"),
+    Strategy("grid", 0, unrolled="grid"),
 )
 #: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled
 #: right after the first (gmsh's meshers leave triangles overlapping beside the seam near the apex of
