@@ -586,3 +586,38 @@ def test_a_twisted_blade_is_left_with_no_folded_triangle_and_every_face_within_t
     assert np.all(np.abs(deficits) <= 1e-2), deficits
     assert result.extras[AFTER_MESH_HOOK]["split"] == [1]
     assert result.report.min_angle >= 20.0
+
+
+def test_a_plane_frontal_delaunay_fans_is_meshed_by_delaunay():
+    """A 70 mm disk whose circle is cut in 7 682 segments of 0.029 mm (as a torus grid's parallel is):
+    gmsh's Frontal-Delaunay joins them to a few nodes far inside (triangles of a few degrees);
+    ``keep_better_angles`` meshes it by Delaunay, which grades them inwards (23.7 degrees before the face
+    optimiser), and keeps that."""
+    from cadedge.mesh.facemesh import triangle_min_angles
+    from cadedge.mesh.floored import DELAUNAY
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.outcomes import FaceOutcome
+    from cadedge.mesh.remesh import keep_better_angles
+
+    with gmsh_session():
+        gmsh.model.occ.addDisk(0, 0, 0, 34.8, 34.8)
+        gmsh.model.occ.synchronize()
+        ((_, curve),) = gmsh.model.getEntities(1)
+        gmsh.model.mesh.setTransfiniteCurve(curve, 7683)
+        for name, value in (("Mesh.MeshSizeFromCurvature", 0), ("Mesh.MeshSizeFromPoints", 0),
+                            ("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.MeshSizeMax", 1.8)):
+            gmsh.option.setNumber(name, value)
+        grown = gmsh.model.mesh.field.add("Extend")
+        gmsh.model.mesh.field.setNumbers(grown, "CurvesList", [curve])
+        gmsh.model.mesh.field.setNumber(grown, "SizeMax", 1.8)
+        gmsh.model.mesh.field.setNumber(grown, "DistMax", 3.5)
+        gmsh.model.mesh.field.setAsBackgroundMesh(grown)
+        gmsh.option.setNumber("Mesh.Algorithm", 6)
+        gmsh.model.mesh.generate(2)
+        ((_, disk),) = gmsh.model.getEntities(2)
+        fan = float(triangle_min_angles(disk).min())
+        assert fan < 10.0
+        outcomes = {disk: FaceOutcome(face=1, surface=disk, strategy="Frontal-Delaunay", triangles=1)}
+        best = keep_better_angles(disk, DELAUNAY, 10.0, outcomes)
+        assert best == pytest.approx(float(triangle_min_angles(disk).min())) and best >= 20.0
+        assert outcomes[disk].strategy == DELAUNAY and outcomes[disk].triangles > 30_000

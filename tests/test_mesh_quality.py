@@ -479,7 +479,8 @@ def _adapt_context(side: int, brep_area: float, target: float):
     from cadedge.mesh.outcomes import FaceOutcome
 
     options = {"fidelity": {"surface_ald": target, "brep_areas": np.array([brep_area]), "per_circle": 20.0,
-                            "face_per_circle": {1: 20.0}}}  # 0.31 on the radius-1 cylinder
+                            "face_per_circle": {1: 20.0},  # 0.31 on the radius-1 cylinder
+                            "meshed_kinds": ["Cylinder"]}}
     lines: list[str] = []
     ctx = SimpleNamespace(job=SimpleNamespace(options=options, no_refine=set(), deadline=None, share=1.0),
                           emap=SimpleNamespace(face_of_surface={side: 1}), progress=lines.append,

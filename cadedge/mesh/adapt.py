@@ -16,7 +16,15 @@ sizes it had. A face with only a few small angles is left to the optimiser: the 
 at 1e-3 (28 454 triangles, none under 20 degrees but one corner of 2.2) took MeshAdapt 33 s for the
 same smallest angle. The new mesh is kept when it is no worse in both figures, clearly better in one
 (:func:`better`), and its area deficit stays within the target (or no larger than before); otherwise the
-face gets its first mesh back (:func:`cadedge.mesh.remesh.mesh_again`). A face held at a size floor
+face gets its first mesh back (:func:`cadedge.mesh.remesh.mesh_again`).
+
+A planar face Frontal-Delaunay left with a triangle under :data:`FAN_ANGLE` is first meshed again by
+gmsh's Delaunay, kept if its smallest angle is larger, however many more triangles it has: bounded by
+a circle cut far finer than the face (7 682 segments of 0.029 mm round a 70 mm disk, for the grid of
+its 0.2 mm edge fillet: :mod:`cadedge.mesh.gridded`), Frontal-Delaunay can join the boundary to a few
+nodes 0.5 mm inside, a fan of 10 762 triangles at 1.7 degrees that MeshAdapt's grading (50 000, 15 s)
+would exceed the triangle bound with; Delaunay grades it inwards in under a second (49 838, 34.7
+degrees once optimised). A face held at a size floor
 (:mod:`cadedge.mesh.floored`, as surf114's are) is meshed with gmsh's switch to other algorithms on
 failure off, as it was first meshed: gmsh's whole fallback chain never finished on such faces. Only a
 face's interior changes: its boundary curves keep their nodes, so neighbours stay conforming.
@@ -48,6 +56,9 @@ BUDGET_SHARE = 0.5
 MIN_BUDGET = 10.0
 #: The strategy name a face kept as MeshAdapt meshed it is recorded with (``FaceOutcome.strategy``).
 MESH_ADAPT = "MeshAdapt"
+#: A planar face Frontal-Delaunay meshed with a triangle under this many degrees is meshed by Delaunay
+#: too, and keeps the mesh with the larger smallest angle (see the module docstring).
+FAN_ANGLE = 10.0
 
 
 def face_quality(surface: int) -> tuple[float, float, int] | None:
@@ -84,7 +95,8 @@ def after_generate(ctx) -> None:
     import gmsh
 
     from .areas import unfolded_areas
-    from .remesh import mesh_again
+    from .floored import DELAUNAY
+    from .remesh import keep_better_angles, mesh_again
     from .strategies import STRATEGIES
 
     opts = ctx.job.options.get("fidelity")
@@ -97,6 +109,14 @@ def after_generate(ctx) -> None:
     counts = {**done.get("refined", {}), **done.get("coarsened", {})}  # face -> the count it was meshed at
     adapt = next(st for st in STRATEGIES if st.name == MESH_ADAPT)
     say = ctx.progress or (lambda line: None)
+    for s, outcome in list(ctx.outcomes.items()):  # planes Frontal-Delaunay fanned: Delaunay grades them
+        f = face_of.get(s, s)
+        if (outcome.ok and outcome.strategy == STRATEGIES[0].name and f not in ctx.job.no_refine
+                and opts["meshed_kinds"][f - 1] == "Plane" and (q := face_quality(s)) is not None
+                and q[0] < FAN_ANGLE and not (ctx.job.deadline is not None and time.time() > ctx.job.deadline)):
+            say(f"refine {f}")
+            keep_better_angles(s, DELAUNAY, opts["per_circle"], ctx.outcomes)
+            say(f"refined {f}")
     quality = {}
     for s, outcome in ctx.outcomes.items():
         f = face_of.get(s, s)

@@ -126,6 +126,33 @@ def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes:
     return other
 
 
+def keep_better_angles(s: int, name: str, per_circle: float, outcomes: dict) -> float:
+    """Mesh gmsh surface ``s`` again by the gmsh strategy ``name`` at ``per_circle`` and keep whichever
+    mesh has the larger smallest angle; returns that angle (``outcomes[s]`` names the strategy kept)."""
+    import gmsh
+
+    from .facemesh import triangle_min_angles
+    from .outcomes import FaceOutcome
+    from .strategies import STRATEGIES
+
+    strategy = next(st for st in STRATEGIES if st.name == name)
+    angles = triangle_min_angles(s)
+    best = float(angles.min()) if angles is not None else 0.0
+
+    def better() -> bool:
+        nonlocal best
+        now = triangle_min_angles(s)
+        if now is None or float(now.min()) <= best:
+            return False
+        best = float(now.min())
+        return True
+
+    if mesh_again(s, strategy, per_circle, better):
+        outcomes[s] = FaceOutcome(face=outcomes[s].face, surface=s, strategy=strategy.name,
+                                  triangles=len(gmsh.model.mesh.getElementsByType(2, s)[0]))
+    return best
+
+
 def remesh_group(surfaces: list[int], per_circle: float, face_of: dict[int, int]) -> dict:
     """Mesh gmsh ``surfaces`` (one group of :func:`job_groups`) again from scratch in one call at
     ``per_circle`` triangles per ``2 pi`` (see :func:`cadedge.mesh.interior.use_per_circle`); a face that
