@@ -7,7 +7,7 @@ import pytest
 
 MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments",
            "cadedge.mesh.shards",
-           "cadedge.mesh.coincident", "cadedge.mesh.quality"]
+           "cadedge.mesh.coincident", "cadedge.mesh.quality", "cadedge.mesh.gridded", "cadedge.mesh.torus_fit"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -305,12 +305,13 @@ def _filleted_disk(radius: float = 12.0, fillet: float = 0.2):
 def test_a_fillet_round_a_disk_is_fitted_for_a_torus_grid():
     """The boundary fit cuts a grid torus's parallels into as many columns each, evenly round the ring
     (no other face's rule splits them first) and at the same angles, and its tube arc into the rows the
-    target needs (:func:`cadedge.mesh.gridded.torus_rows`), the rows about as tall as the columns are
+    target needs (:func:`cadedge.mesh.torus_fit.torus_rows`), the rows about as tall as the columns are
     wide."""
     import cadedge
     from cadedge.mesh.fidelity import brep_face_areas, meshed_kinds
     from cadedge.mesh.boundary_fit import fit_boundaries
-    from cadedge.mesh.gridded import grid_faces, torus_rows
+    from cadedge.mesh.gridded import grid_faces
+    from cadedge.mesh.torus_fit import torus_rows
 
     grid = cadedge.refine_shape(_filleted_disk(), ald=1e-3)
     kinds, areas = meshed_kinds(grid.shape), brep_face_areas(grid.shape)
@@ -337,8 +338,9 @@ def test_a_fillet_round_a_disk_is_fitted_for_a_torus_grid():
 def test_a_fillet_round_a_disk_is_a_torus_grid():
     """The same disk meshed at 1e-3: the fillet is a grid of right triangles of about 45 degrees, its area
     deficit that of the rows' polygon on its tube arc (flat cells on a torus lose a little more, within
-    the share :func:`~cadedge.mesh.gridded.torus_rows` allows for it), 2 x columns x rows triangles; the planar top, bounded by the fine circle, is graded inwards (Delaunay
-    where Frontal-Delaunay fans), every face within the target."""
+    the share :func:`~cadedge.mesh.torus_fit.torus_rows` allows for it), 2 x columns x rows triangles;
+    the planar top, bounded by the fine circle, graded inwards; every face within the target, none
+    under 30 degrees."""
     from cadedge.mesh import mesh_shape
     from cadedge.mesh.gridded import NAME
 
@@ -347,8 +349,9 @@ def test_a_fillet_round_a_disk_is_a_torus_grid():
     assert all(abs(f.area_deficit) <= 1e-3 for f in result.report.faces)
     (torus,) = _face_by_kind(result, "Torus")
     assert next(o for o in result.faces if o.face == torus.face).strategy == NAME
-    arc = next(e for e in result.grid.edges if torus.face in e.faces and not np.allclose(e.points[0], e.points[-1]))
-    ring = next(e for e in result.grid.edges if torus.face in e.faces and np.allclose(e.points[0], e.points[-1]))
+    edges = [e for e in result.grid.edges if torus.face in e.faces]
+    arc = next(e for e in edges if not np.allclose(e.points[0], e.points[-1]))
+    ring = next(e for e in edges if np.allclose(e.points[0], e.points[-1]))
     rows, columns = len(arc.points) - 1, len(ring.points) - 1
     assert torus.triangles == 2 * rows * columns
     rows_deficit = _polygon_deficit(rows, np.pi / 2)  # flat cells inside a torus lose up to 2 r / rho more
