@@ -358,3 +358,24 @@ def test_a_fillet_round_a_disk_is_a_torus_grid():
     assert rows_deficit < torus.area_deficit <= rows_deficit * (1.0 + 2.0 * 0.2 / 11.8)
     assert torus.min_angle >= 42.0 and result.report.folded == 0
     assert min(f.min_angle for f in result.report.faces) >= 30.0
+
+
+def test_a_whole_torus_is_a_grid_round_both_its_seams():
+    """A torus R 12, r 0.2 alone (one face, its parallel and its tube circle each a seam) at 1e-3: a grid
+    whose rows are its tube circle's 41 segments (their polygon within the target: round the whole tube
+    the inner side's loss and the outer side's gain cancel), its parallel cut into as many columns as
+    wide; its area deficit the 41-gon's, its triangles about 45 degrees."""
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.gridded import NAME
+
+    result = mesh_shape(cq.Solid.makeTorus(12.0, 0.2), ald=1e-3)
+    assert result.ok, result.problems()
+    (torus,) = result.report.faces
+    assert next(o for o in result.faces if o.face == torus.face).strategy == NAME
+    tube, ring = sorted(result.grid.edges, key=lambda e: e.segment_lengths.sum())
+    rows, columns = len(tube.points) - 1, len(ring.points) - 1
+    assert rows == 41 and torus.triangles == 2 * rows * columns
+    assert torus.area_deficit == pytest.approx(_polygon_deficit(41), rel=0.01) and torus.area_deficit <= 1e-3
+    assert ring.segment_lengths.mean() == pytest.approx(tube.segment_lengths.mean(), rel=0.02)
+    assert torus.min_angle >= 42.0 and result.report.folded == 0

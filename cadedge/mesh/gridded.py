@@ -158,13 +158,15 @@ class GridFit:
 
     def rows(self, points: np.ndarray) -> np.ndarray:
         """How many equal parameter steps each segment of a grid torus's tube arc (its ``points``) is cut
-        into: rows no taller than :attr:`width`.
+        into: rows no taller than :attr:`width` (by more than :data:`cadedge.mesh.torus_fit.TALLER`).
 
         >>> GridFit(1.0, ()).rows(np.array([[0.0, 0, 0], [2.5, 0, 0], [3.0, 0, 0]])).tolist()
         [3, 1]
         """
+        from .torus_fit import TALLER
+
         length = np.linalg.norm(np.diff(points, axis=0), axis=1)
-        return np.maximum(np.ceil(length / self.width * (1.0 - 1e-9)), 1).astype(int)
+        return np.maximum(np.ceil(length / self.width / (1.0 + TALLER)), 1).astype(int)
 
     def ring_params(self, edge: int, params: np.ndarray) -> np.ndarray | None:
         """Grid torus parallel ``edge``'s parameters cut into the grid's columns (:attr:`cuts`), if they
@@ -358,14 +360,16 @@ def layout(surface: int) -> Layout | str:
     angle = 0 if torus else _angle(surface)
     circles = [c for c in uses if still[c][1 - angle] and not still[c][angle]]
     lines = [c for c in uses if still[c][angle] and not still[c][1 - angle]]
-    if len(circles) != 2 or len(circles) + len(lines) != len(uses) or sum(uses[c] for c in lines) != 2:
+    whole = torus and len(circles) == 1 and uses[circles[0]] == 2  # a whole torus: one parallel, both ends
+    if (len(circles) + whole != 2 or len(circles) + len(lines) != len(uses)
+            or sum(uses[c] for c in lines) != 2):
         return "not bounded by two circles and the lines between them"
     rings = [chains[c] for c in circles]
     sides = [chains[c] for c in lines]
     if len(lines) == 1:  # full circles and a seam
         seam = sides[0]
         bottom = next((r for r in rings if seam[0][0] in r[0]), None)
-        top = next((r for r in rings if r is not bottom), None)
+        top = bottom if whole else next((r for r in rings if r is not bottom), None)
         if bottom is None or seam[0][-1] not in top[0]:
             return "its seam does not join its circles"
         bottom, top = _roll(bottom, seam[0][0]), _roll(top, seam[0][-1])
@@ -394,6 +398,10 @@ def layout(surface: int) -> Layout | str:
         uv[k][:, angle] = np.unwrap(uv[k][:, angle])
     turn = 2.0 * np.pi
     uv[1][:, angle] += turn * np.round((uv[0][0, angle] - uv[1][0, angle]) / turn)
+    if whole:  # the seam round the tube from the parallel back to it: the top is the parallel a turn on
+        for k in (2, 3):
+            uv[k][:, 1 - angle] = np.unwrap(uv[k][:, 1 - angle])
+        uv[0][:, 1 - angle], uv[1][:, 1 - angle] = uv[2][0, 1 - angle], uv[2][-1, 1 - angle]
     steps = [np.diff(uv[k][:, angle]) for k in (0, 1)]
     if (not all(np.all(d > 0) for d in steps) and not all(np.all(d < 0) for d in steps)
             or not np.isclose(uv[0][-1, angle], uv[1][-1, angle])):
