@@ -114,8 +114,7 @@ def fit_grids(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[s
     (:func:`cadedge.mesh.gridded.grid_faces`) split into rows as tall as the grid's columns, the fewest
     for ``surface_ald``, are wide, graded from a finer circle at an end
     (:meth:`~cadedge.mesh.gridded.GridFit.line_params`), and the parallels and tube arc of such tori cut
-    into their columns and rows (:meth:`~cadedge.mesh.gridded.GridFit.ring_params`,
-    :meth:`~cadedge.mesh.gridded.GridFit.rows`); or by the curvature rule
+    into their columns and rows (:meth:`~cadedge.mesh.gridded.GridFit.cut`); or by the curvature rule
     where that grid would take more than :data:`~cadedge.mesh.gridded.MOST_TRIANGLES`. The faces' other
     edges first, the grids' held: their circles may be split further (for a planar ring beside them), and
     a line graded from a circle's coarser segments keeps those nodes (a thin tube's: 3x steps where 1.3x
@@ -212,9 +211,8 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
       :meth:`~cadedge.mesh.gridded.GridFit.line_params` cuts it after the other rules; or None where the
       grid would take too many triangles and the curvature rule holds); a grid torus's parallels and tube
       arc are not split at all until then (for no face: its equal columns, finer than any other rule asks
-      of its parallels, are what its neighbours get), then into its rows
-      (:meth:`~cadedge.mesh.gridded.GridFit.rows`, or finer where another rule asks) and columns, both
-      parallels at the same angles (:meth:`~cadedge.mesh.gridded.GridFit.ring_params`);
+      of its parallels, are what its neighbours get), then into its rows and columns, both parallels at
+      the same angles (:meth:`~cadedge.mesh.gridded.GridFit.cut`);
     - the face's boundary polygon loses too much area: the sliver between a segment and its curve,
       ``2/3 * chord * sagitta`` with the sagitta's component tangent to the face (a circle on a cylinder
       loses nothing to the cylinder, all to a planar cap), summed over the face's boundary, must stay
@@ -296,11 +294,9 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                                                       nan=1).astype(int))
         if torus is not None and not torus:  # uncut: the torus's columns, cut later, suit its neighbours too
             continue
-        cut = torus.ring_params(e.id, e.params) if torus else None  # a parallel: the grid's columns, finer
-        if cut is not None:  # than any other rule asks
+        cut = torus.cut(e.id, e.params) if torus else None  # the grid's columns or rows, finer than any
+        if cut is not None:  # other rule asks
             pieces[:] = 1
-        elif torus:  # the tube's arc: rows no taller than the grid's, or as the other rules ask
-            pieces = np.maximum(pieces, torus.rows(e.points))
         params, points = e.params, e.points
         if np.any(pieces > 1):
             params, points = split_segments(params, points, pieces, curve.evaluate, spacing="parameter")

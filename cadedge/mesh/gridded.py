@@ -26,9 +26,9 @@ A torus face round the whole ring between two of its parallels, joined by one ar
 fillet along a circular edge, an O-ring groove's round) is a grid the other way: the parallels are long
 and hardly curved along themselves, the tube's arc short and sharply curved. Its rows are cut on the
 arc, and both parallels into the same number of columns as wide as the rows are tall, at the same
-angles (:mod:`cadedge.mesh.torus_fit`): a 0.2 mm fillet round a 70 mm disk at 1e-3 takes 7 682 columns by 11 rows,
-169 004 triangles at 8.6e-4 and 44.7 degrees, where gmsh's curvature sizes took 322 000 at 3.9e-4 and
-27.5 degrees. The parallels carry the columns (no band: a torus does not unroll), so they must end with
+angles (:mod:`cadedge.mesh.torus_fit`): a 0.2 mm fillet round a 70 mm disk at 1e-3 takes 7 682 columns
+by 11 rows, 169 004 triangles at 8.6e-4 and 44.5 degrees, where gmsh's curvature sizes took 322 000 at
+3.9e-4 and 27.5 degrees. The parallels carry the columns (no band: a torus does not unroll), so they must end with
 as many nodes each.
 """
 
@@ -145,8 +145,9 @@ def band_reach(row: float, spacing: float) -> float:
 class GridFit:
     """What the boundary fit needs of a face meshed as a grid: the ``width`` of its columns, and each
     circle's end points (2, 3) with its segments' mean length (``ends``); on a torus ``width`` is the
-    rows' greatest height on its tube's arc, ``cuts`` each parallel's parameters cut into the grid's
-    columns ((edge id, parameters) each: :func:`cadedge.mesh.torus_fit.torus_fit`)."""
+    rows' greatest height on its tube's arc, ``cuts`` its parallels' parameters cut into the grid's
+    columns and its tube arc's into its rows ((edge id, parameters) each:
+    :func:`cadedge.mesh.torus_fit.torus_fit`)."""
 
     width: float
     ends: tuple[tuple[np.ndarray, float], ...]
@@ -156,25 +157,13 @@ class GridFit:
         """About how many triangles the grid of a face of B-rep ``area`` takes."""
         return 2.0 * area / self.width ** 2
 
-    def rows(self, points: np.ndarray) -> np.ndarray:
-        """How many equal parameter steps each segment of a grid torus's tube arc (its ``points``) is cut
-        into: rows no taller than :attr:`width` (by more than :data:`cadedge.mesh.torus_fit.TALLER`).
-
-        >>> GridFit(1.0, ()).rows(np.array([[0.0, 0, 0], [2.5, 0, 0], [3.0, 0, 0]])).tolist()
-        [3, 1]
-        """
-        from .torus_fit import TALLER
-
-        length = np.linalg.norm(np.diff(points, axis=0), axis=1)
-        return np.maximum(np.ceil(length / self.width / (1.0 + TALLER)), 1).astype(int)
-
-    def ring_params(self, edge: int, params: np.ndarray) -> np.ndarray | None:
-        """Grid torus parallel ``edge``'s parameters cut into the grid's columns (:attr:`cuts`), if they
-        keep its grid's ``params``; else None.
+    def cut(self, edge: int, params: np.ndarray) -> np.ndarray | None:
+        """Grid torus edge ``edge``'s parameters cut into the grid's columns or rows (:attr:`cuts`), if
+        they keep its grid's ``params``; else None.
 
         >>> fit = GridFit(1.0, (), ((3, np.array([0.0, 0.5, 1.0])),))
-        >>> fit.ring_params(3, np.array([0.0, 1.0])).tolist(), fit.ring_params(3, np.array([0.0, 0.7, 1.0]))
-        ([0.0, 0.5, 1.0], None)
+        >>> fit.cut(3, np.array([0.0, 1.0])).tolist(), fit.cut(3, np.array([0.0, 0.7, 1.0])), fit.cut(4, [0.0])
+        ([0.0, 0.5, 1.0], None, None)
         """
         cut = dict(self.cuts).get(edge)
         return cut if cut is not None and np.all(np.isin(params, cut)) else None

@@ -157,8 +157,12 @@ def torus_fit(edges: list, target: float) -> GridFit | None:
     if inner <= 0.0 or max(max(radius), inner + 2.0 * minor) > RING_SPREAD * inner:
         return None
     tall = float(arc.sum()) / torus_rows(target, turn, minor, inner if len(rings) == 2 else np.inf)
-    rows = int(GridFit(tall, ()).rows(seam.points).sum())  # as the boundary fit will cut them
-    columns = int(np.rint(2.0 * np.pi * float(np.mean(radius)) * rows / float(arc.sum())))
+    # each of the arc's segments in the fewest equal steps no taller than that (TALLER spared)
+    pieces = np.maximum(np.ceil(arc / tall / (1.0 + TALLER)), 1).astype(int)
+    steps = [seam.params[i] + (seam.params[i + 1] - seam.params[i]) * np.arange(k) / k for i, k in enumerate(pieces)]
+    rows = np.concatenate(steps + [seam.params[-1:]])
+    tall = float(arc.sum()) / (len(rows) - 1)
+    columns = int(np.rint(2.0 * np.pi * float(np.mean(radius)) / tall))
 
     def way(e) -> np.ndarray:  # which way round the axis the parallel runs from the seam
         p = e.points[[0, len(e.points) // 3, 2 * len(e.points) // 3]]
@@ -173,4 +177,4 @@ def torus_fit(edges: list, target: float) -> GridFit | None:
         cuts = _aligned(rings[0].params, rings[1].params, float(np.dot(way(rings[0]), way(rings[1]))) > 0)
         if cuts is None:
             return None
-    return GridFit(tall, (), tuple((e.id, c) for e, c in zip(rings, cuts)))
+    return GridFit(tall, (), tuple((e.id, c) for e, c in zip(rings, cuts)) + ((seam.id, rows),))
