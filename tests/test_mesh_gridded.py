@@ -379,3 +379,27 @@ def test_a_whole_torus_is_a_grid_round_both_its_seams():
     assert torus.area_deficit == pytest.approx(_polygon_deficit(41), rel=0.01) and torus.area_deficit <= 1e-3
     assert ring.segment_lengths.mean() == pytest.approx(tube.segment_lengths.mean(), rel=0.02)
     assert torus.min_angle >= 42.0 and result.report.folded == 0
+
+
+def test_a_fillet_along_an_arc_is_a_torus_grid():
+    """A half disk 48 mm across, its curved top edge filleted 0.2 mm, at 1e-3: the fillet is a torus face
+    between two arcs of parallels and two arcs of its tube (at the flat side), a grid whose tube arcs are
+    cut alike into the rows the target needs, within the target at about 45 degrees."""
+    cq = pytest.importorskip("cadquery")
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.gridded import NAME
+
+    half = cq.Workplane().moveTo(-24, 0).lineTo(24, 0).threePointArc((0, 24), (-24, 0)).close().extrude(3)
+    part = half.edges(cq.selectors.BoxSelector((-30, 0.5, 2), (30, 30, 4))).fillet(0.2).val()
+    result = mesh_shape(part, ald=1e-3)
+    assert result.ok, result.problems()
+    assert all(abs(f.area_deficit) <= 1e-3 for f in result.report.faces)
+    (torus,) = _face_by_kind(result, "Torus")
+    assert next(o for o in result.faces if o.face == torus.face).strategy == NAME
+    arcs = sorted((e for e in result.grid.edges if torus.face in e.faces), key=lambda e: e.segment_lengths.sum())
+    assert len(arcs) == 4
+    assert len(arcs[0].points) == len(arcs[1].points) and len(arcs[2].points) == len(arcs[3].points)
+    rows, columns = len(arcs[0].points) - 1, len(arcs[2].points) - 1
+    assert torus.triangles == 2 * rows * columns
+    assert _polygon_deficit(rows, np.pi / 2) < torus.area_deficit <= 1e-3
+    assert torus.min_angle >= 42.0 and result.report.folded == 0

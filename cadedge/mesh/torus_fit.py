@@ -124,28 +124,44 @@ def _aligned(a: np.ndarray, b: np.ndarray, same_way: bool) -> tuple[np.ndarray, 
     return ca, cb
 
 
+def _turn(e) -> float:
+    """The angle a circle edge turns through (its parameter is its angle)."""
+    return float(abs(e.params[-1] - e.params[0]))
+
+
 def _radius(e) -> float:
-    """The radius of a closed circle edge from its polygon (:func:`polygon_deficit` of equal chords)."""
-    return float(e.segment_lengths.sum()) / (2.0 * np.pi * (1.0 - float(polygon_deficit(len(e.segment_lengths)))))
+    """The radius of a circle edge from its polygon (:func:`polygon_deficit` of equal chords)."""
+    turn = _turn(e)
+    return float(e.segment_lengths.sum()) / (turn * (1.0 - float(polygon_deficit(len(e.segment_lengths), turn))))
 
 
 def torus_fit(edges: list, target: float) -> GridFit | None:
     """The :class:`GridFit` of a torus face bounded by two closed parallels and one arc of its tube (its
-    seam) between them, or of a whole torus (one parallel and one circle of its tube, each its seam), or
-    None: rows no taller than the arc's length over :func:`torus_rows`, the parallels cut evenly into
-    columns about as wide (no fewer than either has), or, cut already, aligned where another pass split
-    one further (:func:`_aligned`); only where the parallels' radii, and the ring's inside the face, are
-    within :data:`RING_SPREAD` of each other."""
-    if len(edges) not in (2, 3) or any(e.curve != "Circle" for e in edges):
+    seam) between them, of a torus along an arc (two arcs of parallels, two alike of its tube), or of a
+    whole torus (one parallel and one circle of its tube, each its seam), or None: rows no taller than
+    the arc's length over :func:`torus_rows` (a torus along an arc: its two tube arcs cut alike), the
+    parallels cut evenly into columns about as wide (no fewer than either has), or, cut already, aligned
+    where another pass split one further (:func:`_aligned`); only where the parallels' radii, and the
+    ring's inside the face, are within :data:`RING_SPREAD` of each other."""
+    if len(edges) not in (2, 3, 4) or any(e.curve != "Circle" for e in edges):
         return None
     closed = [bool(np.allclose(e.points[0], e.points[-1])) for e in edges]
+    ends = []  # a torus along an arc: its tube's two arcs at the ends, cut alike
     if len(edges) == 3 and sum(closed) == 2:
         seam = edges[closed.index(False)]
         rings = [e for e, c in zip(edges, closed) if c]
-        turn = float(abs(seam.params[-1] - seam.params[0]))
+        turn = _turn(seam)
     elif len(edges) == 2 and all(closed):  # a whole torus: the smaller circle is its tube's
         seam, ring = sorted(edges, key=_radius)
         rings, turn = [ring], 2.0 * np.pi
+    elif len(edges) == 4 and not any(closed):  # the two smaller arcs are its tube's, alike
+        by_radius = sorted(edges, key=_radius)
+        ends, rings = by_radius[:2], by_radius[2:]
+        if not np.isclose(_radius(ends[0]), _radius(ends[1]), rtol=1e-3) or not np.isclose(
+                _turn(ends[0]), _turn(ends[1]), rtol=1e-3):
+            return None
+        seam = max(ends, key=lambda e: len(e.params))
+        turn = _turn(seam)
     else:
         return None
     arc = seam.segment_lengths
@@ -161,8 +177,9 @@ def torus_fit(edges: list, target: float) -> GridFit | None:
     pieces = np.maximum(np.ceil(arc / tall / (1.0 + TALLER)), 1).astype(int)
     steps = [seam.params[i] + (seam.params[i + 1] - seam.params[i]) * np.arange(k) / k for i, k in enumerate(pieces)]
     rows = np.concatenate(steps + [seam.params[-1:]])
+    sides = [(seam.id, rows)] if not ends else [(e.id, _cut_evenly(e.params, len(rows) - 1)) for e in ends]
     tall = float(arc.sum()) / (len(rows) - 1)
-    columns = int(np.rint(2.0 * np.pi * float(np.mean(radius)) / tall))
+    columns = int(np.rint(_turn(rings[0]) * float(np.mean(radius)) / tall))
 
     def way(e) -> np.ndarray:  # which way round the axis the parallel runs from the seam
         p = e.points[[0, len(e.points) // 3, 2 * len(e.points) // 3]]
@@ -177,4 +194,4 @@ def torus_fit(edges: list, target: float) -> GridFit | None:
         cuts = _aligned(rings[0].params, rings[1].params, float(np.dot(way(rings[0]), way(rings[1]))) > 0)
         if cuts is None:
             return None
-    return GridFit(tall, (), tuple((e.id, c) for e, c in zip(rings, cuts)) + ((seam.id, rows),))
+    return GridFit(tall, (), tuple((e.id, c) for e, c in zip(rings, cuts)) + tuple(sides))
