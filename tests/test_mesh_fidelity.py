@@ -618,6 +618,6 @@ def test_a_plane_frontal_delaunay_fans_is_meshed_by_delaunay():
         fan = float(triangle_min_angles(disk).min())
         assert fan < 10.0
         outcomes = {disk: FaceOutcome(face=1, surface=disk, strategy="Frontal-Delaunay", triangles=1)}
-        best = keep_better_angles(disk, DELAUNAY, 10.0, outcomes)
+        best = keep_better_angles(disk, DELAUNAY, 10.0, outcomes, fan)
         assert best == pytest.approx(float(triangle_min_angles(disk).min())) and best >= 20.0
         assert outcomes[disk].strategy == DELAUNAY and outcomes[disk].triangles > 30_000

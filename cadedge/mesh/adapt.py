@@ -109,20 +109,20 @@ def after_generate(ctx) -> None:
     counts = {**done.get("refined", {}), **done.get("coarsened", {})}  # face -> the count it was meshed at
     adapt = next(st for st in STRATEGIES if st.name == MESH_ADAPT)
     say = ctx.progress or (lambda line: None)
-    for s, outcome in list(ctx.outcomes.items()):  # planes Frontal-Delaunay fanned: Delaunay grades them
+    first = STRATEGIES[0].name  # each face Frontal-Delaunay meshed, and how well
+    measured = {s: q for s, outcome in ctx.outcomes.items()
+                if outcome.ok and outcome.strategy == first and face_of.get(s, s) not in ctx.job.no_refine
+                and (q := face_quality(s)) is not None}
+    for s, q in measured.items():  # planes Frontal-Delaunay fanned: Delaunay grades them
         f = face_of.get(s, s)
-        if (outcome.ok and outcome.strategy == STRATEGIES[0].name and f not in ctx.job.no_refine
-                and opts["meshed_kinds"][f - 1] == "Plane" and (q := face_quality(s)) is not None
-                and q[0] < FAN_ANGLE and not (ctx.job.deadline is not None and time.time() > ctx.job.deadline)):
+        if (opts["meshed_kinds"][f - 1] == "Plane" and q[0] < FAN_ANGLE
+                and not (ctx.job.deadline is not None and time.time() > ctx.job.deadline)):
             say(f"refine {f}")
-            keep_better_angles(s, DELAUNAY, opts["per_circle"], ctx.outcomes)
+            keep_better_angles(s, DELAUNAY, opts["per_circle"], ctx.outcomes, q[0])
             say(f"refined {f}")
-    quality = {}
-    for s, outcome in ctx.outcomes.items():
-        f = face_of.get(s, s)
-        if (outcome.ok and outcome.strategy == STRATEGIES[0].name and f not in ctx.job.no_refine
-                and 1 <= f <= len(areas) and areas[f - 1] > 0 and (q := face_quality(s)) is not None and poor(q)):
-            quality[s] = q
+    quality = {s: q for s, q in measured.items()  # a face kept as Delaunay made it is not tried again
+               if ctx.outcomes[s].strategy == first and 1 <= (f := face_of.get(s, s)) <= len(areas)
+               and areas[f - 1] > 0 and poor(q)}
     cpu = time.process_time()
     cpu_end = cpu + max(MIN_BUDGET * ctx.job.share, BUDGET_SHARE * (cpu - ctx.cpu_started))
     for s in sorted(quality, key=lambda s: (-quality[s][1], s)):  # the poorest first

@@ -228,7 +228,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     from ..occt.edgecurve import EdgeCurve
     from ..occt.topology import Topology
     from ..shapegrid import with_edges
-    from ..splitting import fits_curve, split_segments
+    from ..splitting import fits_curve, insert_points, split_segments
     from .budget import filling_size
     from .gridded import grid_faces
 
@@ -300,18 +300,11 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
         params, points = e.params, e.points
         if np.any(pieces > 1):
             params, points = split_segments(params, points, pieces, curve.evaluate, spacing="parameter")
-        if cut is not None:
-            kept = np.isin(cut, params)
-            new_points = np.empty((len(cut), 3))
-            new_points[kept], new_points[~kept] = points, curve.evaluate(cut[~kept])
-            params, points = cut, new_points
         if rows is not None:  # as tall as the grid's columns are wide, graded from a finer circle
-            graded = rows.line_params(params, points)
-            if len(graded) > len(params):
-                kept = np.isin(graded, params)
-                new_points = np.empty((len(graded), 3))
-                new_points[kept], new_points[~kept] = points, curve.evaluate(graded[~kept])
-                params, points = graded, new_points
+            cut = rows.line_params(params, points)
+        if cut is not None:  # a grid's parameters: the edge's all kept, the others new points on it
+            if len(new := cut[~np.isin(cut, params)]):
+                params, points = insert_points(params, points, new, curve.evaluate(new))
         if len(params) > len(e.params):
             edges[i] = dataclasses.replace(e, params=params, points=points)
     return with_edges(grid, edges), gross

@@ -28,8 +28,8 @@ and hardly curved along themselves, the tube's arc short and sharply curved. Its
 arc, and both parallels into the same number of columns as wide as the rows are tall, at the same
 angles (:mod:`cadedge.mesh.torus_fit`): a 0.2 mm fillet round a 70 mm disk at 1e-3 takes 7 682 columns
 by 11 rows, 169 004 triangles at 8.6e-4 and 44.5 degrees, where gmsh's curvature sizes took 322 000 at
-3.9e-4 and 27.5 degrees. The parallels carry the columns (no band: a torus does not unroll), so they must end with
-as many nodes each.
+3.9e-4 and 27.5 degrees. The parallels carry the columns (no band: a torus does not unroll), so they
+must end with as many nodes each.
 """
 
 from __future__ import annotations

@@ -126,9 +126,10 @@ def keep_closer(s: int, name: str, per_circle: float, measured: float, outcomes:
     return other
 
 
-def keep_better_angles(s: int, name: str, per_circle: float, outcomes: dict) -> float:
-    """Mesh gmsh surface ``s`` again by the gmsh strategy ``name`` at ``per_circle`` and keep whichever
-    mesh has the larger smallest angle; returns that angle (``outcomes[s]`` names the strategy kept)."""
+def keep_better_angles(s: int, name: str, per_circle: float, outcomes: dict, smallest: float) -> float:
+    """Mesh gmsh surface ``s`` (its smallest angle ``smallest`` degrees now) again by the gmsh strategy
+    ``name`` at ``per_circle`` and keep whichever mesh has the larger smallest angle; returns that angle
+    (``outcomes[s]`` names the strategy kept)."""
     import gmsh
 
     from .facemesh import triangle_min_angles
@@ -136,8 +137,7 @@ def keep_better_angles(s: int, name: str, per_circle: float, outcomes: dict) -> 
     from .strategies import STRATEGIES
 
     strategy = next(st for st in STRATEGIES if st.name == name)
-    angles = triangle_min_angles(s)
-    best = float(angles.min()) if angles is not None else 0.0
+    best = smallest
 
     def better() -> bool:
         nonlocal best

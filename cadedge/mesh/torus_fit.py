@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..splitting import split_evenly
 from .gridded import GridFit, polygon_count, polygon_deficit
 
 #: A torus face's rows (the polygon on its tube's arc, raised for the inner side of the torus: flat cells
@@ -82,8 +83,7 @@ def _cut_evenly(params: np.ndarray, columns: int) -> np.ndarray:
     """
     span = np.diff(params)
     pieces = _pieces(columns * span / span.sum(), columns)
-    steps = [params[i] + span[i] * np.arange(k) / k for i, k in enumerate(pieces)]
-    return np.concatenate(steps + [params[-1:]])
+    return np.sort(np.concatenate([params, split_evenly(params, pieces)]))
 
 
 def _aligned(a: np.ndarray, b: np.ndarray, same_way: bool) -> tuple[np.ndarray, np.ndarray] | None:
@@ -175,8 +175,7 @@ def torus_fit(edges: list, target: float) -> GridFit | None:
     tall = float(arc.sum()) / torus_rows(target, turn, minor, inner if len(rings) == 2 else np.inf)
     # each of the arc's segments in the fewest equal steps no taller than that (TALLER spared)
     pieces = np.maximum(np.ceil(arc / tall / (1.0 + TALLER)), 1).astype(int)
-    steps = [seam.params[i] + (seam.params[i + 1] - seam.params[i]) * np.arange(k) / k for i, k in enumerate(pieces)]
-    rows = np.concatenate(steps + [seam.params[-1:]])
+    rows = np.sort(np.concatenate([seam.params, split_evenly(seam.params, pieces)]))
     sides = [(seam.id, rows)] if not ends else [(e.id, _cut_evenly(e.params, len(rows) - 1)) for e in ends]
     tall = float(arc.sum()) / (len(rows) - 1)
     columns = int(np.rint(_turn(rings[0]) * float(np.mean(radius)) / tall))
