@@ -55,7 +55,7 @@ def test_a_straight_bspline_edge_is_split_like_a_line():
     seams = []
     for shape in (line, nurbs):
         grid = cadedge.refine_shape(shape, ald=1e-2)
-        fitted = fit_boundaries(grid, 1e-2)
+        fitted, _ = fit_boundaries(grid, 1e-2)
         pair = [(a, b) for a, b in zip(grid.edges, fitted.edges)
                 if not a.degenerate and np.ptp(a.points[:, :2], axis=0).max() < 1e-9]
         assert len(pair) == 1 and pair[0][0].segments == 1  # the ALD leaves a straight edge one segment
@@ -80,7 +80,7 @@ def test_boundary_splits_stop_at_the_size_that_fills_the_face():
     ellipse = BRepBuilderAPI_MakeEdge(gp_Elips(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 0.05)).Edge()
     cap = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(ellipse).Wire()).Face()
     grid = cadedge.refine_shape(BRepPrimAPI_MakePrism(cap, gp_Vec(0, 0, 5.0)).Shape(), ald=1e-2)
-    fitted = fit_boundaries(grid, 1e-2)
+    fitted, _ = fit_boundaries(grid, 1e-2)
     (seam,) = [e for e in fitted.edges if e.curve == "Line"]
     floor = filling_size(brep_face_areas(grid.shape)[seam.faces[0] - 1])
     assert seam.segments == int(5.0 // floor)  # split, but only down to the floor

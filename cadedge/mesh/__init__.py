@@ -208,9 +208,9 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
         grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
         grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
-                          kinds=fidelity["meshed_kinds"])  # faces' boundary polygons: checked again
-        grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # and the circles of
-                         kinds=fidelity["meshed_kinds"])  # cylinders meshed as grids: their rows again
+                          kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # faces'
+        grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # polygons: checked again, and
+                         kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # the grids' rows
         max_size = cap
     fidelity["grid_faces"] = grid_face_ids(grid, fidelity["meshed_kinds"], surface_ald,  # the boundary's
                                            fidelity["brep_areas"])  # last word: which faces are grids

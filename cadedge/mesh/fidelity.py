@@ -78,8 +78,9 @@ def prepare(grid, surface_ald: float) -> tuple[object, dict]:
     areas = brep_face_areas(grid.shape)
     kinds = surface_types(grid.shape)
     meshed_as = meshed_kinds(grid.shape, kinds)
-    fitted = fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=meshed_as)
+    fitted, credits = fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=meshed_as)
     opts = settings(surface_ald, areas, meshed_as)
+    opts["curved_credits"] = credits  # the later boundary fits keep the curved faces' cancellation
     opts["surface_types"] = kinds  # the report names OCCT's types
     opts["meshed_kinds"] = meshed_as
     return fitted, opts
