@@ -29,11 +29,12 @@ STRAIGHT_RATIO = 1.0
 STRAIGHT_TOL = 1e-6
 
 
-def _face_probe(face):
+def _face_probe(face, *, sided: bool = True):
     """A callable (edge, u, spans) -> (normals (n, 3), largest |curvature| (n,), inward (n, 3) or None) at
     parameters ``u`` of one edge on ``face`` (the middles of segments ``spans`` long in parameter):
     ``inward`` the unit vectors tangent to the face, across the edge, into it (zero on a seam, where the
-    face lies on both sides; None where the side could not be told)."""
+    face lies on both sides; None where the side could not be told, or not ``sided``: a plane's polygon
+    is measured exactly, and telling the side of each of a plate's 1 800 hole edges took 1.7 s)."""
     from OCP.BRep import BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Curve2d, BRepAdaptor_Surface
     from OCP.BRepLProp import BRepLProp_SLProps
@@ -58,6 +59,8 @@ def _face_probe(face):
                 normals[k] = props.Normal().Coord()
             if props.IsCurvatureDefined():
                 curv[k] = max(abs(props.MaxCurvature()), abs(props.MinCurvature()))
+        if not sided:
+            return normals, curv, None
         if BRep_Tool.IsClosed_s(edge, face):
             return normals, curv, np.zeros((n, 3))
         if not classifier:
@@ -344,7 +347,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
             sagitta = _sagittas(e.params, e.points, curve.evaluate)
             for f in e.faces:  # one probe per face (its adaptor bounds the face's pcurves: costly on many holes)
                 if f not in probes:
-                    probes[f] = _face_probe(topo.faces[f - 1])
+                    probes[f] = _face_probe(topo.faces[f - 1], sided=kinds[f - 1] != "Plane")
             probed = [(f, *probes[f](curve.edge, mid_u, np.diff(e.params))) for f in e.faces]
         except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
             continue
