@@ -10,6 +10,8 @@ kept and nodes only added, so faces sharing an edge still share its nodes.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field, replace
+
 import numpy as np
 
 from .fidelity import AIM, INTERIOR_SHARE, brep_face_areas, meshed_kinds, per_circle
@@ -146,8 +148,11 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
     def net(g) -> dict[int, float]:
         return _plane_deficits(g, planes, areas)
 
+    measured = _Measured()  # every fit below is of ``grid``: its edges are probed once
+
     def fit(g, credit: dict[int, float]):
-        return _fit_boundaries(g, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=credit)
+        return _fit_boundaries(g, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=credit,
+                               measured=measured)
 
     fitted, gross, signed = fit(grid, {})
     curved = _curved_credits(gross, signed, kinds, (1.0 - INTERIOR_SHARE) * surface_ald * areas)
@@ -263,9 +268,20 @@ def fit_planes(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[
     return grid
 
 
+@dataclass
+class _Measured:
+    """What :func:`_fit_boundaries` measures of one grid, kept for its next fit of the same grid: the
+    shape's topology, each face's probe and, per edge index, its curve, its segments' sagittas and the
+    probes of its faces (None where the edge is left alone)."""
+
+    topo: object = None
+    probes: dict[int, object] = field(default_factory=dict)
+    edges: dict[int, tuple | None] = field(default_factory=dict)
+
+
 def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[str], ratio: float,
                     credit: dict[int, float], only: set[int] | None = None,
-                    grids: dict[int, object] | None = None):
+                    grids: dict[int, object] | None = None, measured: _Measured | None = None):
     """A copy of ``grid`` whose edge segments suit the surface target of every face they bound (``only``:
     the edges of those faces only), and the summed unsigned sliver estimate of each face's boundary before
     the splits (index ``id - 1``; of the edges looked at), and the same with signs: positive where a
@@ -300,9 +316,10 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
       within ``(1 - INTERIOR_SHARE) * surface_ald`` of its B-rep area (``AIM * surface_ald`` on a plane).
       Splitting a segment in ``k`` divides its sliver by ``k**2``; each segment gets a share of the
       budget by its length.
-    """
-    import dataclasses
 
+    ``measured``: what an earlier call measured of the same ``grid`` (filled here), so that fitting it
+    again with other credits does not probe its edges again.
+    """
     from OCP.Standard import Standard_Failure
 
     from ..errors import GeometryError
@@ -313,7 +330,10 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     from .budget import filling_size
     from .gridded import grid_faces
 
-    topo = Topology(grid.shape)
+    measured = measured or _Measured()
+    if measured.topo is None:
+        measured.topo = Topology(grid.shape)
+    topo, probes = measured.topo, measured.probes
     if grids is None:  # 0: not fitted yet (fit_grids passes the faces it found, None: not a grid)
         grids = dict.fromkeys(grid_faces(grid, kinds, surface_ald, brep_areas), 0)
     grids = {f: g for f, g in grids.items() if g is not None}
@@ -332,25 +352,30 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 perimeter[f - 1] += e.segment_lengths.sum()
     with np.errstate(divide="ignore", invalid="ignore"):
         width = np.where(perimeter > 0, 2.0 * areas / perimeter, np.inf)  # a strip's width, exactly
-    probes: dict[int, object] = {}
     edges = list(grid.edges)
     for i, e in enumerate(edges):
         if e.degenerate or len(e.points) < 2 or not e.faces or not np.all(np.diff(e.params) > 0):
             continue
         if only is not None and not set(e.faces) & only:
             continue
-        try:
-            curve = EdgeCurve(topo.edges[e.id - 1], e.id)
-            if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
-                continue  # the grid's parameters are not this curve's: leave the edge alone
-            mid_u = 0.5 * (e.params[:-1] + e.params[1:])
-            sagitta = _sagittas(e.params, e.points, curve.evaluate)
-            for f in e.faces:  # one probe per face (its adaptor bounds the face's pcurves: costly on many holes)
-                if f not in probes:
-                    probes[f] = _face_probe(topo.faces[f - 1], sided=kinds[f - 1] != "Plane")
-            probed = [(f, *probes[f](curve.edge, mid_u, np.diff(e.params))) for f in e.faces]
-        except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
+        if i not in measured.edges:
+            measured.edges[i] = None
+            try:
+                curve = EdgeCurve(topo.edges[e.id - 1], e.id)
+                if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
+                    continue  # the grid's parameters are not this curve's: leave the edge alone
+                mid_u = 0.5 * (e.params[:-1] + e.params[1:])
+                sagitta = _sagittas(e.params, e.points, curve.evaluate)
+                for f in e.faces:  # one probe per face (its adaptor bounds the face's pcurves: costly on many holes)
+                    if f not in probes:
+                        probes[f] = _face_probe(topo.faces[f - 1], sided=kinds[f - 1] != "Plane")
+                measured.edges[i] = curve, sagitta, [(f, *probes[f](curve.edge, mid_u, np.diff(e.params)))
+                                                     for f in e.faces]
+            except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
+                continue
+        if measured.edges[i] is None:
             continue
+        curve, sagitta, probed = measured.edges[i]
         chord = e.segment_lengths
         straight = e.curve == "Line" or bool(np.all(np.linalg.norm(sagitta, axis=1) <= STRAIGHT_TOL * chord))
         edge_ratio = min(ratio, STRAIGHT_RATIO) if straight else ratio
@@ -389,7 +414,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
             if len(new := cut[~np.isin(cut, params)]):
                 params, points = insert_points(params, points, new, curve.evaluate(new))
         if len(params) > len(e.params):
-            edges[i] = dataclasses.replace(e, params=params, points=points)
+            edges[i] = replace(e, params=params, points=points)
     return with_edges(grid, edges), gross, net
 
 
