@@ -44,7 +44,7 @@ def _face_probe(face, *, sided: bool = True):
 
     surface = BRepAdaptor_Surface(face)
     props = BRepLProp_SLProps(surface, 2, 1e-9)
-    classifier = []  # the face's 2-D classifier, built on first use
+    forward = []  # the face as its wires bound it, for the classifier (on first use)
 
     def probe(edge, u: np.ndarray, spans: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         pcurve = BRepAdaptor_Curve2d(edge, face)
@@ -65,14 +65,13 @@ def _face_probe(face, *, sided: bool = True):
             return normals, curv, None
         if BRep_Tool.IsClosed_s(edge, face):
             return normals, curv, np.zeros((n, 3))
-        if not classifier:
-            from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
+        if not forward:
             from OCP.TopAbs import TopAbs_FORWARD
 
             from ..occt.compat import TopoDS
 
-            classifier.append(BRepTopAdaptor_FClass2d(TopoDS.Face_s(face.Oriented(TopAbs_FORWARD)), 1e-9))
-        side = _left_side(classifier[0], uv, tangent, spans)
+            forward.append(TopoDS.Face_s(face.Oriented(TopAbs_FORWARD)))
+        side = _left_side(forward[0], uv, tangent, spans)
         if side is None:
             return normals, curv, None
         across = side * (tangent[:, :1] * sv - tangent[:, 1:] * su)  # the (u, v) left normal, on the surface
@@ -86,12 +85,20 @@ def _face_probe(face, *, sided: bool = True):
 SIDE_STEPS = (0.05, 0.25)
 
 
-def _left_side(classifier, uv: np.ndarray, tangent: np.ndarray, spans: np.ndarray) -> int | None:
-    """+1 where the face lies left of the pcurve (in (u, v), looking along its parameter), -1 right,
-    None where a point on each side does not tell (both in, both out, on the boundary): probed beside
-    the middle sample, a step of :data:`SIDE_STEPS` of its segment's (u, v) length off the pcurve."""
+def _left_side(face, uv: np.ndarray, tangent: np.ndarray, spans: np.ndarray) -> int | None:
+    """+1 where ``face`` (FORWARD) lies left of the pcurve (in (u, v), looking along its parameter), -1
+    right, None where a point on each side does not tell (both in, both out, on the boundary): probed
+    beside the middle sample, a step of :data:`SIDE_STEPS` of its segment's (u, v) length off the pcurve
+    (``BRepClass_FaceClassifier``: OCP 8.0 does not bind ``BRepTopAdaptor_FClass2d``)."""
+    from OCP.BRepClass import BRepClass_FaceClassifier
     from OCP.TopAbs import TopAbs_IN, TopAbs_OUT
     from OCP.gp import gp_Pnt2d
+
+    classifier = BRepClass_FaceClassifier()
+
+    def state(point: np.ndarray):
+        classifier.Perform(face, gp_Pnt2d(*point), 1e-9)
+        return classifier.State()
 
     k = len(spans) // 2
     length = np.linalg.norm(tangent[k]) * spans[k]
@@ -99,8 +106,7 @@ def _left_side(classifier, uv: np.ndarray, tangent: np.ndarray, spans: np.ndarra
         return None
     left = np.array([-tangent[k, 1], tangent[k, 0]]) / np.linalg.norm(tangent[k])
     for step in SIDE_STEPS:
-        states = [classifier.Perform(gp_Pnt2d(*(uv[k] + sign * step * length * left)), True)
-                  for sign in (1.0, -1.0)]
+        states = [state(uv[k] + sign * step * length * left) for sign in (1.0, -1.0)]
         if states == [TopAbs_IN, TopAbs_OUT]:
             return 1
         if states == [TopAbs_OUT, TopAbs_IN]:
