@@ -20,7 +20,8 @@ bottle, a cut torus, an ellipsoid, a filleted cone on a cylinder, a mug, a fille
 1e-3 and 1e3 and moved far from the origin. A sixth: two tees whose run cylinder has its seam through
 the point where the branch touches it (a tangential inlet, an equal pipe tee): two vertices of the run's
 face at one point; and a sphere and a revolved spline cut to 270 degrees (a face spanning more than half a
-turn between two poles).
+turn between two poles). A seventh: a flat coil (a rectangle swept along a helix), whose helicoidal bands'
+boundary slivers cancel.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -42,6 +43,15 @@ def spring() -> object:
     """A circle swept along a helix (4 turns): helical B-spline faces with a seam along the sweep."""
     path = cq.Wire.makeHelix(pitch=2.0, height=8.0, radius=3.0)
     return cq.Workplane("XZ").center(3.0, 0.0).circle(0.5).sweep(cq.Workplane().add(path), isFrenet=True).val().wrapped
+
+
+def flat_coil(turns: int = 4) -> object:
+    """A 3 x 2 mm rectangle swept ``turns`` turns along a helix of radius 15 and pitch 6: two helicoidal
+    bands 3 mm wide, whose outer helix's chords cut them short and inner one's add to them (their slivers
+    cancel), and two helical bands 2 mm wide."""
+    path = cq.Wire.makeHelix(pitch=6.0, height=6.0 * turns, radius=15.0)
+    section = cq.Workplane("XZ").center(15.0, 0.0).rect(3.0, 2.0)
+    return section.sweep(cq.Workplane().add(path), isFrenet=True).val().wrapped
 
 
 def revolved_spline() -> object:
@@ -582,7 +592,7 @@ def write_pmi_step(path: Path) -> None:
 
 
 MODELS: dict[str, Callable[[], object]] = {
-    "spring": spring, "revolved_spline": revolved_spline, "lofted_spline": lofted_spline,
+    "spring": spring, "flat_coil": flat_coil, "revolved_spline": revolved_spline, "lofted_spline": lofted_spline,
     "twisted_blade": twisted_blade, "hooked_wing": hooked_wing, "razor_wing": razor_wing,
     "thin_plate": thin_plate, "sliver_faces": sliver_faces,
     "tiny_edges": tiny_edges, "hole_through_fillet": hole_through_fillet, "bspline_cage": bspline_cage,

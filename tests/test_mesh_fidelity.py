@@ -328,21 +328,16 @@ def test_the_signed_sliver_estimate_matches_a_planar_rings_exact_polygon():
         assert gross[f - 1] > 4 * signed[f - 1]
 
 
-def _flat_coil():
-    """A 3 x 2 mm rectangle swept two turns along a helix of radius 15 and pitch 6: two helicoidal bands
-    3 mm wide between helices of radius 13.5 and 16.5, and two helical bands 2 mm wide."""
-    helix = cq.Wire.makeHelix(pitch=6.0, height=12.0, radius=15.0)
-    return cq.Workplane("XZ").center(15.0, 0.0).rect(3.0, 2.0).sweep(cq.Workplane().add(helix), isFrenet=True).val()
-
-
 def test_a_helical_bands_edges_are_split_for_its_net_deficit():
-    """A flat coil's helicoidal band loses along its outer helix much of what it gains along its inner one.
-    Split for the sum of their slivers, its helices took 182-208 segments at 1e-2 and the coil 5 096
-    triangles, its bands at 2.6% of the target; credited with the cancellation its signed slivers
-    measure (5x), 78-104, and every face still within the target."""
+    """A flat coil's helicoidal band (``flat_coil`` of ``scripts/hard_models.py``, two turns) loses along its
+    outer helix much of what it gains along its inner one. Split for the sum of their slivers, its helices
+    took 182-208 segments at 1e-2 and the coil 5 096 triangles, its bands at 2.6% of the target;
+    credited with the cancellation its signed slivers measure (5x), 78-104, and every face still within
+    the target."""
     import cadedge
 
-    grid = cadedge.refine_shape(_flat_coil(), ald=1e-2)
+    coil = _hard_models().flat_coil(turns=2)
+    grid = cadedge.refine_shape(coil, ald=1e-2)
     areas, kinds = brep_face_areas(grid.shape), meshed_kinds(grid.shape)
     unsigned = _fit_boundaries(grid, 1e-2, brep_areas=areas, kinds=kinds, ratio=2.0, credit={})[0]
     fitted, credits = fit_boundaries(grid, 1e-2)
@@ -350,7 +345,7 @@ def test_a_helical_bands_edges_are_split_for_its_net_deficit():
     helices = [i for i, e in enumerate(grid.edges) if e.length > 100]
     assert len(helices) == 4
     assert sum(fitted.edges[i].segments for i in helices) < 0.5 * sum(unsigned.edges[i].segments for i in helices)
-    result = mesh_shape(_flat_coil(), ald=1e-2)
+    result = mesh_shape(coil, ald=1e-2)
     assert result.ok, result.problems()
     assert np.all(np.abs(_independent_deficits(result)) <= 1e-2)
     assert result.report.below_20 == 0.0
@@ -529,8 +524,8 @@ def test_a_blade_with_a_sharp_edge_is_meshed_within_the_target(tmp_path):
     assert result.report.min_angle >= 20.0
 
 
-def _hard_model(name: str, folder):
-    """``scripts/hard_models.py``'s model ``name`` written as STEP into ``folder``; its path."""
+def _hard_models():
+    """The module ``scripts/hard_models.py``."""
     import sys
 
     from conftest import ROOT
@@ -540,7 +535,12 @@ def _hard_model(name: str, folder):
         import hard_models
     finally:
         sys.path.remove(str(ROOT / "scripts"))
-    hard_models.write_model(name, folder)
+    return hard_models
+
+
+def _hard_model(name: str, folder):
+    """``scripts/hard_models.py``'s model ``name`` written as STEP into ``folder``; its path."""
+    _hard_models().write_model(name, folder)
     return folder / f"{name}.step"
 
 
