@@ -40,11 +40,14 @@ def _face_probe(face, *, sided: bool = True):
     from OCP.BRep import BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Curve2d, BRepAdaptor_Surface
     from OCP.BRepLProp import BRepLProp_SLProps
+    from OCP.TopAbs import TopAbs_FORWARD
     from OCP.gp import gp_Pnt2d, gp_Vec2d
+
+    from ..occt.compat import TopoDS
 
     surface = BRepAdaptor_Surface(face)
     props = BRepLProp_SLProps(surface, 2, 1e-9)
-    forward = []  # the face as its wires bound it, for the classifier (on first use)
+    forward = TopoDS.Face_s(face.Oriented(TopAbs_FORWARD))  # the face as its wires bound it
 
     def probe(edge, u: np.ndarray, spans: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         pcurve = BRepAdaptor_Curve2d(edge, face)
@@ -55,8 +58,9 @@ def _face_probe(face, *, sided: bool = True):
         for k, uk in enumerate(u.tolist()):
             pcurve.D1(uk, p, d)
             props.SetParameters(p.X(), p.Y())
-            uv[k], tangent[k] = p.Coord(), d.Coord()
-            su[k], sv[k] = props.D1U().Coord(), props.D1V().Coord()
+            if sided:
+                uv[k], tangent[k] = p.Coord(), d.Coord()
+                su[k], sv[k] = props.D1U().Coord(), props.D1V().Coord()
             if props.IsNormalDefined():
                 normals[k] = props.Normal().Coord()
             if props.IsCurvatureDefined():
@@ -65,13 +69,7 @@ def _face_probe(face, *, sided: bool = True):
             return normals, curv, None
         if BRep_Tool.IsClosed_s(edge, face):
             return normals, curv, np.zeros((n, 3))
-        if not forward:
-            from OCP.TopAbs import TopAbs_FORWARD
-
-            from ..occt.compat import TopoDS
-
-            forward.append(TopoDS.Face_s(face.Oriented(TopAbs_FORWARD)))
-        side = _left_side(forward[0], uv, tangent, spans)
+        side = _left_side(forward, uv, tangent, spans)
         if side is None:
             return normals, curv, None
         across = side * (tangent[:, :1] * sv - tangent[:, 1:] * su)  # the (u, v) left normal, on the surface
