@@ -158,6 +158,20 @@ def test_bad_brep_files_say_which_problem(tmp_path, capfd):
     assert out == "" and err == ""  # OCCT never got to print its own complaints
 
 
+def test_a_brep_saved_by_occts_draw_is_read_whole(tmp_path):
+    """Draw's ``save`` heads the shape with its drawable's type (as BRepTools::Write now does too)
+    and ends it with a "0" line (OCCT's own sample files are written so); OCCT reads them, so the
+    check must not refuse them."""
+    good = write_brep(FIXTURES / "bracket.step", tmp_path / "good.brep").read_bytes()
+    good = good if good.startswith(b"DBRep_DrawableShape") else b"DBRep_DrawableShape\n\n" + good
+    drawn = tmp_path / "drawn.brep"
+    drawn.write_bytes(good.rstrip() + b"\n0\n\n")
+    assert _signature(cadedge.refine_shape(drawn, ald=1e-2)) == _signature(cadedge.refine_shape(
+        tmp_path / "good.brep", ald=1e-2))
+    drawn.write_bytes(good[: int(len(good) * 0.8)] + b"\n0\n\n")
+    assert "truncated BREP file" in _error(drawn)
+
+
 def test_an_iges_face_pointing_at_nothing_is_a_partial_transfer(tmp_path):
     lines = write_iges(FIXTURES / "bracket.step", tmp_path / "good.igs").read_bytes().split(b"\n")
     i = next(k for k, line in enumerate(lines) if line.startswith(b"510,"))  # the first face entity

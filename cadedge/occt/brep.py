@@ -2,7 +2,7 @@
 
 OCCT's BREP reader reports a damaged file only on standard output and hands back what it could, so
 the file is checked before it is read: the "CASCADE Topology" header, the ``TShapes N`` table with N
-shape records, and the closing root reference. After the read, the distinct faces and solids of the
+shape records, and the closing root reference (in files saved by OCCT's Draw, followed by its "0" line). After the read, the distinct faces and solids of the
 shape are counted against the file's face (``Fa``) and solid (``So``) records. BREP files carry no
 length unit; their lengths are taken as millimetres, like in-memory shapes.
 """
@@ -23,7 +23,9 @@ from .loading import Completeness, LoadedShape, accept, sniff_path, transferred
 _HEADER = re.compile(rb"^\s*(DBRep_DrawableShape\s+)?CASCADE Topology V\d")
 _TSHAPES = re.compile(rb"^TShapes (\d+)\s*$", re.MULTILINE)
 _RECORD = re.compile(rb"^(Ve|Ed|Wi|Fa|Sh|So|CS|Co)\s*$", re.MULTILINE)
-_ROOT = re.compile(rb"[+\-]\d+ \d+\s*$")
+# The root reference ends the file; a shape saved by OCCT's Draw (``save``, the DBRep_DrawableShape
+# header) is followed by one more line, "0", that the reader does not need.
+_ROOT = re.compile(rb"[+\-]\d+ \d+\s*(?:\n0\s*)?$")
 
 
 def sniff(path: Path, given: str) -> tuple[int, int]:
