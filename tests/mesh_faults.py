@@ -134,3 +134,13 @@ def remesh_split(ctx) -> None:
     gmsh.model.mesh.clear([(2, s)])
     ctx.outcomes.update(mesh_faces([s], ctx.emap.face_of_surface,
                                    skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}}))
+
+
+def break_the_writer(ctx) -> None:
+    """gmsh's writer fails as it does on a shape it could not import whole: a bare Exception, no reason."""
+    import gmsh
+
+    def fail(path: str) -> None:
+        raise Exception("")
+
+    gmsh.write = fail

@@ -36,3 +36,34 @@ def test_an_iges_face_whose_seam_is_two_edges_is_not_a_crack(tmp_path):
     assert result.ok, result.problems(verbose=True)
     assert set(np.unique(result.triangle_faces)) == set(range(1, result.grid.faces + 1))
     assert result.check.duplicate_nodes == 0
+
+
+def test_an_empty_solid_does_not_cost_the_mesh(tmp_path):
+    """A compound holding a solid with no shell (as OCCT's own sample Axis_of_bearing.brep does) stopped
+    gmsh's import and then its ``.msh`` writer, giving no reason: every face was meshed, all were
+    reported failed and nothing was written. The empty solid is left out of the shape gmsh meshes."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepTools import BRepTools
+    from OCP.TopoDS import TopoDS_Compound, TopoDS_Solid
+
+    from cadedge.occt.empty import without_empty
+    from cadedge.occt.topology import indexed
+    from OCP.TopAbs import TopAbs_FACE
+
+    builder, compound, empty = BRep_Builder(), TopoDS_Compound(), TopoDS_Solid()
+    builder.MakeCompound(compound)
+    builder.MakeSolid(empty)
+    builder.Add(compound, cq.Workplane().box(2, 1, 1).val().wrapped)
+    builder.Add(compound, empty)
+    builder.Add(compound, cq.Workplane().cylinder(2, 1).translate((3, 0, 0)).val().wrapped)
+    pruned, left_out = without_empty(compound)
+    assert left_out == ["1 empty solid"]
+    before, after = indexed(compound, TopAbs_FACE), indexed(pruned, TopAbs_FACE)
+    assert [after.FindKey(i).IsSame(before.FindKey(i)) for i in range(1, 10)] == [True] * 9
+    assert without_empty(pruned) == (pruned, [])
+    path, out = tmp_path / "with_empty.brep", tmp_path / "with_empty.msh"
+    assert BRepTools.Write_s(compound, str(path))
+    result = mesh_shape(path, ald=1e-2, output=out, timeout=120)
+    assert result.ok and not result.failures, result.problems(verbose=True)
+    assert set(np.unique(result.triangle_faces)) == set(range(1, 10)) and out.exists()
+    assert "1 empty solid (holding no face) left out of the shape gmsh meshes" in result.notes

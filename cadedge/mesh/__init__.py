@@ -232,6 +232,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     """Mesh in a child process (:func:`~cadedge.mesh.isolate.run_isolated`), then check in this one."""
     import dataclasses
 
+    from ..occt.empty import without_empty
     from .check import check_triangles
     from .coincident import meshed_as, merged_shape
     from .gmsh_model import shape_to_brep
@@ -243,6 +244,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .worker import MeshJob
 
     shape, coincident = merged_shape(grid)  # one gmsh point where a face has two vertices
+    shape, left_out = without_empty(shape)  # gmsh's import and writer fail on a solid with no face
     meshed = meshed_as(dataclasses.replace(grid, shape=None, curves=None), coincident)
     invalid = _invalid_faces(grid)
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
@@ -273,6 +275,8 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     if coincident:
         pairs = ", ".join(f"{v} with {k}" for v, k in sorted(coincident.items()))
         notes.append(f"vertices of one face at one point, meshed as one node: {pairs}")
+    if left_out:
+        notes.append(f"{' and '.join(left_out)} (holding no face) left out of the shape gmsh meshes")
     if res.unmatched_edges:
         notes.append(f"edges {_ids(res.unmatched_edges)} match no gmsh curve: gmsh meshed those curves itself")
     if res.own_mesh_edges:

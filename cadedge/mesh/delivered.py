@@ -82,18 +82,20 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     return Delivered(result, lines, line_edges)
 
 
-def with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dict[int, int]) -> Delivered | None:
+def with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dict[int, int], *,
+                       rewrite: bool = False) -> Delivered | None:
     """``result``, from a child that finished, with the faces an earlier, stopped child delivered and this
     one did not mesh (its replay of them was stopped in turn, or came after the soft deadline with their
     strategy barred): the union of both, nodes merged by exact coordinates as for the hard timeout; None
-    when there is no such face. A restarted job that ran out of time used to end with the last child's
-    faces only, down to none."""
+    when there is no such face (unless ``rewrite``: gmsh's writer failed, so the result is wanted as
+    delivered, for meshio). A restarted job that ran out of time used to end with the last child's faces
+    only, down to none."""
     if result.error is not None:
         return None
     faces, _ = read_deliveries(path)
     meshed = {o.face for o in result.faces if o.ok}
     extra = sorted(set(faces) - meshed)
-    if not extra:
+    if not extra and not (rewrite and faces):
         return None
     union = delivered(path, job, known_ok, "", [])
     mine = {o.face: o for o in result.faces}
@@ -104,7 +106,7 @@ def with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dic
     merged.notes = result.notes + [
         f"faces {', '.join(map(str, extra))}: meshed by an earlier mesh process that was stopped; the last one "
         "did not mesh them again, so they are delivered as that process meshed them (the mesh written by "
-        "meshio, not gmsh's writer)"]
+        "meshio, not gmsh's writer)"] * bool(extra)
     return Delivered(merged, union.lines, union.line_edges)
 
 

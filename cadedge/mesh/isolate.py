@@ -302,7 +302,8 @@ def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
         if run.status == "ok":
             result = run.result
             result.notes = events + result.notes
-            fuller = with_earlier_faces(result, os.path.join(tmp, "faces"), job, known_ok)
+            fuller = with_earlier_faces(result, os.path.join(tmp, "faces"), job, known_ok,
+                                        rewrite=output is not None and not result.written)
             if fuller is not None:
                 if output is not None:
                     write_meshio(fuller, output)

@@ -179,7 +179,8 @@ def _import(brep: bytes, notes: list[str]) -> tuple[str | None, str | None]:
             partial = import_brep(path, attempt=0, partial=True)
         except GeometryError:
             return errors[-1], None
-    notes.append(f"gmsh imported the shape only in part ({partial}): the faces it left out are named")
+    notes.append(f"gmsh imported the shape only in part ({partial or 'giving no reason'}): the faces it left out "
+                 "are named")
     return None, partial
 
 
@@ -369,8 +370,11 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         written = False
         if job.output and len(raw.triangles):
             say("write")
-            gmsh.write(job.output)
-            written = True
+            try:
+                gmsh.write(job.output)
+                written = True
+            except Exception as exc:  # the faces are meshed: the parent writes what they delivered
+                notes.append(f"gmsh's writer failed ({str(exc) or 'giving no reason'}); the mesh was written by meshio")
         extras = _hooks(ctx, "after_mesh")
     tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
     return JobResult(nodes=raw.nodes, triangles=raw.triangles, triangle_faces=tri_faces,
