@@ -184,3 +184,37 @@ def test_a_hole_touching_the_outline_has_both_its_cusps_graded():
     angles = min_angles(result.nodes, result.triangles)
     for c in corners:  # under 20 degrees, only the triangles on the two cusps' tips
         assert np.sum(angles[result.triangle_faces == c.face] < 20.0) <= 2
+
+
+def test_a_wedge_beside_a_loose_edge_is_graded_on_both_sides():
+    """A 25-long prism on a 1.7-degree triangle whose long sides' top and bottom edges carry a tolerance
+    of 0.005 (as B-spline edges of OCCT's sample CrankArm.brep do beside its planar slivers). Splits leave
+    an edge whole where its tolerance is over a thousandth of a piece; the wedge's loose side kept its one
+    segment, and 19% of the wedge faces' triangles were under 20 degrees, down to 1.0 (under the corner's
+    own 1.7). Its pieces are now cut down to 20 tolerances (``LOOSE_SHARE``)."""
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.ShapeFix import ShapeFix_ShapeTolerance
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopoDS import TopoDS
+
+    from cadedge.mesh import mesh_shape
+    from cadedge.occt.topology import indexed
+
+    length, opening = 25.0, 1.7
+    tip = (length, length * math.tan(math.radians(opening)), 0.0)
+    prism = BRepPrimAPI_MakePrism(_polygon_face([(0, 0, 0), (length, 0, 0), tip]), gp_Vec(0, 0, 2)).Shape()
+    fix, loosened, edges = ShapeFix_ShapeTolerance(), 0, indexed(prism, TopAbs_EDGE)
+    for i in range(1, edges.Size() + 1):
+        edge = TopoDS.Edge_s(edges.FindKey(i))
+        curve = BRepAdaptor_Curve(edge)
+        a, b = curve.Value(curve.FirstParameter()), curve.Value(curve.LastParameter())
+        if abs(a.X() - b.X()) > 1.0 and abs(a.Y() - b.Y()) > 0.1:  # the slanted side, top and bottom
+            fix.SetTolerance(edge, 0.005, TopAbs_EDGE)
+            loosened += 1
+    assert loosened == 2
+    report = mesh_shape(prism, ald=1e-2).report
+    wedges = [f for f in report.faces if abs(f.brep_area - 0.5 * length * tip[1]) < 1e-6]
+    assert len(wedges) == 2
+    for f in wedges:
+        assert f.min_angle > opening - 0.05 and f.below_20 < 0.05, (f.min_angle, f.below_20)
+    assert not [a for a in report.small_angles if a.angle < 5 and not a.forced]

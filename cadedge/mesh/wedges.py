@@ -38,7 +38,7 @@ import numpy as np
 
 from ..shapegrid import ShapeGrid, with_edges
 from .grading import cut_on_curve
-from .proximity import TOLERANCE_SHARE, _LazyCurves
+from .proximity import _LazyCurves
 from .widths import BUDGET_FACTOR, MIN_BUDGET, WIDTH_RATIO, _segment_distances
 
 #: Corners of a face narrower than this many degrees (between its two edges' first segments) are graded.
@@ -68,6 +68,16 @@ TIP_AREA_SHARE = 0.4
 SLACK = 1.25
 #: Points along a segment at which the wedge's width is measured to grade its pieces.
 SAMPLES = 16
+#: A wedge's sides are cut, and its tips cut or lengthened, into pieces no shorter than their edge's
+#: tolerance over this share. The other splits leave an edge whole where its tolerance is over a
+#: thousandth of a piece (``proximity.TOLERANCE_SHARE``: on mesh_T106_V3, tolerances up to 0.73 mm,
+#: points on the 3-D curve strayed from the faces' boundaries and gmsh built 0.04-degree triangles). In a
+#: wedge the segments left whole span it from side to side: OCCT's sample CrankArm.brep has three planar
+#: slivers 20-25 long with 1.7-degree corners, each beside a B-spline edge of tolerance 0.004-0.0095,
+#: whose 2.1-long segments stood over widths of 0.05-0.5 (0.72% of its triangles under 20 degrees, 11
+#: under 5 that nothing forced). Pieces of 20 tolerances or more put a new point off the face's boundary
+#: by at most 5% of a piece.
+LOOSE_SHARE = 0.05
 
 
 @dataclasses.dataclass(frozen=True)
@@ -135,7 +145,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     for c in corners:  # the tips first: the longer one cut at the shorter one's length
         tips = [tip_length(edges[k], s) for k, s in c.sides]
         k, s = c.sides[int(np.argmax(tips))]
-        if max(tips) > TIP_RATIO * min(tips) and not edges[k].tolerance > TOLERANCE_SHARE * min(tips):
+        if max(tips) > TIP_RATIO * min(tips) and not edges[k].tolerance > LOOSE_SHARE * min(tips):
             share = min(tips) / max(tips)
             cut = cut_on_curve(edges[k], curves, {tip_segment(edges[k], s): [share if s else 1 - share]})
             if cut is not None:
@@ -159,14 +169,35 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     added = 0
     for i, at in cuts.items():
         e = edges[i]
+        at = _no_piece_under(at, e.segment_lengths, e.tolerance / LOOSE_SHARE)
         new = sum(len(f) for f in at.values())
-        shortest = min(e.segment_lengths[k] / (len(f) + 1) for k, f in at.items())
-        if not new or added + new > budget or e.tolerance > TOLERANCE_SHARE * shortest:
-            continue  # nothing to cut, over the budget, or a loose edge (see proximity.py)
+        if not new or added + new > budget:
+            continue  # nothing to cut, or over the budget
         cut = cut_on_curve(e, curves, at)
         if cut is not None:
             edges[i], changed, added = cut, True, added + new
     return with_edges(grid, edges) if changed else grid
+
+
+def _no_piece_under(cuts: dict[int, np.ndarray], lengths: np.ndarray, least: float) -> dict[int, np.ndarray]:
+    """``cuts`` (segment -> shares of its length to cut at, see :func:`_graded_cuts`) with fewer pieces where
+    one would be shorter than ``least``, graded as before (the shares interpolated); a segment that cannot
+    be cut into two such pieces is left whole.
+
+    >>> _no_piece_under({0: np.array([0.1, 0.3, 0.6]), 1: np.array([0.5])}, np.array([1.0, 0.1]), 0.2)
+    {0: array([0.3])}
+    """
+    out = {}
+    for k, shares in cuts.items():
+        bounds = np.concatenate([[0.0], shares, [1.0]])
+        n = min(len(shares) + 1, int(lengths[k] / least)) if least > 0 else len(shares) + 1
+        while n > 1:
+            fewer = np.interp(np.linspace(0.0, 1.0, n + 1), np.linspace(0.0, 1.0, len(bounds)), bounds)
+            if np.min(np.diff(fewer)) * lengths[k] >= least:
+                out[k] = fewer[1:-1]
+                break
+            n -= 1
+    return out
 
 
 def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, room: np.ndarray) -> bool:
@@ -194,8 +225,8 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, roo
         if need <= min(dist[1] for dist, _, _ in reach) * (1.0 + 1e-9):
             return False  # the tips, made equal, are long enough already
         piece = need / aim  # the first graded piece beside the tips
-        if max(edges[k].tolerance for k, _ in c.sides) > TOLERANCE_SHARE * piece:
-            return False  # a loose edge is not graded (see proximity.py): no longer tips either
+        if max(edges[k].tolerance for k, _ in c.sides) > LOOSE_SHARE * piece:
+            return False  # pieces this short are not cut on so loose an edge: no longer tips either
         plans = [_tip_plan(dist, free, need, piece) for dist, free, _ in reach]
         if any(p is None for p in plans):
             return False  # a kept point inside the tips' new length
