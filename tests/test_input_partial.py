@@ -116,6 +116,71 @@ def test_a_cut_that_crashes_occt_is_one_clean_error(tmp_path, capfd):
     assert out == "" and err == ""
 
 
+def square_face_step(*, vector_is_a_direction: bool) -> str:
+    """A 10 x 10 planar face as an open shell in a STEP file of our own; with ``vector_is_a_direction``
+    the LINE of its first edge names a DIRECTION where STEP wants a VECTOR (a writer's slip that OCCT's
+    load check passes and its transfer dereferences: a segmentation fault in OCCT 7.9 and 8.0)."""
+    corners, steps = [(0, 0), (10, 0), (10, 10), (0, 10)], [(1, 0), (0, 1), (-1, 0), (0, -1)]
+    data = ["#1=APPLICATION_CONTEXT('automotive_design');", "#2=CARTESIAN_POINT('',(0.,0.,0.));",
+            "#3=DIRECTION('',(0.,0.,1.));", "#4=DIRECTION('',(1.,0.,0.));", "#5=AXIS2_PLACEMENT_3D('',#2,#3,#4);",
+            "#6=PLANE('',#5);"]
+    n, points, uses = 10, [], []
+    for x, y in corners:
+        data += [f"#{n}=CARTESIAN_POINT('',({x}.,{y}.,0.));", f"#{n + 1}=VERTEX_POINT('',#{n});"]
+        points.append(n)
+        n += 2
+    for k, (dx, dy) in enumerate(steps):
+        start, end = points[k], points[(k + 1) % 4]
+        vector = n if vector_is_a_direction and k == 0 else n + 1
+        data += [f"#{n}=DIRECTION('',({dx}.,{dy}.,0.));", f"#{n + 1}=VECTOR('',#{n},10.);",
+                 f"#{n + 2}=LINE('',#{start},#{vector});", f"#{n + 3}=EDGE_CURVE('',#{start + 1},#{end + 1},#{n + 2},.T.);",
+                 f"#{n + 4}=ORIENTED_EDGE('',*,*,#{n + 3},.T.);"]
+        uses.append(f"#{n + 4}")
+        n += 5
+    data += [f"#{n}=EDGE_LOOP('',({','.join(uses)}));", f"#{n + 1}=FACE_OUTER_BOUND('',#{n},.T.);",
+             f"#{n + 2}=ADVANCED_FACE('',(#{n + 1}),#6,.T.);", f"#{n + 3}=OPEN_SHELL('',(#{n + 2}));",
+             f"#{n + 4}=SHELL_BASED_SURFACE_MODEL('',(#{n + 3}));",
+             "#100=PRODUCT_CONTEXT('',#1,'mechanical');", "#101=PRODUCT('p','p','',(#100));",
+             "#102=PRODUCT_DEFINITION_FORMATION('','',#101);",
+             "#103=PRODUCT_DEFINITION_CONTEXT('part definition',#1,'design');",
+             "#104=PRODUCT_DEFINITION('','',#102,#103);", "#105=PRODUCT_DEFINITION_SHAPE('','',#104);",
+             "#106=(LENGTH_UNIT()NAMED_UNIT(*)SI_UNIT(.MILLI.,.METRE.));",
+             "#107=(NAMED_UNIT(*)PLANE_ANGLE_UNIT()SI_UNIT($,.RADIAN.));",
+             "#108=(NAMED_UNIT(*)SI_UNIT($,.STERADIAN.)SOLID_ANGLE_UNIT());",
+             "#109=UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-07),#106,'distance_accuracy_value','');",
+             "#110=(GEOMETRIC_REPRESENTATION_CONTEXT(3)GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#109))"
+             "GLOBAL_UNIT_ASSIGNED_CONTEXT((#106,#107,#108))REPRESENTATION_CONTEXT('',''));",
+             f"#111=MANIFOLD_SURFACE_SHAPE_REPRESENTATION('',(#{n + 4}),#110);",
+             "#112=SHAPE_DEFINITION_REPRESENTATION(#105,#111);"]
+    return ("ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\nFILE_NAME('p','',(''),(''),'','','');\n"
+            "FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\nENDSEC;\nDATA;\n"
+            + "\n".join(data) + "\nENDSEC;\nEND-ISO-10303-21;\n")
+
+
+@pytest.mark.parametrize("fork", [True, False])
+def test_a_file_whose_transfer_crashes_occt_is_one_clean_error(tmp_path, capfd, monkeypatch, fork):
+    """OCCT's load check passes the file and its transfer crashes: every transfer runs in another
+    process (a fork of this one after parsing, or where forking is unsafe a new child), so the caller
+    gets one line instead of dying. The sound twin loads the same way, its face whole."""
+    from cadedge.occt import isolate
+
+    monkeypatch.setattr(isolate, "can_fork", lambda: fork)
+    bad, good = tmp_path / "bad.step", tmp_path / "good.step"
+    bad.write_text(square_face_step(vector_is_a_direction=True))
+    good.write_text(square_face_step(vector_is_a_direction=False))
+    msg = error_of(bad)
+    assert msg == f"{bad}: malformed STEP file: OCCT crashed transferring it (signal SIGSEGV), though its load " \
+                  "check found nothing wrong"
+    grid = cadedge.refine_shape(good, ald=1e-2)
+    assert len(grid.edges) == 4 and grid.faces == 1
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+    assert main(["refine", str(bad), "-o", str(tmp_path / "bad.json")]) == 2
+    err = capfd.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "OCCT crashed transferring it (signal SIGSEGV)" in err[0]
+    assert not (tmp_path / "bad.json").exists()
+
+
 def test_cli_refine_refuses_then_allows(tmp_path, capsys):
     path = cut(FIXTURES / "spline_prism.step", tmp_path / "prism.step", 0.9)
     out = tmp_path / "o.json"

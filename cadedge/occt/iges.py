@@ -68,7 +68,7 @@ def _survey(reader: IGESControl_Reader) -> tuple[int, int, int]:
 
 def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferred:
     """Read and transfer an IGES file, without judging completeness; InputError for bad or empty files.
-    A damaged file is transferred in a child process when ``isolate`` (see :mod:`cadedge.occt.isolate`)."""
+    With ``isolate`` the transfer runs in another process, as for STEP (see :mod:`cadedge.occt.isolate`)."""
     from .reader import quiet_occt
 
     sniff(path, given)
@@ -88,13 +88,21 @@ def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferre
         if roots == 0:
             what = f"{entities} entities, none of them a shape" if entities else "it holds no entities"
             raise InputError(f"{given}: no shape in the IGES file ({what})")
-        done_roots, shape, warnings, transfer = transfer_roots(reader, given, "IGES", load)
-    got_faces, got_solids = transferred(shape)
-    done = Completeness(faces=(got_faces, faces), solids=(got_solids, solids), roots=(done_roots, roots),
-                        unresolved=unresolved_references(load), skipped=skipped_entities(transfer))
-    cascade = Interface_Static.CVal_s("xstep.cascade.unit").strip().upper()
-    return Transferred(shape=shape, done=done, units=_CASCADE_UNITS.get(cascade, cascade.lower() or "mm"),
-                       warnings=warnings)
+
+    def transfer() -> Transferred:
+        with quiet_occt():
+            done_roots, shape, warnings, transfer = transfer_roots(reader, given, "IGES", load)
+        got_faces, got_solids = transferred(shape)
+        done = Completeness(faces=(got_faces, faces), solids=(got_solids, solids), roots=(done_roots, roots),
+                            unresolved=unresolved_references(load), skipped=skipped_entities(transfer))
+        cascade = Interface_Static.CVal_s("xstep.cascade.unit").strip().upper()
+        return Transferred(shape=shape, done=done, units=_CASCADE_UNITS.get(cascade, cascade.lower() or "mm"),
+                           warnings=warnings)
+
+    if not isolate:
+        return transfer()
+    from .isolate import can_fork, in_fork, isolated
+    return in_fork(transfer, "IGES", given) if can_fork() else isolated("IGES", path, given, damaged=False)
 
 
 def read_iges(path: Path, given: str, *, allow_partial: bool = False) -> LoadedShape:

@@ -102,8 +102,9 @@ def _file_unit_mm(reader: STEPControl_Reader) -> float | None:
 def transfer_step(path: Path, given: str, *, isolate: bool = True) -> Transferred:
     """Read and transfer a STEP file, without judging completeness; InputError for bad or empty files.
 
-    A file whose load check shows unresolved references or parse errors is transferred in a child
-    process when ``isolate`` (OCCT's transfer may crash on such files; see :mod:`cadedge.occt.isolate`).
+    With ``isolate`` the transfer runs in another process (OCCT's transfer crashes on some malformed
+    files; see :mod:`cadedge.occt.isolate`): a fork of this one after parsing, or a new child that reads
+    the file again where the load check shows damage or forking is unsafe.
     """
     from .reader import quiet_occt
 
@@ -121,15 +122,23 @@ def transfer_step(path: Path, given: str, *, isolate: bool = True) -> Transferre
         faces, solids, unresolved, declared = _survey(reader)
         if roots == 0:
             raise _no_roots(given, path, reader.StepModel().NbEntities(), faces)
-        done_roots, shape, warnings, transfer = transfer_roots(reader, given, "STEP", load)
-    got_faces, got_solids = transferred(shape)
-    done = Completeness(faces=(got_faces, faces + unresolved), solids=(got_solids, solids),
-                        roots=(done_roots, roots), unresolved=max(unresolved, unresolved_references(load)),
-                        truncated=cut_short(load), skipped=skipped_entities(transfer))
-    units = UNIT_NAMES.get(reader.SystemLengthUnit(), f"{reader.SystemLengthUnit():g} mm")
-    mm_per_unit = _file_unit_mm(reader)
-    declared_mm = declared * mm_per_unit if declared is not None and mm_per_unit is not None else None
-    return Transferred(shape=shape, done=done, units=units, warnings=warnings, declared=declared_mm)
+
+    def transfer() -> Transferred:
+        with quiet_occt():
+            done_roots, shape, warnings, transfer = transfer_roots(reader, given, "STEP", load)
+        got_faces, got_solids = transferred(shape)
+        done = Completeness(faces=(got_faces, faces + unresolved), solids=(got_solids, solids),
+                            roots=(done_roots, roots), unresolved=max(unresolved, unresolved_references(load)),
+                            truncated=cut_short(load), skipped=skipped_entities(transfer))
+        units = UNIT_NAMES.get(reader.SystemLengthUnit(), f"{reader.SystemLengthUnit():g} mm")
+        mm_per_unit = _file_unit_mm(reader)
+        declared_mm = declared * mm_per_unit if declared is not None and mm_per_unit is not None else None
+        return Transferred(shape=shape, done=done, units=units, warnings=warnings, declared=declared_mm)
+
+    if not isolate:
+        return transfer()
+    from .isolate import can_fork, in_fork, isolated
+    return in_fork(transfer, "STEP", given) if can_fork() else isolated("STEP", path, given, damaged=False)
 
 
 def read_step(path: Path, given: str, *, allow_partial: bool = False) -> LoadedShape:
