@@ -107,6 +107,19 @@ def test_text_file_named_step(tmp_path):
     _one_line_error(path, "notes.step", "not a STEP file")
 
 
+def test_a_step_file_opening_with_a_comment_is_read(tmp_path):
+    """Part 21 allows comments where white space may be, and OCCT reads a file that opens with one; the
+    sniff took it for "not a STEP file" (22 files of the public dodgy-STEP catalogue open so)."""
+    from cadedge import refine_shape
+
+    path = tmp_path / "commented.step"
+    path.write_bytes(b"/* written by hand,\n   over two lines */\n\n" + (FIXTURES / "bracket.step").read_bytes())
+    got, want = refine_shape(path, ald=1e-2), refine_shape(FIXTURES / "bracket.step", ald=1e-2)
+    assert [e.segments for e in got.edges] == [e.segments for e in want.edges] and got.faces == want.faces
+    path.write_bytes(b"/* a comment, and then no STEP */\nsolid x\n")
+    _one_line_error(path, "commented.step", "not a STEP file")
+
+
 def test_truncated_copy_of_a_fixture(tmp_path):
     data = (FIXTURES / "bracket.step").read_bytes()
     cut = tmp_path / "cut.step"

@@ -20,7 +20,8 @@ from OCP.Interface import Interface_Static
 
 from ..errors import InputError
 from .loading import (Completeness, LoadedShape, Transferred, accept, check_counts, damaged, first_failure,
-                      skipped_entities, sniff_path, transfer_roots, transferred, unresolved_references)
+                      opens_as_step, skipped_entities, sniff_path, transfer_roots, transferred,
+                      unresolved_references)
 
 FACE_TYPES = (510, 144, 143)
 SOLID_TYPES = (186,)
@@ -40,7 +41,7 @@ def sniff(path: Path, given: str) -> None:
     """InputError unless ``path`` looks like a complete IGES file (header letter, terminate line, line count)."""
     head, tail, _ = sniff_path(path, given)
     first = (_lines(head) or [b""])[0]
-    if head.lstrip(b"\xef\xbb\xbf \t\r\n").upper().startswith(b"ISO-10303-21"):
+    if opens_as_step(head):
         raise InputError(f"{given}: not an IGES file (it holds STEP text; name it .step or .stp)")
     if len(first) < 73 or first[72:73] not in (b"S", b"G"):
         raise InputError(f"{given}: not an IGES file (no start section: 'S' in column 73 of the first line)")

@@ -10,6 +10,7 @@ transfer unless the caller allows it, and then says what was lost in a warning.
 
 from __future__ import annotations
 
+import re
 import threading
 from collections import Counter
 from contextlib import contextmanager
@@ -140,6 +141,20 @@ def distinct(shape: TopoDS_Shape, kind: Any) -> int:
         m.Add(ex.Current().Located(here))
         ex.Next()
     return m.Extent()
+
+
+#: What may come before the ISO-10303-21 token: a byte-order mark, white space and ``/* */`` comments
+#: (OCCT reads files that open with a comment).
+_LEADING = re.compile(rb"(?:\xef\xbb\xbf)?(?:\s+|/\*.*?\*/)*", re.DOTALL)
+
+
+def opens_as_step(head: bytes) -> bool:
+    r"""Whether the first bytes of a file are those of an ISO 10303-21 file.
+
+    >>> opens_as_step(b"/* made by hand */\nISO-10303-21;\nHEADER;"), opens_as_step(b"solid x")
+    (True, False)
+    """
+    return head[_LEADING.match(head).end():].upper().startswith(b"ISO-10303-21")
 
 
 def sniff_path(path: Path, given: str) -> tuple[bytes, bytes, int]:

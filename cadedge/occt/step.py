@@ -22,8 +22,8 @@ from OCP.STEPControl import STEPControl_Reader
 from ..errors import InputError
 from .compat import TColStd_SequenceOfAsciiString
 from .loading import (MM_PER_UNIT, UNIT_NAMES, Completeness, LoadedShape, Transferred, accept, check_counts,
-                      cut_short, damaged, first_failure, skipped_entities, sniff_path, transfer_roots, transferred,
-                      unresolved_references)
+                      cut_short, damaged, first_failure, opens_as_step, skipped_entities, sniff_path,
+                      transfer_roots, transferred, unresolved_references)
 
 _READ_STATUS = {"RetVoid": "nothing to read", "RetError": "cannot open or unknown format",
                 "RetFail": "syntax error", "RetStop": "reading stopped"}
@@ -35,7 +35,7 @@ _TRAILER = re.compile(rb"ENDSEC\s*;\s*END-ISO-10303-21\s*;\s*$", re.IGNORECASE)
 def sniff(path: Path, given: str) -> bytes:
     """The file's tail; InputError unless ``path`` looks like a complete ISO 10303-21 file."""
     head, tail, _ = sniff_path(path, given)
-    if not head.lstrip(b"\xef\xbb\xbf \t\r\n").upper().startswith(b"ISO-10303-21"):
+    if not opens_as_step(head):
         raise InputError(f"{given}: not a STEP file (no ISO-10303-21 header)")
     if b"END-ISO-10303-21" not in tail.upper():
         raise InputError(f"{given}: truncated STEP file (it ends without the END-ISO-10303-21 trailer)")
