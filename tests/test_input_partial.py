@@ -159,9 +159,9 @@ def square_face_step(*, vector_is_a_direction: bool) -> str:
 
 @pytest.mark.parametrize("fork", [True, False])
 def test_a_file_whose_transfer_crashes_occt_is_one_clean_error(tmp_path, capfd, monkeypatch, fork):
-    """OCCT's load check passes the file and its transfer crashes: every transfer runs in another
-    process (a fork of this one after parsing, or where forking is unsafe a new child), so the caller
-    gets one line instead of dying. The sound twin loads the same way, its face whole."""
+    """OCCT's load check passes the file and its transfer crashes: every reading runs in another
+    process (a fork of this one, or where forking is unsafe a new child), so the caller gets one line
+    instead of dying. The sound twin loads the same way, its face whole."""
     from cadedge.occt import isolate
 
     monkeypatch.setattr(isolate, "can_fork", lambda: fork)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Callable
 
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.IGESControl import IGESControl_Reader
@@ -67,12 +68,18 @@ def _survey(reader: IGESControl_Reader) -> tuple[int, int, int]:
     return faces, solids, model.NbEntities()
 
 
-def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferred:
+def transfer_iges(path: Path, given: str, *, isolate: bool = True,
+                  note: Callable[[str], None] | None = None) -> Transferred:
     """Read and transfer an IGES file, without judging completeness; InputError for bad or empty files.
-    With ``isolate`` the transfer runs in another process, as for STEP (see :mod:`cadedge.occt.isolate`)."""
+    With ``isolate`` everything after the sniff runs in another process, as for STEP (see
+    :mod:`cadedge.occt.isolate`); ``note`` is told how far the reading got there."""
     from .reader import quiet_occt
 
     sniff(path, given)
+    if isolate:
+        from .isolate import run_isolated
+        return run_isolated("IGES", path, given, lambda at: transfer_iges(path, given, isolate=False, note=at))
+    note = note or (lambda stage: None)
     reader = IGESControl_Reader()
     with quiet_occt():
         status = reader.ReadFile(str(path))
@@ -81,29 +88,19 @@ def transfer_iges(path: Path, given: str, *, isolate: bool = True) -> Transferre
             reason = _READ_STATUS.get(str(status).split("_")[-1], str(status))
             raise InputError(f"{given}: corrupt IGES file (OCCT: {reason}{first})")
         load = check_counts(reader.WS().ModelCheckList())
-        if isolate and damaged(load):
-            from .isolate import isolated
-            return isolated("IGES", path, given)
+        note("damaged" if damaged(load) else "parsed")
         faces, solids, entities = _survey(reader)
         roots = reader.NbRootsForTransfer()
         if roots == 0:
             what = f"{entities} entities, none of them a shape" if entities else "it holds no entities"
             raise InputError(f"{given}: no shape in the IGES file ({what})")
-
-    def transfer() -> Transferred:
-        with quiet_occt():
-            done_roots, shape, warnings, transfer = transfer_roots(reader, given, "IGES", load)
-        got_faces, got_solids = transferred(shape)
-        done = Completeness(faces=(got_faces, faces), solids=(got_solids, solids), roots=(done_roots, roots),
-                            unresolved=unresolved_references(load), skipped=skipped_entities(transfer))
-        cascade = Interface_Static.CVal_s("xstep.cascade.unit").strip().upper()
-        return Transferred(shape=shape, done=done, units=_CASCADE_UNITS.get(cascade, cascade.lower() or "mm"),
-                           warnings=warnings)
-
-    if not isolate:
-        return transfer()
-    from .isolate import can_fork, in_fork, isolated
-    return in_fork(transfer, "IGES", given) if can_fork() else isolated("IGES", path, given, damaged=False)
+        done_roots, shape, warnings, transfer = transfer_roots(reader, given, "IGES", load)
+    got_faces, got_solids = transferred(shape)
+    done = Completeness(faces=(got_faces, faces), solids=(got_solids, solids), roots=(done_roots, roots),
+                        unresolved=unresolved_references(load), skipped=skipped_entities(transfer))
+    cascade = Interface_Static.CVal_s("xstep.cascade.unit").strip().upper()
+    return Transferred(shape=shape, done=done, units=_CASCADE_UNITS.get(cascade, cascade.lower() or "mm"),
+                       warnings=warnings)
 
 
 def read_iges(path: Path, given: str, *, allow_partial: bool = False) -> LoadedShape:

@@ -1,19 +1,19 @@
 """OCCT's STEP and IGES transfers run outside the caller, so that an OCCT crash cannot take it down.
 
-OCCT's transfer crashes (segmentation fault) on some malformed files: files with unresolved references
-(a file cut short with a trailer appended), but also files its load check passes, such as a ``LINE``
-whose vector attribute names a ``DIRECTION`` (a writer's slip; the transfer dereferences the missing
-vector). Every transfer therefore runs in another process, which hands the shape back as an OCCT BREP
-file with the completeness, units and warnings as JSON; a crash, a hang past ``TIMEOUT`` or any other
-death of that process becomes one :class:`~cadedge.errors.InputError` naming the file.
+OCCT crashes (segmentation fault) on some malformed files: in the transfer of files with unresolved
+references (a file cut short with a trailer appended), but also of files its load check passes, such
+as a ``LINE`` whose vector attribute names a ``DIRECTION`` (a writer's slip), and in its entities'
+own accessors (an ``ORIENTED_CLOSED_SHELL`` whose shell did not resolve). So a STEP or IGES file is
+read, checked and transferred in another process (:func:`run_isolated`), which hands the shape back as
+an OCCT BREP file with the completeness, units and warnings as JSON. It notes how far it got (parsed;
+parsed, but damaged or cut short by the load check's account), so that a crash, a hang past
+``TIMEOUT`` or any other death of it becomes one :class:`~cadedge.errors.InputError` naming the file
+and saying what OCCT was doing.
 
-- A file whose load check shows damage (:func:`cadedge.occt.loading.damaged`) is read and transferred
-  again in a new child (``python -m cadedge.occt.isolate``, :func:`isolated`).
-- Any other file is parsed here and transferred in a fork of this process (:func:`in_fork`): the
-  parsed model is already there, so it costs the fork and the BREP round trip (0.02-0.1 s), not a new
-  interpreter (about 1 s a file). The fork runs only OCCT's transfer, the BREP writer and a JSON dump,
-  so the locks other threads may hold at the fork (a batch worker's event loop, a notebook's kernel)
-  are not ones it takes. Off Linux the new child is used.
+On Linux the process is a fork of this one (0.01-0.1 s a file: the fork and the BREP round trip);
+elsewhere a new child, ``python -m cadedge.occt.isolate`` (about 1 s: a new interpreter). The fork runs
+only OCCT's reader, the BREP writer and a JSON dump, so the locks other threads may hold when it is
+made (a batch worker's event loop, a notebook's kernel) are not ones it takes.
 
 The child ends with its caller (:mod:`cadedge.childproc`).
 """
@@ -44,75 +44,71 @@ from .loading import Completeness, Transferred, quiet_occt
 #: Seconds the child may take to read and transfer one file.
 TIMEOUT = 600.0
 _ERRORS = {"InputError": InputError, "GeometryError": GeometryError}
-
-
-def _transfer(kind: str, path: Path, given: str) -> Transferred:
-    if kind == "STEP":
-        from .step import transfer_step
-        return transfer_step(path, given, isolate=False)
-    from .iges import transfer_iges
-    return transfer_iges(path, given, isolate=False)
-
-
-def isolated(kind: str, path: Path, given: str, *, cut: bool = False, damaged: bool = True) -> Transferred:
-    """``transfer_step``/``transfer_iges`` of ``path`` run in a new child process; InputError if it dies
-    (saying why the file is suspect: ``cut`` short, ``damaged`` by the load check's account, or neither)."""
-    with tempfile.TemporaryDirectory(prefix="cadedge-") as tmp:
-        cmd = [sys.executable, "-m", "cadedge.occt.isolate", kind, os.fspath(path), given, tmp]
-        env = child_env()
-        try:
-            proc = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                  stderr=subprocess.DEVNULL, timeout=TIMEOUT, env=env)
-        except subprocess.TimeoutExpired:
-            raise InputError(f"{given}: damaged {kind} file: OCCT did not finish transferring it within "
-                             f"{TIMEOUT:g} s") from None
-        if proc.returncode != 0 or not (Path(tmp) / "result.json").is_file():
-            if not damaged:
-                raise _crashed(kind, given, proc.returncode)
-            why = "it is cut short (its last entity is incomplete)" if cut else \
-                "it refers to entities it does not define, or holds unreadable ones"
-            raise InputError(f"{given}: damaged {kind} file: OCCT crashed transferring it "
-                             f"({_how(proc.returncode)}); {why}")
-        return _result(Path(tmp), given)
-
-
-def _crashed(kind: str, given: str, code: int) -> InputError:
-    return InputError(f"{given}: malformed {kind} file: OCCT crashed transferring it ({_how(code)}), though "
-                      "its load check found nothing wrong")
+#: A transfer run isolated: called with a function that records how far it got (see :data:`_CRASHES`).
+Transfer = Callable[[Callable[[str], None]], Transferred]
+#: How a crash is put, by the last stage the child noted (``{kind}`` STEP or IGES, ``{how}`` the signal).
+_CRASHES = {
+    "": "corrupt {kind} file: OCCT crashed reading it ({how})",
+    "parsed": "malformed {kind} file: OCCT crashed transferring it ({how}), though its load check found "
+              "nothing wrong",
+    "damaged": "damaged {kind} file: OCCT crashed transferring it ({how}); it refers to entities it does not "
+               "define, or holds unreadable ones",
+    "cut": "damaged {kind} file: OCCT crashed transferring it ({how}); it is cut short (its last entity is "
+           "incomplete)",
+}
 
 
 def can_fork() -> bool:
-    """Whether :func:`in_fork` may fork here: on Linux (macOS's system libraries are not safe to use in
-    a fork that does not exec; Windows cannot fork)."""
+    """Whether :func:`run_isolated` forks: on Linux (macOS's system libraries are not safe to use in a
+    fork that does not exec; Windows cannot fork)."""
     return sys.platform.startswith("linux") and hasattr(os, "fork")
 
 
-def in_fork(transfer: Callable[[], Transferred], kind: str, given: str) -> Transferred:
-    """``transfer()`` (the rest of a transfer whose file this process has parsed) run in a fork of this
-    process (see the module doc; the caller checks :func:`can_fork`); InputError if the fork dies."""
+def run_isolated(kind: str, path: Path, given: str, transfer: Transfer) -> Transferred:
+    """``transfer(note)``, the reading of ``path`` as ``kind`` (STEP or IGES), run in a fork of this
+    process or a new child (see the module doc); InputError naming ``given`` if that process dies."""
     with tempfile.TemporaryDirectory(prefix="cadedge-") as tmp:
-        parent = os.getpid()
-        sys.stdout.flush()
-        sys.stderr.flush()
-        with warnings.catch_warnings():  # Python 3.12+ warns of forking beside other threads (see below)
-            warnings.simplefilter("ignore", DeprecationWarning)
-            pid = os.fork()
-        if pid == 0:  # the child: never returns, never runs the caller's exit handlers
-            code = 1
-            try:
-                os.environ[PARENT_ENV] = str(parent)
-                die_with_parent()
-                _silence()
-                _write(transfer, Path(tmp), given)
-                code = 0
-            finally:
-                os._exit(code)
-        status = _wait(pid)
+        folder = Path(tmp)
+        status = _in_fork(transfer, folder, given) if can_fork() else _in_child(kind, path, given, folder)
+        stage = (folder / "stage").read_text() if (folder / "stage").is_file() else ""
         if status is None:
-            raise InputError(f"{given}: OCCT did not finish transferring the {kind} file within {TIMEOUT:g} s")
-        if status != 0 or not (Path(tmp) / "result.json").is_file():
-            raise _crashed(kind, given, status)
-        return _result(Path(tmp), given)
+            raise InputError(f"{given}: OCCT did not finish reading the {kind} file within {TIMEOUT:g} s")
+        if status != 0 or not (folder / "result.json").is_file():
+            raise InputError(f"{given}: " + _CRASHES[stage].format(kind=kind, how=_how(status)))
+        return _result(folder, given)
+
+
+def _in_fork(transfer: Transfer, folder: Path, given: str) -> int | None:
+    """Run ``transfer`` in a fork of this process, its result left in ``folder``: its exit status (see
+    :func:`_wait`)."""
+    parent = os.getpid()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    with warnings.catch_warnings():  # Python 3.12+ warns of forking beside other threads (see the module doc)
+        warnings.simplefilter("ignore", DeprecationWarning)
+        pid = os.fork()
+    if pid == 0:  # the child: never returns, never runs the caller's exit handlers
+        code = 1
+        try:
+            os.environ[PARENT_ENV] = str(parent)
+            die_with_parent()
+            _silence()
+            _write(transfer, folder, given)
+            code = 0
+        finally:
+            os._exit(code)
+    return _wait(pid)
+
+
+def _in_child(kind: str, path: Path, given: str, folder: Path) -> int | None:
+    """Run :func:`main` in a new child process, its result left in ``folder``: its exit status, None if
+    it was killed at :data:`TIMEOUT`."""
+    cmd = [sys.executable, "-m", "cadedge.occt.isolate", kind, os.fspath(path), given, os.fspath(folder)]
+    try:
+        return subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                              timeout=TIMEOUT, env=child_env()).returncode
+    except subprocess.TimeoutExpired:
+        return None
 
 
 def _silence() -> None:
@@ -144,15 +140,19 @@ def _how(code: int) -> str:
     return f"signal {signal.Signals(-code).name}" if code < 0 else f"exit code {code}"
 
 
-def _write(transfer: Callable[[], Transferred], out: Path, given: str) -> None:
-    """Run ``transfer`` and leave its result in folder ``out``: ``shape.brep`` and ``result.json`` (a
-    CadedgeError as its type and message; any other exception as an OCCT failure)."""
+def _write(transfer: Transfer, out: Path, given: str) -> None:
+    """Run ``transfer`` and leave in folder ``out`` how far it got (``stage``) and its result:
+    ``shape.brep`` and ``result.json`` (a CadedgeError as its type and message; any other exception as
+    an OCCT failure)."""
+    def note(stage: str) -> None:
+        (out / "stage").write_text(stage)
+
     try:
-        t = transfer()
+        t = transfer(note)
     except CadedgeError as exc:
         doc = {"error": {"type": type(exc).__name__, "message": str(exc)}}
     except Exception as exc:  # an OCCT exception OCP did not turn into Standard_Failure, a bug of ours
-        doc = {"error": {"type": "GeometryError", "message": f"{given}: OCCT failed to transfer the file: "
+        doc = {"error": {"type": "GeometryError", "message": f"{given}: OCCT failed to read the file: "
                                                             f"{type(exc).__name__}: {exc}"}}
     else:
         if not t.shape.IsNull():
@@ -185,10 +185,14 @@ def _pair(value: list[int] | None) -> tuple[int, int] | None:
 
 
 def main(argv: list[str]) -> int:
-    """The child: transfer ``argv = [kind, path, given, folder]``, write ``shape.brep`` and ``result.json``."""
+    """The new child: read ``argv = [kind, path, given, folder]``, leaving its result in the folder."""
     die_with_parent()
     kind, path, given, folder = argv
-    _write(lambda: _transfer(kind, Path(path), given), Path(folder), given)
+    if kind == "STEP":
+        from .step import transfer_step as read
+    else:
+        from .iges import transfer_iges as read
+    _write(lambda note: read(Path(path), given, isolate=False, note=note), Path(folder), given)
     return 0
 
 

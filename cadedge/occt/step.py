@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Callable
 
 from OCP.IFSelect import IFSelect_RetDone
 from OCP.StepBasic import StepBasic_UncertaintyMeasureWithUnit
-from OCP.StepShape import StepShape_ConnectedFaceSet, StepShape_FaceSurface, StepShape_ManifoldSolidBrep
+from OCP.StepShape import (StepShape_ConnectedFaceSet, StepShape_FaceSurface, StepShape_ManifoldSolidBrep,
+                           StepShape_OrientedClosedShell, StepShape_OrientedOpenShell)
 from OCP.STEPControl import STEPControl_Reader
 
 from ..errors import InputError
@@ -25,6 +27,7 @@ from .loading import (MM_PER_UNIT, UNIT_NAMES, Completeness, LoadedShape, Transf
                       cut_short, damaged, first_failure, opens_as_step, skipped_entities, sniff_path,
                       transfer_roots, transferred, unresolved_references)
 
+_ORIENTED = (StepShape_OrientedClosedShell, StepShape_OrientedOpenShell)
 _READ_STATUS = {"RetVoid": "nothing to read", "RetError": "cannot open or unknown format",
                 "RetFail": "syntax error", "RetStop": "reading stopped"}
 #: Files up to this size are read whole to tell an empty DATA section from an unreadable one.
@@ -80,8 +83,8 @@ def _survey(reader: STEPControl_Reader) -> tuple[int, int, int, float | None]:
             faces += 1
         elif isinstance(ent, StepShape_ManifoldSolidBrep):
             solids += 1
-        elif isinstance(ent, StepShape_ConnectedFaceSet):
-            refs = ent.CfsFaces()
+        elif isinstance(ent, StepShape_ConnectedFaceSet) and not isinstance(ent, _ORIENTED):
+            refs = ent.CfsFaces()  # (an oriented shell's are its shell's, which OCCT fetches without a check)
             if refs is None:
                 continue
             unresolved += sum(refs.Value(k) is None for k in range(refs.Lower(), refs.Upper() + 1))
@@ -99,46 +102,40 @@ def _file_unit_mm(reader: STEPControl_Reader) -> float | None:
     return MM_PER_UNIT.get(lengths.Value(1).ToCString().strip().lower())
 
 
-def transfer_step(path: Path, given: str, *, isolate: bool = True) -> Transferred:
+def transfer_step(path: Path, given: str, *, isolate: bool = True,
+                  note: Callable[[str], None] | None = None) -> Transferred:
     """Read and transfer a STEP file, without judging completeness; InputError for bad or empty files.
 
-    With ``isolate`` the transfer runs in another process (OCCT's transfer crashes on some malformed
-    files; see :mod:`cadedge.occt.isolate`): a fork of this one after parsing, or a new child that reads
-    the file again where the load check shows damage or forking is unsafe.
+    With ``isolate`` everything after the sniff runs in another process (OCCT crashes on some malformed
+    files; see :mod:`cadedge.occt.isolate`); ``note`` is told how far the reading got there.
     """
     from .reader import quiet_occt
 
     tail = sniff(path, given)
+    if isolate:
+        from .isolate import run_isolated
+        return run_isolated("STEP", path, given, lambda at: transfer_step(path, given, isolate=False, note=at))
+    note = note or (lambda stage: None)
     reader = STEPControl_Reader()
     with quiet_occt():
         status = reader.ReadFile(str(path))
         if status != IFSelect_RetDone:
             raise _parse_failure(given, tail, reader, str(status).split("_")[-1])
         load = check_counts(reader.WS().ModelCheckList())
-        if isolate and damaged(load):
-            from .isolate import isolated
-            return isolated("STEP", path, given, cut=cut_short(load))
+        note("cut" if cut_short(load) else "damaged" if damaged(load) else "parsed")
         roots = reader.NbRootsForTransfer()
         faces, solids, unresolved, declared = _survey(reader)
         if roots == 0:
             raise _no_roots(given, path, reader.StepModel().NbEntities(), faces)
-
-    def transfer() -> Transferred:
-        with quiet_occt():
-            done_roots, shape, warnings, transfer = transfer_roots(reader, given, "STEP", load)
-        got_faces, got_solids = transferred(shape)
-        done = Completeness(faces=(got_faces, faces + unresolved), solids=(got_solids, solids),
-                            roots=(done_roots, roots), unresolved=max(unresolved, unresolved_references(load)),
-                            truncated=cut_short(load), skipped=skipped_entities(transfer))
-        units = UNIT_NAMES.get(reader.SystemLengthUnit(), f"{reader.SystemLengthUnit():g} mm")
-        mm_per_unit = _file_unit_mm(reader)
-        declared_mm = declared * mm_per_unit if declared is not None and mm_per_unit is not None else None
-        return Transferred(shape=shape, done=done, units=units, warnings=warnings, declared=declared_mm)
-
-    if not isolate:
-        return transfer()
-    from .isolate import can_fork, in_fork, isolated
-    return in_fork(transfer, "STEP", given) if can_fork() else isolated("STEP", path, given, damaged=False)
+        done_roots, shape, warnings, transfer = transfer_roots(reader, given, "STEP", load)
+    got_faces, got_solids = transferred(shape)
+    done = Completeness(faces=(got_faces, faces + unresolved), solids=(got_solids, solids),
+                        roots=(done_roots, roots), unresolved=max(unresolved, unresolved_references(load)),
+                        truncated=cut_short(load), skipped=skipped_entities(transfer))
+    units = UNIT_NAMES.get(reader.SystemLengthUnit(), f"{reader.SystemLengthUnit():g} mm")
+    mm_per_unit = _file_unit_mm(reader)
+    declared_mm = declared * mm_per_unit if declared is not None and mm_per_unit is not None else None
+    return Transferred(shape=shape, done=done, units=units, warnings=warnings, declared=declared_mm)
 
 
 def read_step(path: Path, given: str, *, allow_partial: bool = False) -> LoadedShape:
