@@ -133,7 +133,8 @@ def square_face_step(*, vector_is_a_direction: bool) -> str:
         start, end = points[k], points[(k + 1) % 4]
         vector = n if vector_is_a_direction and k == 0 else n + 1
         data += [f"#{n}=DIRECTION('',({dx}.,{dy}.,0.));", f"#{n + 1}=VECTOR('',#{n},10.);",
-                 f"#{n + 2}=LINE('',#{start},#{vector});", f"#{n + 3}=EDGE_CURVE('',#{start + 1},#{end + 1},#{n + 2},.T.);",
+                 f"#{n + 2}=LINE('',#{start},#{vector});",
+                 f"#{n + 3}=EDGE_CURVE('',#{start + 1},#{end + 1},#{n + 2},.T.);",
                  f"#{n + 4}=ORIENTED_EDGE('',*,*,#{n + 3},.T.);"]
         uses.append(f"#{n + 4}")
         n += 5

@@ -2,9 +2,10 @@
 
 OCCT's BREP reader reports a damaged file only on standard output and hands back what it could, so
 the file is checked before it is read: the "CASCADE Topology" header, the ``TShapes N`` table with N
-shape records, and the closing root reference (in files saved by OCCT's Draw, followed by its "0" line). After the read, the distinct faces and solids of the
-shape are counted against the file's face (``Fa``) and solid (``So``) records. BREP files carry no
-length unit; their lengths are taken as millimetres, like in-memory shapes.
+shape records, and the closing root reference (in files saved by OCCT's Draw, followed by its "0"
+line). After the read, the distinct faces and solids of the shape are counted against the file's face
+(``Fa``) and solid (``So``) records. BREP files carry no length unit; their lengths are taken as
+millimetres, like in-memory shapes.
 """
 
 from __future__ import annotations
