@@ -158,14 +158,16 @@ def square_face_step(*, vector_is_a_direction: bool) -> str:
             + "\n".join(data) + "\nENDSEC;\nEND-ISO-10303-21;\n")
 
 
-@pytest.mark.parametrize("fork", [True, False])
-def test_a_file_whose_transfer_crashes_occt_is_one_clean_error(tmp_path, capfd, monkeypatch, fork):
+@pytest.mark.parametrize("how", ["fork", "fork, polled", "new child"])
+def test_a_file_whose_transfer_crashes_occt_is_one_clean_error(tmp_path, capfd, monkeypatch, how):
     """OCCT's load check passes the file and its transfer crashes: every reading runs in another
-    process (a fork of this one, or where forking is unsafe a new child), so the caller gets one line
-    instead of dying. The sound twin loads the same way, its face whole."""
+    process (a fork of this one, waited for on a pidfd or, without one, polled; where forking is unsafe
+    a new child), so the caller gets one line instead of dying. The sound twin loads the same way."""
     from cadedge.occt import isolate
 
-    monkeypatch.setattr(isolate, "can_fork", lambda: fork)
+    monkeypatch.setattr(isolate, "can_fork", lambda: how != "new child")
+    if how == "fork, polled":
+        monkeypatch.delattr(os, "pidfd_open", raising=False)
     bad, good = tmp_path / "bad.step", tmp_path / "good.step"
     bad.write_text(square_face_step(vector_is_a_direction=True))
     good.write_text(square_face_step(vector_is_a_direction=False))

@@ -286,6 +286,15 @@ def test_cli_internal_error_on_a_valid_file_is_one_line_exit_1(tmp_path, monkeyp
     assert err == ["cadedge mesh: part.step: internal error: ValueError: injected fault"]
 
 
+def _command(process: psutil.Process) -> str:
+    """A process's command line; "" for one that has ended (the fork that read the STEP file, between
+    its exit and its reaping, is a zombie, whose command line psutil refuses)."""
+    try:
+        return " ".join(process.cmdline())
+    except psutil.Error:
+        return ""
+
+
 def _cli_hung_in_gmsh(tmp_path):
     """``cadedge mesh`` in a new process whose gmsh child hangs in a face: (the process, the child)."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]))
@@ -299,7 +308,7 @@ def _cli_hung_in_gmsh(tmp_path):
     deadline = time.monotonic() + 120
     child = None
     while child is None and time.monotonic() < deadline and proc.poll() is None:
-        child = next((c for c in parent.children() if "cadedge.mesh.worker" in " ".join(c.cmdline())), None)
+        child = next((c for c in parent.children() if "cadedge.mesh.worker" in _command(c)), None)
         time.sleep(0.05)
     if child is None:
         proc.kill()

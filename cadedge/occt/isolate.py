@@ -23,6 +23,7 @@ from __future__ import annotations
 import faulthandler
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -122,18 +123,38 @@ def _silence() -> None:
 
 def _wait(pid: int) -> int | None:
     """The exit status of child ``pid`` (negative: the signal that ended it); None, the child killed,
-    after :data:`TIMEOUT` seconds. Polled, first every millisecond: most transfers take a few."""
-    deadline, pause = time.monotonic() + TIMEOUT, 0.001
-    while True:
-        done, status = os.waitpid(pid, os.WNOHANG)
-        if done:
-            return os.waitstatus_to_exitcode(status)
-        if time.monotonic() > deadline:
+    after :data:`TIMEOUT` seconds. The child is killed too if the wait is interrupted (Ctrl-C)."""
+    try:
+        if not _exited(pid, TIMEOUT):
             os.kill(pid, signal.SIGKILL)
             os.waitpid(pid, 0)
             return None
+    except BaseException:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+        raise
+    return os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+
+
+def _exited(pid: int, timeout: float) -> bool:
+    """Whether child ``pid`` ended within ``timeout`` seconds (it is not reaped here): woken by a pidfd
+    where the kernel has them (Linux 5.3), else polled, first every millisecond."""
+    try:
+        fd = os.pidfd_open(pid)
+    except (AttributeError, OSError):
+        fd = None
+    if fd is not None:
+        try:
+            return bool(select.select([fd], [], [], timeout)[0])
+        finally:
+            os.close(fd)
+    deadline, pause = time.monotonic() + timeout, 0.001
+    while os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is None:
+        if time.monotonic() > deadline:
+            return False
         time.sleep(pause)
         pause = min(2 * pause, 0.05)
+    return True
 
 
 def _how(code: int) -> str:
