@@ -195,7 +195,7 @@ def test_a_wedge_beside_a_loose_edge_is_graded_on_both_sides():
     from OCP.BRepAdaptor import BRepAdaptor_Curve
     from OCP.ShapeFix import ShapeFix_ShapeTolerance
     from OCP.TopAbs import TopAbs_EDGE
-    from OCP.TopoDS import TopoDS
+    from cadedge.occt.compat import TopoDS
 
     from cadedge.mesh import mesh_shape
     from cadedge.occt.topology import indexed
