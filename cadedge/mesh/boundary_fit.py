@@ -192,8 +192,8 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
 
 def _curved_credits(gross: np.ndarray, signed: np.ndarray, kinds: list[str], budget: np.ndarray) -> dict[int, float]:
     """Face id -> budget factor of each curved face whose boundary slivers cancel (see
-    :data:`CURVED_CREDIT`) and are over its ``budget`` (elsewhere the unsigned rule splits nothing);
-    ``gross`` and ``signed`` as :func:`_fit_boundaries` sums them."""
+    :data:`CURVED_CREDIT`, a cone's at most :data:`CONE_CREDIT`) and are over its ``budget`` (elsewhere
+    the unsigned rule splits nothing); ``gross`` and ``signed`` as :func:`_fit_boundaries` sums them."""
     least, most = CURVED_CREDIT
     cap = np.array([CONE_CREDIT if kind == "Cone" else most for kind in kinds])
     with np.errstate(divide="ignore", invalid="ignore"):
