@@ -73,13 +73,17 @@ def transfer_iges(path: Path, given: str, *, isolate: bool = True,
     """Read and transfer an IGES file, without judging completeness; InputError for bad or empty files.
     With ``isolate`` everything after the sniff runs in another process, as for STEP (see
     :mod:`cadedge.occt.isolate`); ``note`` is told how far the reading got there."""
-    from .reader import quiet_occt
-
     sniff(path, given)
     if isolate:
         from .isolate import run_isolated
-        return run_isolated("IGES", path, given, lambda at: transfer_iges(path, given, isolate=False, note=at))
-    note = note or (lambda stage: None)
+        return run_isolated("IGES", path, given, lambda at: _read(path, given, at))
+    return _read(path, given, note or (lambda stage: None))
+
+
+def _read(path: Path, given: str, note: Callable[[str], None]) -> Transferred:
+    """:func:`transfer_iges` past the sniff, here."""
+    from .reader import quiet_occt
+
     reader = IGESControl_Reader()
     with quiet_occt():
         status = reader.ReadFile(str(path))

@@ -124,16 +124,14 @@ def _silence() -> None:
 def _wait(pid: int) -> int | None:
     """The exit status of child ``pid`` (negative: the signal that ended it); None, the child killed,
     after :data:`TIMEOUT` seconds. The child is killed too if the wait is interrupted (Ctrl-C)."""
+    ended = False
     try:
-        if not _exited(pid, TIMEOUT):
+        ended = _exited(pid, TIMEOUT)
+    finally:
+        if not ended:
             os.kill(pid, signal.SIGKILL)
-            os.waitpid(pid, 0)
-            return None
-    except BaseException:
-        os.kill(pid, signal.SIGKILL)
-        os.waitpid(pid, 0)
-        raise
-    return os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+        status = os.waitpid(pid, 0)[1]
+    return os.waitstatus_to_exitcode(status) if ended else None
 
 
 def _exited(pid: int, timeout: float) -> bool:

@@ -109,13 +109,17 @@ def transfer_step(path: Path, given: str, *, isolate: bool = True,
     With ``isolate`` everything after the sniff runs in another process (OCCT crashes on some malformed
     files; see :mod:`cadedge.occt.isolate`); ``note`` is told how far the reading got there.
     """
-    from .reader import quiet_occt
-
     tail = sniff(path, given)
     if isolate:
         from .isolate import run_isolated
-        return run_isolated("STEP", path, given, lambda at: transfer_step(path, given, isolate=False, note=at))
-    note = note or (lambda stage: None)
+        return run_isolated("STEP", path, given, lambda at: _read(path, given, tail, at))
+    return _read(path, given, tail, note or (lambda stage: None))
+
+
+def _read(path: Path, given: str, tail: bytes, note: Callable[[str], None]) -> Transferred:
+    """:func:`transfer_step` past the sniff (``tail``, the file's last bytes), here."""
+    from .reader import quiet_occt
+
     reader = STEPControl_Reader()
     with quiet_occt():
         status = reader.ReadFile(str(path))
