@@ -150,6 +150,13 @@ def test_a_gapped_box_meshes_to_its_closed_face_areas_and_names_its_tolerances(g
                        surface_ald=1e-9, tolerances=bands)
     assert len(rep.over_target) == 6 and all("tolerances allow" in f.note for f in rep.over_target)
     assert {f.reason for f in rep.over_target} == {"tolerances"}
+    # edges meshed with pcurves rebuilt in step (MeshResult.restepped) are judged by their new tolerances
+    tight = tolerance_bands(result.grid, brep_face_areas(result.grid.shape), {e.id: 1e-9 for e in result.grid.edges})
+    assert sorted(tight) == list(range(1, 7)) and {tol for tol, _ in tight.values()} == {1e-9}
+    rep = build_report(result.nodes, result.triangles, result.triangle_faces,
+                       brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
+                       surface_ald=1e-9, tolerances=tight)
+    assert {f.reason for f in rep.over_target} == {"planar"}
     rep = build_report(result.nodes, result.triangles, result.triangle_faces,
                        brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
                        surface_ald=1e-9, tolerances=bands, folded={2: 3, 5: 1})

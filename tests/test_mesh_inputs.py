@@ -67,3 +67,76 @@ def test_an_empty_solid_does_not_cost_the_mesh(tmp_path):
     assert result.ok and not result.failures, result.problems(verbose=True)
     assert set(np.unique(result.triangle_faces)) == set(range(1, 10)) and out.exists()
     assert "1 empty solid (holding no face) left out of the shape gmsh meshes" in result.notes
+
+
+def _out_of_step_face():
+    """A curved B-spline patch whose edge along v = 0 has a pcurve running t -> (0.3 t + 0.7 t^2, 0): the
+    same points as its 3-D curve, at other parameters (up to 2.2 apart), its tolerance raised to cover
+    that, as OCCT's IGES reader leaves some edges of its own sample bearing.iges."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepAdaptor import BRepAdaptor_Curve2d
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.Geom import Geom_BSplineSurface
+    from OCP.Geom2d import Geom2d_BSplineCurve
+    from OCP.gp import gp_Pnt, gp_Pnt2d
+    from OCP.TColgp import TColgp_Array1OfPnt2d, TColgp_Array2OfPnt
+    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+    from OCP.TopAbs import TopAbs_EDGE
+    from OCP.TopExp import TopExp_Explorer
+
+    from cadedge.occt.compat import TopoDS
+
+    def knots(a: float, b: float, mult: int) -> tuple[TColStd_Array1OfReal, TColStd_Array1OfInteger]:
+        k, m = TColStd_Array1OfReal(1, 2), TColStd_Array1OfInteger(1, 2)
+        for i, value in ((1, a), (2, b)):
+            k.SetValue(i, value)
+            m.SetValue(i, mult)
+        return k, m
+
+    poles = TColgp_Array2OfPnt(1, 4, 1, 4)
+    for i in range(4):
+        for j in range(4):
+            poles.SetValue(i + 1, j + 1, gp_Pnt(10.0 * i / 3, 10.0 * j / 3, 6.0 * np.sin(2 * i + 1.5 * j)))
+    ends, mults = knots(0.0, 1.0, 4)
+    surface = Geom_BSplineSurface(poles, ends, ends, mults, mults, 3, 3)
+    face = BRepBuilderAPI_MakeFace(surface, 1e-7).Face()
+    explorer = TopExp_Explorer(face, TopAbs_EDGE)
+    while explorer.More():
+        edge = TopoDS.Edge_s(explorer.Current())
+        pcurve = BRepAdaptor_Curve2d(edge, face)
+        t0, t1 = pcurve.FirstParameter(), pcurve.LastParameter()
+        a, b = pcurve.Value(t0), pcurve.Value(t1)
+        if max(abs(a.Y()), abs(b.Y())) < 1e-12:  # along v = 0
+            ctl = TColgp_Array1OfPnt2d(1, 3)
+            for k, p in enumerate((a, gp_Pnt2d(a.X() + 0.15 * (b.X() - a.X()), 0.0), b), start=1):
+                ctl.SetValue(k, p)
+            BRep_Builder().UpdateEdge(edge, Geom2d_BSplineCurve(ctl, *knots(t0, t1, 3), 2), face, 3.0)
+        explorer.Next()
+    return face
+
+
+def test_an_edge_whose_pcurve_is_out_of_step_is_meshed_where_it_lies():
+    """gmsh places an edge node in its face's parameters by the edge's pcurve at the node's parameter;
+    where the pcurve runs out of step with the 3-D curve (the same points at other parameters, covered
+    by a loose tolerance), the node stood there far from where it lies, and the face's triangles crossed
+    each other to reach it: bearing.iges at 1e-3 had faces 11% off and 0.1-degree slivers; this patch
+    came out 14x its target at 1.3 degrees. The pcurves are rebuilt in step in the shape gmsh meshes,
+    the caller's shape is left as it was, and the edge's new tolerance is what the report goes by."""
+    from cadedge.mesh import _shortest_segments
+    from cadedge.occt.sameparam import STEP_SHARE, in_step
+
+    face = _out_of_step_face()
+    result = mesh_shape(face, ald=1e-3, timeout=120)
+    assert result.ok and not result.failures, result.problems(verbose=True)
+    report = result.report
+    assert report.worst_deficit <= 1e-3 and report.min_angle >= 20.0, report.lines()
+    assert not any(f.folded for f in report.faces)
+    assert [n for n in result.notes if "out of step" in n] == [
+        "edge 2: its curves on its faces ran out of step with its own curve (by up to 2.2): rebuilt in step for "
+        "meshing"]
+    assert list(result.restepped) == [2] and result.restepped[2] < 0.05
+    shortest = _shortest_segments(result.grid)
+    again, restepped = in_step(face, shortest)  # the caller's face still has its own pcurve
+    assert [r.edge for r in restepped] == [2] and restepped[0].before > 2.0
+    assert restepped[0].after <= STEP_SHARE * shortest[2]
+    assert in_step(again, shortest) == (again, [])  # in step now: nothing to do

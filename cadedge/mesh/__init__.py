@@ -77,6 +77,10 @@ class MeshResult:
     extras: dict[str, Any] = field(default_factory=dict)
     #: per face: surface type, triangles, area deficit, min angle (:class:`~cadedge.mesh.report.MeshReport`)
     report: Any = None
+    #: edge id -> its tolerance with the pcurves it was meshed with, where those were rebuilt in step with its
+    #: curve (:mod:`cadedge.occt.sameparam`): its tolerance had covered the old pcurves, not its distance
+    #: from its faces
+    restepped: dict[int, float] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -233,6 +237,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     import dataclasses
 
     from ..occt.empty import without_empty
+    from ..occt.sameparam import in_step
     from .check import check_triangles
     from .coincident import meshed_as, merged_shape
     from .gmsh_model import shape_to_brep
@@ -245,7 +250,12 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
 
     shape, coincident = merged_shape(grid)  # one gmsh point where a face has two vertices
     shape, left_out = without_empty(shape)  # gmsh's import and writer fail on a solid with no face
+    shape, restepped = in_step(shape, _shortest_segments(grid))  # gmsh places edge nodes by the pcurves
     meshed = meshed_as(dataclasses.replace(grid, shape=None, curves=None), coincident)
+    tolerance = {r.edge: r.tolerance for r in restepped}
+    if tolerance:  # the job judges what the edges' tolerances excuse by the tolerances they now need
+        meshed = dataclasses.replace(meshed, edges=[dataclasses.replace(e, tolerance=tolerance[e.id])
+                                                    if e.id in tolerance else e for e in meshed.edges])
     invalid = _invalid_faces(grid)
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
                   hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident,
@@ -277,6 +287,15 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         notes.append(f"vertices of one face at one point, meshed as one node: {pairs}")
     if left_out:
         notes.append(f"{' and '.join(left_out)} (holding no face) left out of the shape gmsh meshes")
+    if restepped:
+        worst = max(restepped, key=lambda r: r.before)
+        if len(restepped) == 1:
+            notes.append(f"edge {worst.edge}: its curves on its faces ran out of step with its own curve (by up to "
+                         f"{worst.before:.2g}): rebuilt in step for meshing")
+        else:
+            notes.append(f"edges {_ids([r.edge for r in restepped])}: their curves on their faces ran out of step "
+                         f"with their own curves (by up to {worst.before:.2g}, edge {worst.edge}): rebuilt in step "
+                         "for meshing")
     if res.unmatched_edges:
         notes.append(f"edges {_ids(res.unmatched_edges)} match no gmsh curve: gmsh meshed those curves itself")
     if res.own_mesh_edges:
@@ -287,7 +306,16 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
                       output=out if res.written else None, seconds=time.perf_counter() - t0, notes=notes,
                       faces=faces, unmatched_edges=list(res.unmatched_edges), own_mesh_edges=list(res.own_mesh_edges),
                       error=res.error, extras=res.extras,
-                      details=list(res.details))
+                      details=list(res.details), restepped=tolerance)
+
+
+def _shortest_segments(grid: ShapeGrid) -> dict[int, float]:
+    """Edge id -> the length of its grid's shortest segment (edges with a segment only)."""
+    out = {}
+    for e in grid.edges:
+        if not e.degenerate and len(e.points) >= 2:
+            out[e.id] = float(np.linalg.norm(np.diff(np.asarray(e.points, dtype=float), axis=0), axis=1).min())
+    return out
 
 
 def _invalid_faces(grid: ShapeGrid) -> dict[int, str]:

@@ -238,19 +238,23 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
     return "still over", "still over after the face was meshed again finer"
 
 
-def tolerance_bands(grid, brep_areas: np.ndarray) -> dict[int, tuple[float, float]]:
+def tolerance_bands(grid, brep_areas: np.ndarray,
+                    tolerances: dict[int, float] | None = None) -> dict[int, tuple[float, float]]:
     """Per face whose edges carry a tolerance: (their largest tolerance, the share of the face's area a
     boundary moved by each edge's tolerance along its length could add or take away: the sum of
     tolerance x length over its edges, divided by its area). Edges may lie that far from the face's
-    surface, and its mesh follows them (gapped_sewn: 0.02-0.04 from the fillets, 2-3% of their area)."""
+    surface, and its mesh follows them (gapped_sewn: 0.02-0.04 from the fillets, 2-3% of their area).
+    ``tolerances`` (edge id -> tolerance) overrides the grid's, for edges meshed with rebuilt pcurves
+    (:attr:`cadedge.mesh.MeshResult.restepped`)."""
     reach: dict[int, float] = {}
     worst: dict[int, float] = {}
     for e in grid.edges:
-        if e.tolerance <= 0.0:
+        tolerance = (tolerances or {}).get(e.id, e.tolerance)
+        if tolerance <= 0.0:
             continue
         for f in e.faces:
-            reach[f] = reach.get(f, 0.0) + e.tolerance * e.length
-            worst[f] = max(worst.get(f, 0.0), e.tolerance)
+            reach[f] = reach.get(f, 0.0) + tolerance * e.length
+            worst[f] = max(worst.get(f, 0.0), tolerance)
     return {f: (worst[f], r / brep_areas[f - 1]) for f, r in reach.items()
             if 1 <= f <= len(brep_areas) and brep_areas[f - 1] > 0}
 
@@ -266,7 +270,7 @@ def report_of(result, opts: dict) -> MeshReport | None:
     return build_report(result.nodes, result.triangles, result.triangle_faces, brep_areas=opts["brep_areas"],
                         surface_types=opts["surface_types"], surface_ald=opts["surface_ald"], failed=failed,
                         vertex_points=vertex_points, stuck=extras.get("stuck", ()),
-                        tolerances=tolerance_bands(result.grid, opts["brep_areas"]),
+                        tolerances=tolerance_bands(result.grid, opts["brep_areas"], result.restepped),
                         planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]),
                         floored=extras.get("floored"), budget=set(extras.get("budget", ())),
                         budget_triangles=extras.get("budget_triangles"),
