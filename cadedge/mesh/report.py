@@ -219,8 +219,9 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
     the job's per-face triangle budget where the face holds it (0: it does not)."""
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
         return "tolerances", (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} "
-                              f"from its surface, and a boundary moved that far changes its area by up to "
-                              f"{tolerance[1]:.2g} (loose tolerances; the mesh follows the shared edges)")
+                              "from its boundary (their pcurves on its surface), and a boundary moved that far "
+                              f"changes its area by up to {tolerance[1]:.2g} (loose tolerances; the mesh follows "
+                              "the shared edges)")
     if floor is not None:
         return "size floor", (f"its surface has a sharp ridge: its triangles were held at {floor:.2g} or more "
                               "(the face's triangle budget; curvature sizes would go down to a share of the "
@@ -238,23 +239,26 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
     return "still over", "still over after the face was meshed again finer"
 
 
-def tolerance_bands(grid, brep_areas: np.ndarray,
-                    tolerances: dict[int, float] | None = None) -> dict[int, tuple[float, float]]:
+def tolerance_bands(grid, brep_areas: np.ndarray, tolerances: dict[int, float] | None = None,
+                    measured: dict[int, dict[int, float]] | None = None) -> dict[int, tuple[float, float]]:
     """Per face whose edges carry a tolerance: (their largest tolerance, the share of the face's area a
     boundary moved by each edge's tolerance along its length could add or take away: the sum of
     tolerance x length over its edges, divided by its area). Edges may lie that far from the face's
-    surface, and its mesh follows them (gapped_sewn: 0.02-0.04 from the fillets, 2-3% of their area).
-    ``tolerances`` (edge id -> tolerance) overrides the grid's, for edges meshed with rebuilt pcurves
-    (:attr:`cadedge.mesh.MeshResult.restepped`)."""
+    boundary (their pcurves on its surface, which bound its B-rep area), and its mesh follows them
+    (gapped_sewn: 0.02-0.04 from the fillets, 2-3% of their area). ``tolerances`` (edge id -> tolerance)
+    overrides the grid's, for edges meshed with rebuilt pcurves (:attr:`cadedge.mesh.MeshResult.restepped`);
+    ``measured`` (face id -> {edge id: distance}, :func:`cadedge.occt.offsets.edge_offsets`) overrides
+    both, per face, with how far the edge lies from that face's boundary."""
     reach: dict[int, float] = {}
     worst: dict[int, float] = {}
     for e in grid.edges:
         tolerance = (tolerances or {}).get(e.id, e.tolerance)
-        if tolerance <= 0.0:
-            continue
         for f in e.faces:
-            reach[f] = reach.get(f, 0.0) + tolerance * e.length
-            worst[f] = max(worst.get(f, 0.0), tolerance)
+            off = (measured or {}).get(f, {}).get(e.id, tolerance)
+            if off <= 0.0:
+                continue
+            reach[f] = reach.get(f, 0.0) + off * e.length
+            worst[f] = max(worst.get(f, 0.0), off)
     return {f: (worst[f], r / brep_areas[f - 1]) for f, r in reach.items()
             if 1 <= f <= len(brep_areas) and brep_areas[f - 1] > 0}
 
@@ -267,15 +271,35 @@ def report_of(result, opts: dict) -> MeshReport | None:
     extras = result.extras.get(AFTER_MESH_HOOK, {}) or {}
     failed = {f.face: f.reason for f in result.failures}
     vertex_points = np.array([np.asarray(v.point, dtype=float) for v in result.grid.vertices]).reshape(-1, 3)
+    bands = tolerance_bands(result.grid, opts["brep_areas"], result.restepped)
+    excused = _excused(result, opts, bands, failed)
+    if excused and result.grid.shape is not None:  # what the edges' real distances account for, not the bound
+        from ..occt.offsets import edge_offsets
+
+        bands = tolerance_bands(result.grid, opts["brep_areas"], result.restepped,
+                                edge_offsets(result.grid.shape, result.grid.edges, excused))
     return build_report(result.nodes, result.triangles, result.triangle_faces, brep_areas=opts["brep_areas"],
                         surface_types=opts["surface_types"], surface_ald=opts["surface_ald"], failed=failed,
                         vertex_points=vertex_points, stuck=extras.get("stuck", ()),
-                        tolerances=tolerance_bands(result.grid, opts["brep_areas"], result.restepped),
+                        tolerances=bands,
                         planar=set(range(1, len(opts["brep_areas"]) + 1)) - set(opts["curved_faces"]),
                         floored=extras.get("floored"), budget=set(extras.get("budget", ())),
                         budget_triangles=extras.get("budget_triangles"),
                         face_edges=face_edge_grids(result.grid),
                         folded=extras.get("folded"))
+
+
+def _excused(result, opts: dict, bands: dict[int, tuple[float, float]], failed: dict[int, str]) -> list[int]:
+    """The meshed faces over the surface target by no more than their edges' tolerances allow (``bands``):
+    those the report would excuse by tolerances."""
+    areas = np.asarray(opts["brep_areas"], dtype=float)
+    target = opts["surface_ald"]
+    if not target or not len(result.triangles):
+        return []
+    deficits = area_deficits(face_mesh_areas(result.nodes, result.triangles, result.triangle_faces, len(areas)),
+                             areas)
+    return [f for f, (_, share) in sorted(bands.items())
+            if f not in failed and np.isfinite(deficits[f - 1]) and target < abs(deficits[f - 1]) <= share]
 
 
 def face_edge_grids(grid) -> dict[int, list[np.ndarray]]:

@@ -26,11 +26,11 @@ from OCP.BRepTools import BRepTools_ReShape
 from OCP.ShapeBuild import ShapeBuild_Edge
 from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
-from OCP.TopExp import TopExp, TopExp_Explorer
+from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Iterator, TopoDS_Shape
 
 from .compat import TopoDS, TopTools_IndexedDataMapOfShapeListOfShape
-from .topology import indexed, list_items
+from .topology import indexed, list_items, orientations_in
 
 #: An edge is out of step where its pcurve's point lies farther than this share of the edge grid's
 #: shortest segment from the 3-D curve's point at the same parameter: a node then stands in the face's
@@ -67,17 +67,6 @@ def _out_of_step(edge: TopoDS_Edge, uses: list[tuple[TopoDS_Face, list]]) -> flo
                 uv = pcurve.Value(min(max(t, lo), hi))
                 worst = max(worst, curve.Value(t).Distance(surface.Value(uv.X(), uv.Y())))
     return worst
-
-
-def _uses(face: TopoDS_Face, edge: TopoDS_Edge) -> list:
-    """The orientations in which ``face`` holds ``edge`` (a seam's two)."""
-    found = []
-    explorer = TopExp_Explorer(face, TopAbs_EDGE)
-    while explorer.More():
-        if explorer.Current().IsSame(edge) and explorer.Current().Orientation() not in found:
-            found.append(explorer.Current().Orientation())
-        explorer.Next()
-    return found
 
 
 def _copied(edge: TopoDS_Edge) -> TopoDS_Edge:
@@ -117,7 +106,7 @@ def in_step(shape: TopoDS_Shape, shortest: Mapping[int, float]) -> tuple[TopoDS_
         for f in list_items(ancestors.FindFromKey(edge)):  # a seam's face is listed twice
             if not any(f.IsSame(g) for g in faces):
                 faces.append(TopoDS.Face_s(f))
-        uses = [(face, _uses(face, edge)) for face in faces]
+        uses = [(face, orientations_in(face, edge)) for face in faces]
         bound = STEP_SHARE * shortest[i]
         try:
             before = _out_of_step(edge, uses)

@@ -38,6 +38,17 @@ def curve_type_name(kind) -> str:
     return str(kind).rsplit(".", 1)[-1].removeprefix("GeomAbs_")
 
 
+def orientations_in(face: TopoDS_Face, edge: TopoDS_Edge) -> list:
+    """The orientations in which ``face`` holds ``edge`` (a seam's two; none if it does not hold it)."""
+    found = []
+    explorer = TopExp_Explorer(face, TopAbs_EDGE)
+    while explorer.More():
+        if explorer.Current().IsSame(edge) and explorer.Current().Orientation() not in found:
+            found.append(explorer.Current().Orientation())
+        explorer.Next()
+    return found
+
+
 def walked_wires(face: TopoDS_Face) -> list[list[TopoDS_Edge]] | None:
     """Each wire of ``face`` as its edges in walking order (``BRepTools_WireExplorer``), oriented as the face
     uses them; None if a walk skips an edge (its loop would not be the wire)."""
