@@ -268,6 +268,26 @@ def test_a_zero_width_strip_is_named_as_forcing_small_angles():
     assert small and len(strip) >= 0.8 * len(small)  # before: none recognised (the strip has no corner)
 
 
+def test_a_sliver_on_an_edge_off_its_face_is_forced_only_when_the_gap_is_near_its_size():
+    """An edge that lies ``d`` off its face's boundary (an OCCT offset of a loft: 1-2.3 mm) makes the
+    triangles that join it to the face span the gap: one no longer than OFF_REACH times ``d`` is forced;
+    a longer one, or one with no node on that edge, is the mesher's."""
+    from cadedge.mesh.quality import OFF_REACH, small_angles
+
+    nodes = np.array([[0.0, 0, 0], [1, 0, 0], [0.5, 0.01, 0], [5, 0, 0], [6, 0, 0], [5.5, 0.01, 0]])
+    tris = np.array([[0, 1, 2], [3, 4, 5]])
+    edge = np.array([[-1.0, 0, 0], [0, 0, 0]])  # through node 0 only
+
+    def forced(off: float) -> list[bool]:
+        smalls = small_angles(nodes, tris, np.ones(2, dtype=int), np.zeros((0, 3)), offsets={1: [(edge, off)]})
+        return [s.forced for s in sorted(smalls, key=lambda s: s.reason)]
+
+    assert forced(1.0 / OFF_REACH) == [True, False]  # the first is 1.0 long; the second has no node on it
+    assert forced(0.9 / OFF_REACH) == [False, False]
+    (smalls,) = [small_angles(nodes, tris[:1], [1], np.zeros((0, 3)), offsets={1: [(edge, 0.5)]})]
+    assert smalls[0].reason.startswith("a node of it is on an edge that lies 0.5 off the face's boundary")
+
+
 def test_cli_surface_ald_and_report(tmp_path, capsys):
     out, rep = tmp_path / "cyl.msh", tmp_path / "cyl.json"
     code = main(["mesh", str(FIXTURES / "cylinder.step"), "--ald", "1e-2", "--surface-ald", "2e-3",

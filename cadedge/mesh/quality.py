@@ -25,6 +25,12 @@ GOOD_DEG = 20.0
 #: its boundary segment there can get over this many degrees (see :func:`small_angles`): its apex would
 #: have to lie beyond the face's other side.
 WEDGE_BOUND = 2 * SLIVER_DEG
+#: A triangle under :data:`SLIVER_DEG` with a node on an edge that lies off its face's boundary (the
+#: edge's pcurve on the face's surface) by ``d`` is forced when it is at most this many times ``d``
+#: long: the mesh joins the edge's nodes, where they are, to the face's, on its surface where the
+#: boundary runs, and a triangle that small spans the gap (an OCCT offset of a loft, edges 1-2.3 mm
+#: off their faces: 165 triangles under 5 degrees beside them).
+OFF_REACH = 4.0
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -162,9 +168,24 @@ def _closing(nodes: np.ndarray, tri: np.ndarray, angles: np.ndarray, apex: int, 
     return False, "not forced by the B-rep"
 
 
+def _off_boundary(p: np.ndarray, length: float, offsets: Sequence[tuple[np.ndarray, float]]) -> str | None:
+    """Why a triangle (corners ``p``, longest side ``length``) is forced by an edge off its face's
+    boundary (``offsets``: each such edge's grid polyline and how far it lies off), or None."""
+    for line, off in offsets:
+        if off <= 0.0 or length > OFF_REACH * off or len(line) < 2:
+            continue
+        dist, _ = segment_feet(p[:, None, :], line[None, :-1], line[None, 1:])
+        if dist.min() <= 1e-9 * (1.0 + np.abs(line).max()):
+            return (f"a node of it is on an edge that lies {off:.2g} off the face's boundary (its curve on the "
+                    f"face), and the triangle is {length:.2g} long (no more than {OFF_REACH:g} times that): it "
+                    "spans the gap between the edge and the face")
+    return None
+
+
 def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray,
                  vertex_points: np.ndarray, angles: np.ndarray | None = None, *,
-                 face_edges: Mapping[int, Sequence[np.ndarray]] | None = None) -> list[SmallAngle]:
+                 face_edges: Mapping[int, Sequence[np.ndarray]] | None = None,
+                 offsets: Mapping[int, Sequence[tuple[np.ndarray, float]]] | None = None) -> list[SmallAngle]:
     """Every triangle under :data:`SLIVER_DEG`, worst first.
 
     Forced: its face narrows to a corner sharper than :data:`SLIVER_DEG` at a B-rep vertex (a node at one
@@ -183,6 +204,11 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     Also forced: near a B-rep vertex inside the face's mesh round which its triangles' angles sum to under
     three times :data:`SLIVER_DEG` (a narrow cone's apex; :func:`_closing`), a triangle with its small
     angle there, or standing on a curve segment much longer than the face is across there.
+
+    Also forced: a node of the triangle is on an edge that lies off the face's boundary by ``d``
+    (``offsets``: face id -> (the edge's grid polyline, ``d``) for such edges, measured by
+    :func:`cadedge.occt.offsets.edge_offsets`), and the triangle is at most :data:`OFF_REACH` times
+    ``d`` long.
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     ang = triangle_angles(nodes, tris) if angles is None else angles
@@ -245,5 +271,10 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                 reason = (f"the face is about {width:.2g} wide there, between two sides of its boundary, and "
                           f"the triangle is {length:.2g} long (no triangle that long gets much over "
                           f"{bound:.2g} degrees there)")
+        if not forced and offsets and f in offsets:
+            p = nodes[tris[t]]
+            why = _off_boundary(p, float(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1).max()), offsets[f])
+            if why is not None:
+                forced, reason = True, why
         out.append(SmallAngle(face=f, angle=float(ang[t].min()), forced=forced, reason=reason))
     return out

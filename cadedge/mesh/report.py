@@ -19,7 +19,7 @@ from ..atomic import atomic_path
 from .areas import area_deficits, face_mesh_areas
 from .budget import MAX_FACE_TRIANGLES
 from .interior import SPREAD
-from .quality import GOOD_DEG, SLIVER_DEG, SmallAngle, small_angles, triangle_angles
+from .quality import GOOD_DEG, OFF_REACH, SLIVER_DEG, SmallAngle, min_angles, small_angles, triangle_angles
 
 SCHEMA = "cadedge.meshreport/1"
 #: Faces listed in the printed summary.
@@ -153,7 +153,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  planar: set[int] | None = None, floored: dict[int, float] | None = None,
                  budget: set[int] | frozenset[int] = frozenset(), budget_triangles: int | None = None,
                  face_edges: dict[int, list[np.ndarray]] | None = None,
-                 folded: dict[int, int] | None = None) -> MeshReport:
+                 folded: dict[int, int] | None = None,
+                 offsets: dict[int, list[tuple[np.ndarray, float]]] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
 
     ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
@@ -167,7 +168,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`); ``face_edges`` the grid
     polylines of each face's edges (:func:`face_edge_grids`: to tell small angles forced by a face
     narrower than its boundary segments); ``folded`` the faces with triangles that face against their
-    surface (face -> how many).
+    surface (face -> how many); ``offsets`` the edges that lie off a face's boundary (face -> (grid
+    polyline, distance), :func:`edge_polylines_off`: to tell small angles forced by such an edge).
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -206,7 +208,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         faces.append(rec)
     measured = [abs(f.area_deficit) for f in faces if f.area_deficit is not None]
     smalls = small_angles(nodes, tris, tri_faces, np.zeros((0, 3)) if vertex_points is None else vertex_points,
-                          angles=angles, face_edges=face_edges) if len(tris) else []
+                          angles=angles, face_edges=face_edges, offsets=offsets) if len(tris) else []
     return MeshReport(surface_ald=surface_ald, faces=faces, triangles=len(tris),
                       min_angle=float(tri_min.min()) if len(tri_min) else None,
                       below_20=float(np.mean(tri_min < GOOD_DEG)) if len(tri_min) else 0.0,
@@ -273,11 +275,14 @@ def report_of(result, opts: dict) -> MeshReport | None:
     vertex_points = np.array([np.asarray(v.point, dtype=float) for v in result.grid.vertices]).reshape(-1, 3)
     bands = tolerance_bands(result.grid, opts["brep_areas"], result.restepped)
     excused = _excused(result, opts, bands, failed)
-    if excused and result.grid.shape is not None:  # what the edges' real distances account for, not the bound
+    slivered = _slivered_near_loose(result, bands)
+    measured: dict[int, dict[int, float]] = {}
+    if (excused or slivered) and result.grid.shape is not None:  # the edges' real distances, not the bound
         from ..occt.offsets import edge_offsets
 
+        measured = edge_offsets(result.grid.shape, result.grid.edges, sorted(set(excused) | set(slivered)))
         bands = tolerance_bands(result.grid, opts["brep_areas"], result.restepped,
-                                edge_offsets(result.grid.shape, result.grid.edges, excused))
+                                {f: d for f, d in measured.items() if f in excused})
     return build_report(result.nodes, result.triangles, result.triangle_faces, brep_areas=opts["brep_areas"],
                         surface_types=opts["surface_types"], surface_ald=opts["surface_ald"], failed=failed,
                         vertex_points=vertex_points, stuck=extras.get("stuck", ()),
@@ -286,7 +291,32 @@ def report_of(result, opts: dict) -> MeshReport | None:
                         floored=extras.get("floored"), budget=set(extras.get("budget", ())),
                         budget_triangles=extras.get("budget_triangles"),
                         face_edges=face_edge_grids(result.grid),
-                        folded=extras.get("folded"))
+                        folded=extras.get("folded"), offsets=edge_polylines_off(result.grid, measured))
+
+
+def _slivered_near_loose(result, bands: dict[int, tuple[float, float]]) -> list[int]:
+    """The faces with a triangle under :data:`~cadedge.mesh.quality.SLIVER_DEG` no longer than
+    :data:`~cadedge.mesh.quality.OFF_REACH` times their edges' largest tolerance (``bands``): those an
+    edge off the face's boundary may force (:func:`~cadedge.mesh.quality.small_angles`)."""
+    if not len(result.triangles) or not bands:
+        return []
+    tris = np.asarray(result.triangles, dtype=np.int64)
+    low = np.flatnonzero(min_angles(result.nodes, tris) < SLIVER_DEG)
+    if not len(low):
+        return []
+    p = np.asarray(result.nodes, dtype=float)[tris[low]]
+    longest = np.linalg.norm(p - np.roll(p, -1, axis=1), axis=2).max(axis=1)
+    faces = np.asarray(result.triangle_faces, dtype=np.int64)[low]
+    reach = np.array([OFF_REACH * bands.get(int(f), (0.0, 0.0))[0] for f in faces])
+    return sorted(set(faces[longest <= reach].tolist()))
+
+
+def edge_polylines_off(grid, measured: dict[int, dict[int, float]]) -> dict[int, list[tuple[np.ndarray, float]]]:
+    """Face id -> (grid polyline, distance) of its edges that lie off its boundary, from the distances
+    ``measured`` (face id -> {edge id: distance}, :func:`cadedge.occt.offsets.edge_offsets`)."""
+    lines = {e.id: np.asarray(e.points, dtype=float) for e in grid.edges}
+    return {f: [(lines[e], d) for e, d in sorted(per_edge.items()) if d > 0.0 and e in lines]
+            for f, per_edge in measured.items()}
 
 
 def _excused(result, opts: dict, bands: dict[int, tuple[float, float]], failed: dict[int, str]) -> list[int]:
