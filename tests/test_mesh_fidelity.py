@@ -288,6 +288,29 @@ def test_a_sliver_on_an_edge_off_its_face_is_forced_only_when_the_gap_is_near_it
     assert smalls[0].reason.startswith("a node of it is on an edge that lies 0.5 off the face's boundary")
 
 
+def test_a_face_of_no_area_does_not_ask_its_edges_for_billions_of_segments():
+    """Gs001 of the dodgy-STEP catalogue (3.9 KB) holds a face of area 2.3e-13 inside 14 mm of edges: the
+    boundary fit cut its segments to that area's budget, asked 780 million pieces of one, and the caller's
+    process grew to 24 GB and was killed. Such a face is degenerate (no area target), and no edge is cut
+    into more than MAX_PIECES segments whatever a face asks."""
+    from cadedge import refine_shape
+    from cadedge.mesh.boundary_fit import MAX_PIECES
+    from cadedge.mesh.fidelity import without_degenerate
+
+    grid = refine_shape(FIXTURES / "cylinder.step", ald=1e-2)
+    areas = brep_face_areas(grid.shape)
+    tiny = areas.copy()
+    tiny[1] = 1e-13 * areas[1]  # an end face: a plane, whose segments the fit cuts to its area budget
+    assert list(without_degenerate(grid, tiny) == 0) == [False, True, False]
+    assert np.array_equal(without_degenerate(grid, areas), areas)
+    kinds = meshed_kinds(grid.shape)
+    fitted, _ = fit_boundaries(grid, 1e-2, brep_areas=tiny, kinds=kinds)
+    cut = {e.id: e.segments for e in fitted.edges}
+    assert 0.5 * MAX_PIECES < max(cut.values()) <= MAX_PIECES + max(e.segments for e in grid.edges)
+    degenerate, _ = fit_boundaries(grid, 1e-2, brep_areas=without_degenerate(grid, tiny), kinds=kinds)
+    assert max(e.segments for e in degenerate.edges) < 1000  # no area target on the face: nothing asked
+
+
 def test_cli_surface_ald_and_report(tmp_path, capsys):
     out, rep = tmp_path / "cyl.msh", tmp_path / "cyl.json"
     code = main(["mesh", str(FIXTURES / "cylinder.step"), "--ald", "1e-2", "--surface-ald", "2e-3",

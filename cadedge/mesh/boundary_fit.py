@@ -116,6 +116,10 @@ def _left_side(face, uv: np.ndarray, tangent: np.ndarray, spans: np.ndarray) -> 
 #: width ``2 area / perimeter``: periodic_u_cst's 1 mm strip, credited down to 4.4 mm segments, was filled
 #: with 11-degree triangles (6% of them under 20 degrees); the unsigned rule had split it finer than that.
 THIN_RATIO = 2.0
+#: An edge is cut into at most about this many segments (the default per-face triangle budget,
+#: :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`: a face cannot have more boundary segments than
+#: triangles): a face 1e-9 of its length wide would otherwise ask billions of its edges.
+MAX_PIECES = 400_000
 #: Rounds of the planar faces' signed fit (see :func:`fit_boundaries`); each divides the cancellation
 #: credit of a face still over its budget by :data:`CREDIT_STEP`.
 PLANAR_ROUNDS, CREDIT_STEP = 4, 4.0
@@ -391,6 +395,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
         straight = e.curve == "Line" or bool(np.all(np.linalg.norm(sagitta, axis=1) <= STRAIGHT_TOL * chord))
         edge_ratio = min(ratio, STRAIGHT_RATIO) if straight else ratio
         pieces = np.ones(len(chord), dtype=int)
+        most = max(1, MAX_PIECES // len(chord))  # a segment's pieces at most: the edge's, MAX_PIECES in all
         rows = None  # the GridFit of a grid face this edge is a line of
         torus = None  # the GridFit of a grid torus this edge bounds (0: held until fit_grids cuts it)
         for f, normals, curv, inward in probed:
@@ -401,16 +406,19 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 sliver * np.sign(np.sum(tangential * inward, axis=1)))
             allowed = budget[f - 1] * chord / max(perimeter[f - 1], 1e-300)
             with np.errstate(divide="ignore", invalid="ignore"):
-                k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
                 k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
                 k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
-                k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
+                if areas[f - 1] > 0:  # a face of no area (degenerate) has no area target to cut segments for
+                    k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
+                    k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
+                else:
+                    k_area = k_thin = 1
             if f in grids and kinds[f - 1] == "Torus":  # its columns and rows, cut below
                 k_curv, torus = 1, grids[f]
             elif straight and f in grids:  # a grid's rows, cut below (not by the curvature rule)
                 k_curv, rows = 1, grids[f] or rows
-            pieces = np.maximum(pieces, np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin),
-                                                      nan=1).astype(int))
+            asked = np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin), nan=1.0, posinf=1.0)
+            pieces = np.maximum(pieces, np.minimum(asked, most).astype(int))
         if torus is not None and not torus:  # uncut: the torus's columns, cut later, suit its neighbours too
             continue
         cut = torus.cut(e.id, e.params) if torus else None  # the grid's columns or rows, finer than any
