@@ -172,6 +172,25 @@ def test_a_brep_saved_by_occts_draw_is_read_whole(tmp_path):
     assert "truncated BREP file" in _error(drawn)
 
 
+def test_a_brep_with_an_internal_root_or_text_after_its_root_is_read_whole(tmp_path):
+    """gmsh's own benchmark files: SlenderSurface.brep's root shape is INTERNAL (``i1 0``), and
+    unable_to_recover_edge_2d-2.brep has 44 lines of a .geo script after its root reference (``+1 1 //+``);
+    OCCT reads both whole, and the check refused both as truncated. The second is read with a warning."""
+    good = write_brep(FIXTURES / "bracket.step", tmp_path / "good.brep").read_bytes().rstrip()
+    expected = _signature(cadedge.refine_shape(tmp_path / "good.brep", ald=1e-2))
+    head, root = good.rsplit(b"\n", 1)
+    assert root[:1] in (b"+", b"-")
+    internal = tmp_path / "internal.brep"
+    internal.write_bytes(head + b"\ni" + root[1:] + b" \n")
+    assert _signature(cadedge.refine_shape(internal, ald=1e-2)) == expected
+    assert load_shape(internal).warnings == []
+    junk = tmp_path / "junk.brep"
+    junk.write_bytes(good + b' //+\nField[2].F = "1500 + 600 * sin (x/500)";\n//+\n')
+    assert load_shape(junk).warnings == [
+        "BREP file: 3 lines of text after the root shape reference ignored (OCCT's reader reads none of it)"]
+    assert _signature(cadedge.refine_shape(junk, ald=1e-2)) == expected
+
+
 def test_an_iges_face_pointing_at_nothing_is_a_partial_transfer(tmp_path):
     lines = write_iges(FIXTURES / "bracket.step", tmp_path / "good.igs").read_bytes().split(b"\n")
     i = next(k for k, line in enumerate(lines) if line.startswith(b"510,"))  # the first face entity
