@@ -171,6 +171,34 @@ def test_thin_faces_are_meshed_without_slivers():
     assert long_edges and all(e.segment_lengths.max() <= 2.0 * 0.05 * (1 + 1e-9) for e in long_edges)
 
 
+def test_a_thin_band_whose_edges_carry_loose_tolerances_but_lie_on_it_is_cut_to_its_width():
+    """gmsh's benchmark cylinder.brep: a band 0.0005 tall round a cylinder of radius 0.01, its edges read
+    with tolerances of 1e-5, over a thousandth of the pieces the band asks for: the circles were left
+    whole as loose (0.0016 segments) and 9.2% of the triangles were under 20 degrees. They lie on their
+    faces to 1e-15, measured, and are cut to the band's width."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp_Explorer
+
+    from cadedge.occt.compat import TopoDS
+
+    shape = BRepPrimAPI_MakeCylinder(0.01, 0.0005).Shape()
+    builder = BRep_Builder()
+    for kind, update in ((TopAbs_EDGE, lambda s: builder.UpdateEdge(TopoDS.Edge_s(s), 1e-5)),
+                         (TopAbs_VERTEX, lambda s: builder.UpdateVertex(TopoDS.Vertex_s(s), 1e-5))):
+        explorer = TopExp_Explorer(shape, kind)
+        while explorer.More():
+            update(explorer.Current())
+            explorer.Next()
+    result = mesh_shape(shape, ald=1e-2)
+    assert all(e.tolerance == pytest.approx(1e-5) for e in result.grid.edges)
+    _assert_no_slivers(result, 1e-2)
+    assert result.report.below_20 == 0.0 and result.report.min_angle > 20.0
+    circles = [e for e in result.grid.edges if e.curve == "Circle"]
+    assert len(circles) == 2 and all(e.segment_lengths.max() <= 2.0 * 0.0005 * (1 + 1e-9) for e in circles)
+
+
 @pytest.mark.parametrize("name, finer", [("washer", False), ("fin", True)])
 def test_strips_are_cut_finer_where_that_costs_few_segments(name, finer):
     """Segments of at most 1.5 times a face's width (33.7-degree triangles across it, not 26.6) where

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..shapegrid import ShapeGrid, with_edges
 from ..splitting import split_segments
-from .proximity import TOLERANCE_SHARE, _LazyCurves
+from .proximity import Looseness, _LazyCurves
 from .segments import segment_feet
 
 #: A segment is split when longer than this many times its face's width at its midpoint: a strip of
@@ -169,6 +169,7 @@ def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> Shap
     edges = list(grid.edges)
     budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
     added = 0
+    loose = Looseness(grid)
     for _ in range(passes):
         width = face_widths(edges, reach=1.0 / ratio)
         changed = False
@@ -181,7 +182,7 @@ def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> Shap
                 pieces = np.where(seg > ratio * w, np.ceil(seg / (ratio * np.maximum(w, 1e-300))), 1)
             pieces = np.nan_to_num(pieces, nan=1.0, posinf=1.0).astype(np.int64)
             new = int(np.sum(pieces - 1))
-            if not new or added + new > budget or e.tolerance > TOLERANCE_SHARE * np.min(seg / pieces):
+            if not new or added + new > budget or loose.too_loose(e, float(np.min(seg / pieces))):
                 continue  # nothing to split, over the budget, or a loose edge (see proximity.py)
             params, points = split_segments(e.params, e.points, pieces, curves[e.id].evaluate)
             edges[i] = dataclasses.replace(e, params=params, points=points)
@@ -207,6 +208,7 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
 
     curves = curves if curves is not None else (grid.curves if grid.curves is not None else _LazyCurves(grid))
     edges = list(grid.edges)
+    loose = Looseness(grid)
     for _ in range(passes):
         tips: dict[tuple[int, int], float] = {}  # a narrow corner's tip -> the other tip's length there
         for c in narrow_corners(edges):
@@ -232,7 +234,7 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
         changed = False
         for i, k in pieces.items():
             e = edges[i]
-            if not np.any(k > 1) or e.tolerance > TOLERANCE_SHARE * np.min(e.segment_lengths / k):
+            if not np.any(k > 1) or loose.too_loose(e, float(np.min(e.segment_lengths / k))):
                 continue
             try:
                 params, points = split_segments(e.params, e.points, k, curves[e.id].evaluate)
