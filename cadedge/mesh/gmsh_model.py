@@ -296,17 +296,18 @@ def _nearest_surfaces(grid: ShapeGrid, faces: list[int], free: dict[int, set[int
     face kept gmsh's surface of its own id, and lost it when an edge match had given that surface to
     another face: gmsh's benchmark ellipses.brep, 14 edges no gmsh curve carries, had faces 21 and 22
     left with no surface, their triangles labelled as faces 26 and 27 and left out of the ``.msh``."""
-    centre: dict[int, np.ndarray] = {}
+    points: dict[int, list[np.ndarray]] = {}
     for e in grid.edges:
         for f in set(e.faces) & set(faces):
             if len(e.points):
-                centre.setdefault(f, []).append(np.asarray(e.points, dtype=float).reshape(-1, 3))
-    centre = {f: 0.5 * (np.vstack(p).min(axis=0) + np.vstack(p).max(axis=0)) for f, p in centre.items()}
+                points.setdefault(f, []).append(np.asarray(e.points, dtype=float).reshape(-1, 3))
+    centre = {f: 0.5 * (np.vstack(p).min(axis=0) + np.vstack(p).max(axis=0)) for f, p in points.items()}
     boxes = {s: np.asarray(gmsh.model.getBoundingBox(2, s), dtype=float) for s in free}
     pairs = []
     for f in faces:
         for s, edges in free.items():
-            far = float(np.linalg.norm(0.5 * (boxes[s][:3] + boxes[s][3:]) - centre[f])) if f in centre else np.inf
+            middle = 0.5 * (boxes[s][:3] + boxes[s][3:])
+            far = float(np.linalg.norm(middle - centre[f])) if f in centre else np.inf
             pairs.append((-len(edges & ours.get(f, set())), far, f, s))
     out: dict[int, int] = {}
     for _, far, f, s in sorted(pairs):

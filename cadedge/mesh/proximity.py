@@ -29,6 +29,8 @@ TOLERANCE_SHARE = 1e-3
 #: shorter than a thousand times it (a tee's ellipses, measured to 2e-8, were cut to 2e-5 mm pieces
 #: beside the point where its branch touches its run: 1.2-degree triangles).
 CONFUSION = 1e-7
+#: Each pass rebuilds the field from the split grid; sizes settle in a few.
+PASSES = 3
 
 
 class Looseness:
@@ -52,10 +54,9 @@ class Looseness:
             from ..occt.offsets import edge_offsets
 
             per_face = [d[e.id] for d in edge_offsets(self.shape, [e], e.faces).values() if e.id in d]
-            self.measured[e.id] = max(max(per_face), CONFUSION) if len(per_face) == len(set(e.faces)) else e.tolerance
+            whole = len(per_face) == len(set(e.faces))  # every face measured, else the bound stands
+            self.measured[e.id] = max(max(per_face), CONFUSION) if whole else e.tolerance
         return self.measured[e.id] > TOLERANCE_SHARE * piece
-#: Each pass rebuilds the field from the split grid; sizes settle in a few.
-PASSES = 3
 
 
 def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np.ndarray], np.ndarray]], *,

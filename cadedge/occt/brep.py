@@ -3,9 +3,9 @@
 OCCT's BREP reader reports a damaged file only on standard output and hands back what it could, so
 the file is checked before it is read: the "CASCADE Topology" header, the ``TShapes N`` table with N
 shape records, and the root reference after them (in files saved by OCCT's Draw, followed by its "0"
-line; text after it, which OCCT's reader ignores, is named in a warning). After the read, the distinct faces and solids of the shape are counted against the file's face
-(``Fa``) and solid (``So``) records. BREP files carry no length unit; their lengths are taken as
-millimetres, like in-memory shapes.
+line; text after it, which OCCT's reader ignores, is named in a warning). After the read, the distinct
+faces and solids of the shape are counted against the file's face (``Fa``) and solid (``So``) records.
+BREP files carry no length unit; their lengths are taken as millimetres, like in-memory shapes.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ _RECORD = re.compile(rb"^(Ve|Ed|Wi|Fa|Sh|So|CS|Co)\s*$", re.MULTILINE)
 # internal, ``e`` external: gmsh's SlenderSurface.brep has an internal root), the shape's index and its
 # location's. It is the end of the shape; OCCT's reader reads nothing after it. A shape saved by OCCT's
 # Draw (``save``, the DBRep_DrawableShape header) has one more line, "0"; text appended after it (gmsh's
-# unable_to_recover_edge_2d-2.brep carries 40 lines of a .geo script, from "+1 1 //+" on) is ignored.
+# unable_to_recover_edge_2d-2.brep carries 44 lines of a .geo script, from "+1 1 //+" on) is ignored.
 _ROOT = re.compile(rb"^[+\-ie]\d+ \d+(?![ \t]*[+\-ie]?\d)(?![ \t]*\*)[^\n]*$", re.MULTILINE)
 
 
