@@ -311,11 +311,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
 
 def _shortest_segments(grid: ShapeGrid) -> dict[int, float]:
     """Edge id -> the length of its grid's shortest segment (edges with a segment only)."""
-    out = {}
-    for e in grid.edges:
-        if not e.degenerate and len(e.points) >= 2:
-            out[e.id] = float(np.linalg.norm(np.diff(np.asarray(e.points, dtype=float), axis=0), axis=1).min())
-    return out
+    return {e.id: float(e.segment_lengths.min()) for e in grid.edges if not e.degenerate and len(e.points) >= 2}
 
 
 def _invalid_faces(grid: ShapeGrid) -> dict[int, str]:
