@@ -144,3 +144,11 @@ def break_the_writer(ctx) -> None:
         raise Exception("")
 
     gmsh.write = fail
+
+
+def add_free_surface(ctx) -> None:
+    """A square surface in gmsh's model that no face of the shape matches (as an import splitting a face)."""
+    import gmsh
+
+    gmsh.model.occ.addRectangle(100.0, 100.0, 0.0, 1.0, 1.0)
+    gmsh.model.occ.synchronize()

@@ -417,3 +417,16 @@ def test_a_face_whose_edges_gmsh_does_not_carry_still_gets_its_own_surface(tmp_p
         assert map_entities(grid).faces == {1: 3, 2: 2, 3: 1}  # every edge matched: their sets decide
         faces = _match_faces(grid, {e: m for e, m in edges.items() if e not in circles})
     assert faces == {1: 3, 2: 2, 3: 1}  # before: {1: 3, 2: 2}, face 3 left out and surface 1 labelled face 1
+
+
+
+def test_a_gmsh_surface_no_face_matches_is_named_and_not_meshed(cylinder):
+    """A gmsh surface with no cadedge face (an import that splits a face or adds one) was meshed and
+    labelled with its own tag, which can be another face's id: its triangles would have counted as that
+    face's. Here a hook adds a free square to gmsh's model after the faces are matched: it is named in a
+    note and left unmeshed: the mesh holds the cylinder's three faces, and only those."""
+    result = mesh_shape(cylinder, hooks={"before_generate": ["mesh_faults:add_free_surface"]})
+    assert result.error is None and not result.failures, result.problems()
+    assert any(n.startswith("gmsh surface(s) 4 match no face") for n in result.notes), result.notes
+    assert set(np.unique(result.triangle_faces)) == {1, 2, 3}  # before: face 4 too, the square's triangles
+    assert result.check.ok and result.report.worst_deficit <= 1e-2

@@ -321,8 +321,11 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         except Exception as exc:  # gmsh's bare Exception: the faces on the curves it missed fail below
             notes.append(f"gmsh's curve meshing reported: {exc}")
         deliver_edges()
-        ctx.surfaces = [t for _, t in gmsh.model.getEntities(2)] if job.faces is None else \
+        ctx.surfaces = sorted(emap.faces.values()) if job.faces is None else \
             [emap.faces[f] for f in sorted(job.faces) if f in emap.faces]  # the others: another process's
+        extra = sorted({t for _, t in gmsh.model.getEntities(2)} - set(emap.faces.values()))
+        if extra and job.faces is None:  # their triangles could only be labelled with some other face's id
+            notes.append(f"gmsh surface(s) {', '.join(map(str, extra))} match no face of the shape: not meshed")
         face_of = emap.face_of_surface
         ctx.progress, ctx.deliver = say, deliver
 
@@ -376,7 +379,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             except Exception as exc:  # the faces are meshed: the parent writes what they delivered
                 notes.append(f"gmsh's writer failed ({str(exc) or 'giving no reason'}); the mesh was written by meshio")
         extras = _hooks(ctx, "after_mesh")
-    tri_faces = np.array([face_of.get(int(s), int(s)) for s in raw.triangle_surfaces], dtype=np.int64)
+    tri_faces = np.array([face_of[int(s)] for s in raw.triangle_surfaces], dtype=np.int64)
     return JobResult(nodes=raw.nodes, triangles=raw.triangles, triangle_faces=tri_faces,
                      faces=sorted(ctx.outcomes.values(), key=lambda o: o.face), edge_pairs=pairs, edge_uses=uses,
                      imposed_edges=imposed_edges, unmatched_edges=unmatched, own_mesh_edges=own_edges, notes=notes,
