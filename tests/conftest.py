@@ -158,3 +158,30 @@ def stadium_cap(radius: float = 1.0, length: float = 20.0, n: int = 120):
     curve = interp.Curve()
     edge = BRepBuilderAPI_MakeEdge(curve).Edge()
     return BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(edge).Wire(), True).Face(), curve
+
+
+def listed_cone_and_sphere():
+    """A cone fused with a sphere on its apex, in a compound that lists the solid's vertices and edges, last
+    first, before the solid (as gmsh writes a whole model to BREP; its benchmark simple_plane.brep is one):
+    cadedge's ids follow that listing, gmsh binds points and curves in another order. The cone's apex is a
+    degenerate edge."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCone, BRepPrimAPI_MakeSphere
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS_Compound
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 0.0, 12.0).Shape()
+    solid = BRepAlgoAPI_Fuse(cone, BRepPrimAPI_MakeSphere(gp_Pnt(0, 0, 14.0), 4.0).Shape()).Shape()
+    builder, compound = BRep_Builder(), TopoDS_Compound()
+    builder.MakeCompound(compound)
+    for kind in (TopAbs_VERTEX, TopAbs_EDGE):
+        found = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(solid, kind, found)
+        for i in range(found.Extent(), 0, -1):
+            builder.Add(compound, found.FindKey(i))
+    builder.Add(compound, solid)
+    return compound

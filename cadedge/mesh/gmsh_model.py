@@ -109,7 +109,8 @@ class EntityMap:
     vertices: dict[int, int]
     edges: dict[int, CurveMatch]
     faces: dict[int, int]
-    degenerate_curves: list[int] = field(default_factory=list)
+    #: degenerate edge id -> the gmsh curve (a point) carrying it
+    degenerate_curves: dict[int, int] = field(default_factory=dict)
     unmatched_curves: list[int] = field(default_factory=list)
     #: cadedge edges no gmsh curve carries within tolerance: gmsh meshes the curves of their faces itself
     unmatched_edges: list[int] = field(default_factory=list)
@@ -156,6 +157,19 @@ def _match_vertices(grid: ShapeGrid, tol: float, notes: list[str], expected: dic
     return out
 
 
+def _at_point(tag: int, point: np.ndarray, tol: float) -> bool:
+    """Whether gmsh curve ``tag`` stays within ``tol`` of ``point`` (a degenerate edge's curve). A
+    degenerate edge was given the curve of its own id unchecked; where gmsh's order differs from
+    MapShapes' it took a real curve: gmsh's benchmark simple_plane.brep (non-manifold edges shared by up
+    to six faces) lost 7 of its edges' grids that way, gmsh meshing their curves itself."""
+    try:
+        lo, hi = (float(x[0]) for x in gmsh.model.getParametrizationBounds(1, tag))
+        values = _curve_values(tag, np.linspace(lo, hi, 5))
+    except Exception:  # gmsh raises on curves it cannot evaluate
+        return False
+    return bool(np.max(np.linalg.norm(values - np.asarray(point, dtype=float), axis=1)) <= tol)
+
+
 def _match_by_geometry(edge, candidates: list[int], tol: float) -> CurveMatch | None:
     """Find the gmsh curve carrying every grid point of ``edge``; parameters come from projection."""
     p0, p1 = edge.points[0], edge.points[-1]
@@ -189,11 +203,12 @@ def map_entities(grid: ShapeGrid, *, coincident: dict[int, int] | None = None) -
     by_tag = set(curve_tags)
     edges: dict[int, CurveMatch] = {}
     pending = []
-    degenerate_curves = []
+    degenerate_curves: dict[int, int] = {}
+    for e in (e for e in grid.edges if e.degenerate):
+        if e.id in by_tag and _at_point(e.id, e.points[0], tol):
+            degenerate_curves[e.id] = e.id
     for e in grid.edges:
         if e.degenerate:
-            if e.id in by_tag:
-                degenerate_curves.append(e.id)
             continue
         if e.id in by_tag:
             try:
@@ -204,7 +219,13 @@ def map_entities(grid: ShapeGrid, *, coincident: dict[int, int] | None = None) -
                 edges[e.id] = CurveMatch(tag=e.id, params=np.asarray(e.params, dtype=float), by_order=True)
                 continue
         pending.append(e)
-    taken = {m.tag for m in edges.values()} | set(degenerate_curves)
+    taken = {m.tag for m in edges.values()} | set(degenerate_curves.values())
+    for e in (e for e in grid.edges if e.degenerate and e.id not in degenerate_curves):
+        tag = next((t for t in curve_tags if t not in taken and _at_point(t, e.points[0], tol)), None)
+        if tag is not None:
+            degenerate_curves[e.id] = tag
+            taken.add(tag)
+            notes.append(f"degenerate edge {e.id} matched to gmsh curve {tag} by geometry")
     unmatched_edges = []
     surfaces_of = {t: {int(s) for s in gmsh.model.getAdjacencies(1, t)[0]} for t in curve_tags} if pending else {}
     for e in pending:

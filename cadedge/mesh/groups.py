@@ -23,8 +23,7 @@ def add_physical_groups(emap) -> tuple[int, int]:
             gmsh.model.addPhysicalGroup(2, [surface], tag=face, name=f"face {face}")
             n_faces += 1
     edge_curves = {eid: m.tag for eid, m in emap.edges.items()}
-    for tag in getattr(emap, "degenerate_curves", []):  # degenerate edges keep their id as gmsh's tag
-        edge_curves.setdefault(int(tag), int(tag))
+    edge_curves.update(emap.degenerate_curves)
     for eid, curve in sorted(edge_curves.items()):
         if int(curve) in curves and (1, eid) not in existing:
             gmsh.model.addPhysicalGroup(1, [int(curve)], tag=eid, name=f"edge {eid}")

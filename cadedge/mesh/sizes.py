@@ -149,7 +149,7 @@ def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField, *, f
         gmsh.model.mesh.setSizeAtParametricPoints(1, m.tag, gparams.tolist(), sizes.tolist())
         sized.add(m.tag)
     for tag in emap.unmatched_curves:
-        if tag not in sized and tag not in emap.degenerate_curves and (curves is None or tag in curves):
+        if tag not in sized and (curves is None or tag in curves):
             _size_own_curve(tag, field, factor)
 
 
