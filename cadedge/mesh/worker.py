@@ -321,6 +321,9 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         except Exception as exc:  # gmsh's bare Exception: the faces on the curves it missed fail below
             notes.append(f"gmsh's curve meshing reported: {exc}")
         deliver_edges()
+        # gmsh renumbers the nodes after meshing (Mesh.Renumber, in its entity order): the imposed chains
+        # as they are now are what a strategy may change later
+        imposed_chains = curve_chains(imposed_edges, emap) if job.faces is not None and job.mode == "nodes" else {}
         ctx.surfaces = sorted(emap.faces.values()) if job.faces is None else \
             [emap.faces[f] for f in sorted(job.faces) if f in emap.faces]  # the others: another process's
         extra = sorted({t for _, t in gmsh.model.getEntities(2)} - set(emap.faces.values()))
@@ -360,7 +363,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
         _recheck(ctx, notes)
-        changed = changed_edges(imposed.edge_nodes, emap) if job.faces is not None and job.mode == "nodes" else {}
+        changed = changed_edges(imposed_chains, emap)
         if deliver is not None:  # the hooks may have meshed faces again or moved their nodes
             for s, o in sorted(ctx.outcomes.items()):
                 if o.ok and s in face_of:
@@ -387,9 +390,33 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                      extras=extras, written=written, changed_edges=changed)
 
 
+def curve_chains(edges: list[int], emap: Any) -> dict[int, np.ndarray]:
+    """Node tags along each of ``edges``' gmsh curves (edge id -> tags from the edge's first vertex), for
+    those with a 1-D mesh. Read back rather than taken from the imposed nodes: gmsh renumbers nodes in
+    its entity order after meshing, and where that order is not cadedge's (gmsh's benchmark
+    simple_plane.brep, its points bound in another order) every imposed chain looked changed, and a job
+    in two processes dropped all 108 faces as meshed on edges their neighbours had changed."""
+    from .generate import curve_chain
+
+    out = {}
+    for eid in edges:
+        match = emap.edges[eid]
+        if len(_segment_nodes(match.tag)):
+            chain, _ = curve_chain(match.tag)
+            out[eid] = chain[::-1] if match.params[-1] < match.params[0] else chain
+    return out
+
+
+def _segment_nodes(curve: int) -> np.ndarray:
+    """The node tags of gmsh curve ``curve``'s line elements, two a segment."""
+    import gmsh
+
+    return np.asarray(gmsh.model.mesh.getElementsByType(1, curve)[1], dtype=np.int64)
+
+
 def changed_edges(imposed: dict[int, np.ndarray], emap: Any) -> dict[int, tuple[np.ndarray, np.ndarray] | None]:
     """Edges whose curve no longer carries the chain of nodes ``imposed`` on it (edge -> node tags, from
-    its first vertex): a strategy split it or meshed it itself. Each with its nodes' points (from the edge's
+    its first vertex, as :func:`curve_chains` read them): a strategy split it or meshed it itself. Each with its nodes' points (from the edge's
     first vertex to its last) and gmsh parameters, for :func:`~cadedge.mesh.impose.impose_edge_grids` in
     the processes that mesh the edge's other faces; None where the new chain does not run from vertex to
     vertex (it cannot be imposed there)."""
@@ -400,8 +427,7 @@ def changed_edges(imposed: dict[int, np.ndarray], emap: Any) -> dict[int, tuple[
     out: dict[int, tuple[np.ndarray, np.ndarray] | None] = {}
     for eid, was in imposed.items():
         match = emap.edges[eid]
-        _, seg = gmsh.model.mesh.getElementsByType(1, match.tag)
-        seg = np.asarray(seg, dtype=np.int64)
+        seg = _segment_nodes(match.tag)
         if not len(seg) or (len(seg) == 2 * (len(was) - 1) and np.array_equal(np.unique(seg), np.unique(was))):
             continue  # no mesh (its faces failed), or the imposed one
         chain, u = curve_chain(match.tag)
