@@ -70,6 +70,36 @@ def test_processes_agree_where_gmsh_numbers_nodes_in_its_own_order(split_small_j
     assert set(np.unique(result.triangle_faces)) == set(range(1, result.grid.faces + 1))
 
 
+def test_a_face_repeated_on_the_same_edges_joins_as_in_one_process(split_small_jobs):
+    """A face repeated on the same edges (gmsh's dlr_f6.brep has one; here a cylinder's side and a twin
+    of it): the two are meshed alike in one process, and the join welded their interior nodes, which
+    stand at the same points, so every inner edge had four triangles; and on the seam, which both hold
+    twice, it expected two. The check failed with a line for every triangle."""
+    from OCP.BRep import BRep_Builder, BRep_Tool
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.BRepTools import BRepTools
+    from OCP.TopoDS import TopoDS_Compound, TopoDS_Face
+
+    from cadedge.occt.topology import Topology
+
+    solid = BRepPrimAPI_MakeCylinder(5.0, 10.0).Shape()
+    side = Topology(solid).faces[0]
+    builder, twin, compound = BRep_Builder(), TopoDS_Face(), TopoDS_Compound()
+    builder.MakeFace(twin, BRep_Tool.Surface_s(side), 1e-7)
+    builder.Add(twin, BRepTools.OuterWire_s(side))
+    builder.MakeCompound(compound)
+    builder.Add(compound, solid)
+    builder.Add(compound, twin)
+    assert Topology(compound).shared_seams() == {2: (1, 4)}
+    one = mesh_shape(compound, ald=1e-2, workers=1)
+    two = mesh_shape(compound, ald=1e-2, workers=2)
+    assert any("meshed in 2 processes at once" in n for n in two.notes)
+    for result in (one, two):
+        assert result.ok and result.check.ok, result.problems()[:3]
+        assert np.array_equal(np.bincount(result.triangle_faces), np.bincount(one.triangle_faces))
+    assert len(two.nodes) == len(one.nodes)  # the twin's interior nodes its own
+
+
 @pytest.mark.parametrize("fallback", ["split", "own_curves"])
 def test_a_neighbour_is_meshed_again_on_an_edge_another_process_changed(split_small_jobs, cylinder, fallback,
                                                                         tmp_path):
@@ -154,7 +184,7 @@ def test_extras_of_the_parts_are_merged():
         part.result.extras = {"cadedge.mesh.fidelity:after_mesh": {"split": split, "stuck": [], "floored": {}}}
         parts.append(part)
     grid = type("G", (), {"faces": 2, "edges": []})()
-    result, _, _ = shards.join(grid, parts)
+    result, _, _ = shards.join(grid, parts, {})
     assert result.extras["cadedge.mesh.fidelity:after_mesh"]["split"] == [1]
     assert [o.ok for o in result.faces] == [True, True]
     assert isinstance(result, JobResult)

@@ -238,6 +238,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
 
     from ..occt.empty import without_empty
     from ..occt.sameparam import in_step
+    from ..occt.topology import Topology
     from .check import check_triangles
     from .coincident import meshed_as, merged_shape
     from .gmsh_model import shape_to_brep
@@ -259,7 +260,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     invalid = _invalid_faces(grid)
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
                   hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident,
-                  skip=invalid_face_skips(invalid))
+                  skip=invalid_face_skips(invalid), seams=Topology(grid.shape).shared_seams())
     res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout,
                        progress=MeshStatus(say, faces=grid.faces), workers=workers or default_workers())
     faces = list(res.faces)

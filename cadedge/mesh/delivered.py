@@ -67,7 +67,7 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     result.triangles = index.reshape(-1, 3)
     result.triangle_faces = np.repeat(np.array(order, dtype=np.int64), [len(faces[f]) for f in order])
     result.edge_pairs = np.sort(lines, axis=1)
-    result.edge_uses = edge_uses(job.grid, line_edges, set(faces))
+    result.edge_uses = edge_uses(job.grid, line_edges, set(faces), job.seams)
     names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
     mine = sorted(job.faces) if job.faces is not None else range(1, job.grid.faces + 1)
     result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))

@@ -459,7 +459,7 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
             f"{', '.join(map(str, sorted(adopt)))} as a neighbour's strategy changed them")
         notes.append(f"{faces_text(redo)}: {why}; meshed again on the changed edge")
         parts.append(run(frozenset(redo), dict(adopted), os.path.join(tmp, f"again{rounds}")))
-    result, lines, line_edges = join(job.grid, parts)
+    result, lines, line_edges = join(job.grid, parts, job.seams)
     result.notes = notes + result.notes
     if output is not None and len(result.triangles):
         write_meshio(Delivered(result, lines, line_edges), output)

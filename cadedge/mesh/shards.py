@@ -161,14 +161,17 @@ def faces_text(faces: set[int], limit: int = 8) -> str:
     return ("faces " if len(ids) > 1 else "face ") + shown
 
 
-def edge_uses(grid, edge_ids: np.ndarray, meshed: set[int]) -> np.ndarray:
-    """How many triangles each segment of the edges ``edge_ids`` should have: how many meshed faces its
-    edge bounds; 0 (free boundary or seam, both fine) for an edge of a single face."""
+def edge_uses(grid, edge_ids: np.ndarray, meshed: set[int], seams: dict[int, tuple[int, ...]]) -> np.ndarray:
+    """How many triangles each segment of the edges ``edge_ids`` should have: how many times the meshed
+    faces hold its edge, twice each face in ``seams[edge]`` (a cylinder's side repeated on its edges
+    puts four triangles on each seam segment); 0 (free boundary or seam, both fine) for an edge of a
+    single face."""
     by_id = {e.id: e for e in grid.edges}
     uses = {}
     for e in np.unique(edge_ids).tolist():
         on = by_id[e].faces if e in by_id else []
-        uses[e] = 0 if len(on) == 1 else sum(1 for f in on if f in meshed)
+        twice = seams.get(e, ())
+        uses[e] = 0 if len(on) == 1 else sum(2 if f in twice else 1 for f in on if f in meshed)
     return np.array([uses[e] for e in edge_ids.tolist()], dtype=np.int64)
 
 
@@ -190,31 +193,62 @@ def merge_extras(values: list[Any]) -> Any:
     return values[0]
 
 
-def weld(blocks: list[np.ndarray], edges: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                                          np.ndarray]:
+def weld(blocks: list[np.ndarray], edges: dict[int, np.ndarray], *,
+         distinct: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Point blocks and edges' segments ((k, 2, 3) corners each) as one node array, merged by exact
-    coordinates (:func:`cadedge.mesh.check.row_keys`: -0.0 is 0.0): ``(nodes, index of each block row in
-    nodes, lines (k, 2) node indices, line_edges (k,) edge ids)``, the edges in id order.
+    coordinates (:func:`cadedge.mesh.check.row_keys`: -0.0 is 0.0) across blocks: ``(nodes, index of
+    each block row in nodes, lines (k, 2) node indices, line_edges (k,) edge ids)``, the edges in id
+    order. ``distinct`` (blocks of a process's nodes, not of triangle corners): within a block nodes stay
+    as gmsh made them, the k-th at a point merged with the k-th of another block there. Two faces on one
+    surface meshed in one process (gmsh's dlr_f6.brep repeats a face) keep their own interior nodes, as
+    in a job of one process; welded, their triangles shared every edge four times and the check failed.
 
-    >>> nodes, index, lines, line_edges = weld([np.array([[0., 0, 0], [1, 0, 0]])],
-    ...                                        {7: np.array([[[1., 0, 0], [-0.0, 0, 0]]])})
+    >>> block = np.array([[0., 0, 0], [1, 0, 0], [0, 0, 0]])
+    >>> nodes, index, lines, line_edges = weld([block], {7: np.array([[[1., 0, 0], [-0.0, 0, 0]]])})
     >>> len(nodes), index.tolist(), lines.tolist(), line_edges.tolist()
-    (2, [0, 1], [[1, 0]], [7])
+    (2, [0, 1, 0], [[1, 0]], [7])
+    >>> nodes, index, lines, _ = weld([block], {7: np.array([[[1., 0, 0], [-0.0, 0, 0]]])}, distinct=True)
+    >>> len(nodes), index.tolist(), lines.tolist()
+    (3, [0, 2, 1], [[2, 0]])
     """
     order = sorted(edges)
     points = [np.asarray(b, dtype=np.float64).reshape(-1, 3) for b in blocks]
     n = sum(len(p) for p in points)
     rows = np.concatenate(points + [edges[e].reshape(-1, 3) for e in order])
-    _, first, inverse = np.unique(row_keys(rows), return_index=True, return_inverse=True)
+    _, at = np.unique(row_keys(rows), return_inverse=True)
+    at = at.ravel().astype(np.int64)
+    repeat = np.zeros(len(rows), dtype=np.int64)  # earlier rows of the same block at the same point
+    start = 0
+    for p in points if distinct else ():
+        repeat[start:start + len(p)] = _repeats(at[start:start + len(p)])
+        start += len(p)
+    _, first, inverse = np.unique(at * (int(repeat.max(initial=0)) + 1) + repeat, return_index=True,
+                                  return_inverse=True)
     inverse = inverse.ravel().astype(np.int64)
     line_edges = np.repeat(np.array(order, dtype=np.int64), np.array([len(edges[e]) for e in order], dtype=np.int64))
     return rows[first], inverse[:n], inverse[n:].reshape(-1, 2), line_edges
 
 
-def join(grid, parts: list[Part]) -> tuple[JobResult, np.ndarray, np.ndarray]:
+def _repeats(keys: np.ndarray) -> np.ndarray:
+    """For each key, how many earlier entries have the same one.
+
+    >>> _repeats(np.array([5, 3, 5, 5, 3])).tolist()
+    [0, 0, 1, 2, 1]
+    """
+    order = np.argsort(keys, kind="stable")
+    ranked = keys[order]
+    k = np.arange(len(keys))
+    starts = np.maximum.accumulate(np.where(np.r_[True, ranked[1:] != ranked[:-1]], k, 0)) if len(keys) else k
+    out = np.empty(len(keys), dtype=np.int64)
+    out[order] = k - starts
+    return out
+
+
+def join(grid, parts: list[Part], seams: dict[int, tuple[int, ...]]) -> tuple[JobResult, np.ndarray, np.ndarray]:
     """The parts' meshes as one result, nodes merged by exact coordinates, and the edges' segments for
     the writer: ``(result, lines (k, 2) node indices, line_edges (k,) edge ids)``. An edge's segments are
-    those of the last part that changed or adopted it, else the first part's."""
+    those of the last part that changed or adopted it, else the first part's. ``seams``: the job's
+    (:attr:`cadedge.mesh.worker.MeshJob.seams`)."""
     errors = [p.result.error for p in parts if p.result.error is not None]
     if len(errors) == len(parts):
         result = empty_result(errors[0])
@@ -235,7 +269,7 @@ def join(grid, parts: list[Part]) -> tuple[JobResult, np.ndarray, np.ndarray]:
         offset += len(r.nodes)
     result = empty_result("")
     result.error = None
-    result.nodes, index, lines, line_edges = weld(blocks, edges)
+    result.nodes, index, lines, line_edges = weld(blocks, edges, distinct=True)
     result.triangles = index[np.concatenate(tris)]
     result.triangle_faces = np.concatenate(tri_faces).astype(np.int64)
     outcomes: dict[int, FaceOutcome] = {}
@@ -248,7 +282,7 @@ def join(grid, parts: list[Part]) -> tuple[JobResult, np.ndarray, np.ndarray]:
     result.faces = [outcomes.get(f, FaceOutcome(face=f, surface=f)) for f in range(1, grid.faces + 1)]
     meshed = {o.face for o in result.faces if o.ok}
     result.edge_pairs = np.sort(lines, axis=1)
-    result.edge_uses = edge_uses(grid, line_edges, meshed)
+    result.edge_uses = edge_uses(grid, line_edges, meshed, seams)
     ok = [p.result for p in parts if p.result.error is None]
     result.own_mesh_edges = sorted({e for r in ok for e in r.own_mesh_edges})
     result.imposed_edges = sorted({e for r in ok for e in r.imposed_edges} - set(result.own_mesh_edges))

@@ -84,6 +84,9 @@ class MeshJob:
     # vertex -> the vertex it is meshed as: vertices of one face at one point, merged in ``brep`` (see
     # cadedge.mesh.coincident)
     coincident: dict[int, int] = field(default_factory=dict)
+    # edge -> the faces whose seam it is, for seams more than one face holds (a face repeated on the same
+    # edges): each such face puts two triangles on each of its segments (see cadedge.mesh.shards.edge_uses)
+    seams: dict[int, tuple[int, ...]] = field(default_factory=dict)
 
 
 @dataclass

@@ -209,6 +209,15 @@ class Topology:
                           for edge, fids in zip(self.edges, self.edge_faces)]
         return self._seam[i]
 
+    def shared_seams(self) -> dict[int, tuple[int, ...]]:
+        """Edge id -> the faces whose seam it is, for the seams that more than one face holds (a face
+        repeated on the same edges): each such face holds the edge twice."""
+        out = {}
+        for i, fids in enumerate(self.edge_faces):
+            if len(fids) > 1 and self.is_seam(i):
+                out[i + 1] = tuple(f for f in fids if BRep_Tool.IsClosed_s(self.edges[i], self.faces[f - 1]))
+        return out
+
     def has_3d_curve(self, i: int) -> bool:
         """True when the edge carries a 3-D curve (not only curves on surfaces)."""
         return bool(BRepAdaptor_Curve(self.edges[i]).Is3DCurve())
