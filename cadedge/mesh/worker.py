@@ -324,9 +324,8 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         except Exception as exc:  # gmsh's bare Exception: the faces on the curves it missed fail below
             notes.append(f"gmsh's curve meshing reported: {exc}")
         deliver_edges()
-        # gmsh renumbers the nodes after meshing (Mesh.Renumber, in its entity order): the imposed chains
-        # as they are now are what a strategy may change later
-        imposed_chains = curve_chains(imposed_edges, emap) if job.faces is not None and job.mode == "nodes" else {}
+        # the imposed curve meshes as gmsh holds them, to tell later which a strategy changed
+        imposed_points = curve_points(imposed_edges, emap) if job.faces is not None and job.mode == "nodes" else {}
         ctx.surfaces = sorted(emap.faces.values()) if job.faces is None else \
             [emap.faces[f] for f in sorted(job.faces) if f in emap.faces]  # the others: another process's
         extra = sorted({t for _, t in gmsh.model.getEntities(2)} - set(emap.faces.values()))
@@ -366,7 +365,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
         _recheck(ctx, notes)
-        changed = changed_edges(imposed_chains, emap)
+        changed = changed_edges(imposed_points, emap)
         if deliver is not None:  # the hooks may have meshed faces again or moved their nodes
             for s, o in sorted(ctx.outcomes.items()):
                 if o.ok and s in face_of:
@@ -393,55 +392,49 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                      extras=extras, written=written, changed_edges=changed)
 
 
-def curve_chains(edges: list[int], emap: Any) -> dict[int, np.ndarray]:
-    """Node tags along each of ``edges``' gmsh curves (edge id -> tags from the edge's first vertex), for
-    those with a 1-D mesh. Read back rather than taken from the imposed nodes: gmsh renumbers nodes in
-    its entity order after meshing, and where that order is not cadedge's (gmsh's benchmark
-    simple_plane.brep, its points bound in another order) every imposed chain looked changed, and a job
-    in two processes dropped all 108 faces as meshed on edges their neighbours had changed."""
-    from .generate import curve_chain
-
-    out = {}
-    for eid in edges:
-        match = emap.edges[eid]
-        if len(_segment_nodes(match.tag)):
-            chain, _ = curve_chain(match.tag)
-            out[eid] = chain[::-1] if match.params[-1] < match.params[0] else chain
-    return out
+def curve_points(edges: list[int], emap: Any) -> dict[int, np.ndarray]:
+    """The nodes along each of ``edges``' gmsh curves (edge id -> points from the edge's first vertex),
+    for those with a 1-D mesh: what :func:`changed_edges` compares with later. Points, not node tags:
+    gmsh renumbers every node in its entity order after each meshing call, so a curve's tags change when
+    its own order is not cadedge's (gmsh's benchmark simple_plane.brep: a job in two processes dropped
+    all 108 faces as meshed on edges their neighbours had changed) and when a curve bound before it
+    gains nodes (ellipses.brep at 1e-3: one split curve made 36 edges look changed)."""
+    return {eid: got[0] for eid in edges if (got := _chain_of(emap.edges[eid])) is not None}
 
 
-def _segment_nodes(curve: int) -> np.ndarray:
-    """The node tags of gmsh curve ``curve``'s line elements, two a segment."""
+def _chain_of(match: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """The points along a matched edge's gmsh curve from the edge's first vertex, and their gmsh
+    parameters; None where the curve has no 1-D mesh."""
     import gmsh
 
-    return np.asarray(gmsh.model.mesh.getElementsByType(1, curve)[1], dtype=np.int64)
+    from .generate import curve_chain
+
+    if not len(gmsh.model.mesh.getElementsByType(1, match.tag)[1]):
+        return None
+    chain, u = curve_chain(match.tag)
+    if match.params[-1] < match.params[0]:  # the edge's direction, as imposed
+        chain, u = chain[::-1], u[::-1]
+    tags, coords, _ = gmsh.model.mesh.getNodes(1, match.tag, includeBoundary=False)
+    x_of = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords, dtype=float).reshape(-1, 3)))
+    for end in {int(chain[0]), int(chain[-1])} - set(x_of):  # the vertex nodes: on points, maybe another curve's
+        x_of[end] = np.asarray(gmsh.model.mesh.getNode(end)[0], dtype=float)
+    return np.array([x_of[t] for t in chain.tolist()]), u
 
 
 def changed_edges(imposed: dict[int, np.ndarray], emap: Any) -> dict[int, tuple[np.ndarray, np.ndarray] | None]:
-    """Edges whose curve no longer carries the chain of nodes ``imposed`` on it (edge -> node tags, from
-    its first vertex, as :func:`curve_chains` read them): a strategy split it or meshed it itself. Each with its nodes' points (from the edge's
-    first vertex to its last) and gmsh parameters, for :func:`~cadedge.mesh.impose.impose_edge_grids` in
-    the processes that mesh the edge's other faces; None where the new chain does not run from vertex to
-    vertex (it cannot be imposed there)."""
-    import gmsh
-
-    from .generate import curve_chain
-
+    """Edges whose curve no longer carries the nodes ``imposed`` on it (edge -> points from its first
+    vertex, as :func:`curve_points` read them): a strategy split it or meshed it itself. Each with its
+    nodes' points (from the edge's first vertex to its last) and gmsh parameters, for
+    :func:`~cadedge.mesh.impose.impose_edge_grids` in the processes that mesh the edge's other faces; None
+    where the new chain does not run from vertex to vertex (it cannot be imposed there)."""
     out: dict[int, tuple[np.ndarray, np.ndarray] | None] = {}
     for eid, was in imposed.items():
-        match = emap.edges[eid]
-        seg = _segment_nodes(match.tag)
-        if not len(seg) or (len(seg) == 2 * (len(was) - 1) and np.array_equal(np.unique(seg), np.unique(was))):
+        got = _chain_of(emap.edges[eid])
+        if got is None or (got[0].shape == was.shape and np.array_equal(got[0], was)):
             continue  # no mesh (its faces failed), or the imposed one
-        chain, u = curve_chain(match.tag)
-        if (u[-1] < u[0]) != (match.params[-1] < match.params[0]):  # the edge's direction, as imposed
-            chain, u = chain[::-1], u[::-1]
-        if chain[0] != was[0] or chain[-1] != was[-1] or not np.all(np.isfinite(u)):
-            out[eid] = None
-            continue
-        tags, coords, _ = gmsh.model.mesh.getNodes(1, match.tag, includeBoundary=True)
-        x_of = dict(zip(np.asarray(tags, dtype=np.int64).tolist(), np.asarray(coords, dtype=float).reshape(-1, 3)))
-        out[eid] = (np.array([x_of[t] for t in chain.tolist()]), u)
+        points, u = got
+        ends = np.array_equal(points[[0, -1]], was[[0, -1]])
+        out[eid] = (points, u) if ends and np.all(np.isfinite(u)) else None
     return out
 
 
