@@ -189,3 +189,21 @@ def test_an_edge_without_vertices_is_a_geometry_error():
     BRep_Builder().MakeEdge(edge, Geom_Line(gp_Pnt(0, 0, 0), gp_Dir(1, 0, 0)), 1e-7)
     with pytest.raises(GeometryError, match="edge 1 has no vertex at one end"):
         Topology(edge)
+
+
+def test_an_edge_two_faces_hold_once_on_one_closed_surface_is_no_seam():
+    """A cylinder in two halves on one surface: the edge at angle 0 has two curves on that surface, so
+    ``BRep_Tool::IsClosed`` is true for both faces, yet each holds it once (gmsh's ellipses.brep: taken
+    for seams, a job in two processes expected four triangles on such edges and failed its check)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_Sewing
+
+    surface = Geom_CylindricalSurface(gp_Ax3(), 5.0)
+    sew = BRepBuilderAPI_Sewing(1e-6)
+    for start in (0.0, math.pi):
+        sew.Add(BRepBuilderAPI_MakeFace(surface, start, start + math.pi, 0.0, 10.0, 1e-7).Face())
+    sew.Perform()
+    topology = Topology(sew.SewedShape())
+    shared = [i for i, faces in enumerate(topology.edge_faces) if len(faces) == 2]
+    assert any(BRep_Tool.IsClosed_s(topology.edges[i], topology.faces[0]) for i in shared)
+    assert not any(topology.is_seam(i) for i in range(len(topology.edges)))
+    assert topology.shared_seams() == {}

@@ -203,20 +203,23 @@ class Topology:
         return self.edge_vertices[i][0] == self.edge_vertices[i][1]
 
     def is_seam(self, i: int) -> bool:
-        """True when a face uses the edge twice (the seam of a periodic surface)."""
+        """True when a face holds the edge twice, once each way (the seam of a periodic surface)."""
         if self._seam is None:
-            self._seam = [any(BRep_Tool.IsClosed_s(edge, self.faces[fid - 1]) for fid in fids)
-                          for edge, fids in zip(self.edges, self.edge_faces)]
+            self._seam = [any(self._holds_twice(k, f) for f in fids) for k, fids in enumerate(self.edge_faces)]
         return self._seam[i]
 
+    def _holds_twice(self, i: int, face: int) -> bool:
+        """Whether face ``face`` (1-based id) holds edge ``i`` once each way. ``BRep_Tool::IsClosed`` (two
+        curves on the face's surface) alone is also true for two faces on one closed surface that each
+        hold the edge once, as a cylinder in two halves (gmsh's ellipses.brep), so the orientations tell."""
+        edge, shape = self.edges[i], self.faces[face - 1]
+        return BRep_Tool.IsClosed_s(edge, shape) and len(orientations_in(shape, edge)) == 2
+
     def shared_seams(self) -> dict[int, tuple[int, ...]]:
-        """Edge id -> the faces whose seam it is, for the seams that more than one face holds (a face
-        repeated on the same edges): each such face holds the edge twice."""
-        out = {}
-        for i, fids in enumerate(self.edge_faces):
-            if len(fids) > 1 and self.is_seam(i):
-                out[i + 1] = tuple(f for f in fids if BRep_Tool.IsClosed_s(self.edges[i], self.faces[f - 1]))
-        return out
+        """Edge id -> the faces that hold it twice, for the seams of more than one face (a face repeated on
+        the same edges)."""
+        return {i + 1: tuple(f for f in fids if self._holds_twice(i, f))
+                for i, fids in enumerate(self.edge_faces) if len(fids) > 1 and self.is_seam(i)}
 
     def has_3d_curve(self, i: int) -> bool:
         """True when the edge carries a 3-D curve (not only curves on surfaces)."""
