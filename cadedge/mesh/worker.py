@@ -328,8 +328,8 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         imposed_points = curve_points(imposed_edges, emap) if job.faces is not None and job.mode == "nodes" else {}
         ctx.surfaces = sorted(emap.faces.values()) if job.faces is None else \
             [emap.faces[f] for f in sorted(job.faces) if f in emap.faces]  # the others: another process's
-        extra = sorted({t for _, t in gmsh.model.getEntities(2)} - set(emap.faces.values()))
-        if extra and job.faces is None:  # their triangles could only be labelled with some other face's id
+        extra = [] if job.faces is not None else sorted({t for _, t in gmsh.model.getEntities(2)} - set(ctx.surfaces))
+        if extra:  # their triangles could only be labelled with some other face's id
             notes.append(f"gmsh surface(s) {', '.join(map(str, extra))} match no face of the shape: not meshed")
         face_of = emap.face_of_surface
         ctx.progress, ctx.deliver = say, deliver
