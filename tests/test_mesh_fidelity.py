@@ -77,6 +77,34 @@ def test_boundary_polygon_is_fitted_to_the_face_target():
     assert caps and all(abs(f.area_deficit) <= eps for f in caps)
 
 
+def test_a_grid_ending_off_its_curve_within_its_vertices_tolerance_is_fitted():
+    """A grid ends on its vertices' points, which may lie as far from its curve's ends as the vertices'
+    tolerances allow, not only its edge's: dlr_f6.brep's edge 278 (tolerance 2e-7, ending 3.4e-5 off its
+    curve at vertices of 2e-4 and 1e-3) was taken for a grid of another curve and never fitted, and its
+    face was reported at 6.3e-3 against 1e-3. Here the cylinder's circles end 5e-5 off their curves."""
+    import dataclasses
+
+    import cadedge
+    from cadedge.shapegrid import with_edges
+
+    shape = cq.Workplane().cylinder(5.0, 10.0).val()
+    eps = 1e-2
+    grid = cadedge.refine_shape(shape, ald=eps)
+    fitted, _ = fit_boundaries(grid, eps)
+    circles = [i for i, e in enumerate(grid.edges) if e.curve == "Circle"]
+    moved = list(grid.edges)
+    for i in circles:
+        e = moved[i]
+        points = e.points.copy()
+        points[[0, -1]] += np.array([0.0, 0.0, 5e-5])  # a closed circle: both ends on its one vertex
+        moved[i] = dataclasses.replace(e, points=points, tolerance=1e-7)
+    vertices = [dataclasses.replace(v, tolerance=1e-3) for v in grid.vertices]
+    off = dataclasses.replace(with_edges(grid, moved), vertices=vertices)
+    refitted, _ = fit_boundaries(off, eps)
+    for i in circles:
+        assert refitted.edges[i].segments == fitted.edges[i].segments > grid.edges[i].segments
+
+
 def test_every_face_and_edge_is_a_physical_group(tmp_path):
     out = tmp_path / "bracket.msh"
     result = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, output=out)
