@@ -172,7 +172,8 @@ def listed_cone_and_sphere():
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
     from OCP.TopExp import TopExp
     from OCP.TopoDS import TopoDS_Compound
-    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    from cadedge.occt.compat import TopTools_IndexedMapOfShape
 
     cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 0.0, 12.0).Shape()
     solid = BRepAlgoAPI_Fuse(cone, BRepPrimAPI_MakeSphere(gp_Pnt(0, 0, 14.0), 4.0).Shape()).Shape()
