@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .fidelity import AIM, INTERIOR_SHARE, brep_face_areas, meshed_kinds, per_circle
+from .fidelity import AIM, INTERIOR_SHARE, brep_face_areas, face_perimeters, meshed_kinds, per_circle
 
 #: A boundary segment is split when longer than this many times the curvature size of a face it bounds:
 #: gmsh does not refine triangles standing on a long boundary segment, so a fillet between two straight
@@ -360,11 +360,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     for f, c in credit.items():
         budget[f - 1] *= c
     gross, net = np.zeros(len(areas)), np.zeros(len(areas))
-    perimeter = np.zeros(len(areas))
-    for e in grid.edges:
-        if not e.degenerate and len(e.points) >= 2:
-            for f in e.faces:
-                perimeter[f - 1] += e.segment_lengths.sum()
+    perimeter = face_perimeters(grid, len(areas))
     with np.errstate(divide="ignore", invalid="ignore"):
         width = np.where(perimeter > 0, 2.0 * areas / perimeter, np.inf)  # a strip's width, exactly
     edges = list(grid.edges)

@@ -77,14 +77,20 @@ def surface_type_name(surface) -> str:
 DEGENERATE_AREA = 1e-9
 
 
-def without_degenerate(grid, areas: np.ndarray) -> np.ndarray:
-    """``areas`` (per face, ``id - 1``) with 0 for every face whose area is under :data:`DEGENERATE_AREA`
-    times its perimeter (its edge grids' lengths) squared."""
-    perimeter = np.zeros(len(areas))
+def face_perimeters(grid, faces: int) -> np.ndarray:
+    """Each face's perimeter (index ``id - 1``, ``faces`` of them): its edge grids' lengths summed."""
+    perimeter = np.zeros(faces)
     for e in grid.edges:
         for f in e.faces:
-            if 1 <= f <= len(areas):
+            if 1 <= f <= faces:
                 perimeter[f - 1] += e.length
+    return perimeter
+
+
+def without_degenerate(grid, areas: np.ndarray) -> np.ndarray:
+    """``areas`` (per face, ``id - 1``) with 0 for every face whose area is under :data:`DEGENERATE_AREA`
+    times its perimeter (:func:`face_perimeters`) squared."""
+    perimeter = face_perimeters(grid, len(areas))
     return np.where(np.abs(areas) < DEGENERATE_AREA * perimeter ** 2, 0.0, areas)
 
 
