@@ -165,24 +165,51 @@ def listed_cone_and_sphere():
     first, before the solid (as gmsh writes a whole model to BREP; its benchmark simple_plane.brep is one):
     cadedge's ids follow that listing, gmsh binds points and curves in another order. The cone's apex is a
     degenerate edge."""
-    from OCP.BRep import BRep_Builder
     from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
     from OCP.BRepPrimAPI import BRepPrimAPI_MakeCone, BRepPrimAPI_MakeSphere
     from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+
+    cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 0.0, 12.0).Shape()
+    solid = BRepAlgoAPI_Fuse(cone, BRepPrimAPI_MakeSphere(gp_Pnt(0, 0, 14.0), 4.0).Shape()).Shape()
+    return _listed(solid, lambda n: range(n, 0, -1), lambda n: range(n, 0, -1))
+
+
+def listed_step_with_pieces_swapped():
+    """Two boxes fused into a step, in a compound that lists the solid's vertices and edges before it, in
+    the solid's own order but for two pieces of one line (edges 5 and 17 of the solid, parameters [0, 1]
+    and [1, 2] of one OCCT line) swapped: cadedge's edge 5 is gmsh's curve 17, and gmsh's curve 5 the
+    other piece of the same line."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+
+    solid = BRepAlgoAPI_Fuse(BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), gp_Pnt(2, 1, 1)).Shape(),
+                             BRepPrimAPI_MakeBox(gp_Pnt(1, 0, 0), gp_Pnt(3, 1, 0.5)).Shape()).Shape()
+
+    def swapped(n):
+        order = list(range(1, n + 1))
+        order[4], order[16] = 17, 5
+        return order
+
+    return _listed(solid, lambda n: range(1, n + 1), swapped)
+
+
+def _listed(solid, vertex_order, edge_order):
+    """A compound of ``solid``'s vertices and edges (MapShapes indices in the orders ``vertex_order(n)`` and
+    ``edge_order(n)`` give), then ``solid`` itself."""
+    from OCP.BRep import BRep_Builder
     from OCP.TopAbs import TopAbs_EDGE, TopAbs_VERTEX
     from OCP.TopExp import TopExp
     from OCP.TopoDS import TopoDS_Compound
 
     from cadedge.occt.compat import TopTools_IndexedMapOfShape
 
-    cone = BRepPrimAPI_MakeCone(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 0.0, 12.0).Shape()
-    solid = BRepAlgoAPI_Fuse(cone, BRepPrimAPI_MakeSphere(gp_Pnt(0, 0, 14.0), 4.0).Shape()).Shape()
     builder, compound = BRep_Builder(), TopoDS_Compound()
     builder.MakeCompound(compound)
-    for kind in (TopAbs_VERTEX, TopAbs_EDGE):
+    for kind, order in ((TopAbs_VERTEX, vertex_order), (TopAbs_EDGE, edge_order)):
         found = TopTools_IndexedMapOfShape()
         TopExp.MapShapes_s(solid, kind, found)
-        for i in range(found.Extent(), 0, -1):
+        for i in order(found.Extent()):
             builder.Add(compound, found.FindKey(i))
     builder.Add(compound, solid)
     return compound

@@ -19,7 +19,7 @@ import cadedge  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
 from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
 
-from conftest import FIXTURES, listed_cone_and_sphere  # noqa: E402
+from conftest import FIXTURES, listed_cone_and_sphere, listed_step_with_pieces_swapped  # noqa: E402
 
 ALD = 1e-2
 FAULT_FACE = 2  # mesh_faults.FAULT_FACE
@@ -430,6 +430,19 @@ def test_a_gmsh_surface_no_face_matches_is_named_and_not_meshed(cylinder):
     assert any(n.startswith("gmsh surface(s) 4 match no face") for n in result.notes), result.notes
     assert set(np.unique(result.triangle_faces)) == {1, 2, 3}  # before: face 4 too, the square's triangles
     assert result.check.ok and result.report.worst_deficit <= 1e-2
+
+
+def test_an_edge_is_not_given_the_curve_of_its_id_beyond_that_curve_s_range():
+    """An edge was given gmsh's curve of its own id when that curve, evaluated at the edge's parameters,
+    gave the edge's points; gmsh evaluates a line beyond its range, so another piece of the edge's own
+    line passed, and the edge's own curve was left to nothing (gmsh's ellipses.brep: edge 87 matched no
+    curve and faces 50 and 51 were dropped at ALD 1e-3). Here cadedge's edge 5 is the line's piece [1, 2],
+    gmsh's curve 5 its piece [0, 1]."""
+    result = mesh_shape(listed_step_with_pieces_swapped(), ald=1e-2)
+    assert any(d.startswith("edge 5 matched to gmsh curve 17 by geometry") for d in result.details), result.details
+    assert not any("match no gmsh curve" in n for n in result.notes), result.notes  # before: edge 17
+    assert result.ok and result.check.ok and result.check.missing_grid_nodes == 0, result.problems(verbose=True)
+    assert abs(result.report.worst_deficit) <= 1e-2
 
 
 def test_a_degenerate_edge_takes_the_gmsh_curve_at_its_point_not_the_one_of_its_id():

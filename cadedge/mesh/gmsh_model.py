@@ -134,6 +134,16 @@ def _curve_values(tag: int, params: np.ndarray) -> np.ndarray:
     return np.asarray(gmsh.model.getValue(1, tag, params.tolist()), dtype=float).reshape(-1, 3)
 
 
+def _within_range(tag: int, params: np.ndarray) -> bool:
+    """Whether ``params`` lie in gmsh curve ``tag``'s parameter range. gmsh evaluates a line (or any
+    curve it can extend) beyond its range: in gmsh's ellipses.brep, bound in another order, the line that
+    was edge 47's id is one piece of edge 47's own line, and edge 47's parameters put its points exactly
+    on it; taken for edge 47, it left edge 87 no curve, and two faces were dropped."""
+    lo, hi = (float(x[0]) for x in gmsh.model.getParametrizationBounds(1, tag))
+    slack = 1e-9 * max(1.0, abs(lo), abs(hi))
+    return bool(lo - slack <= np.min(params) and np.max(params) <= hi + slack)
+
+
 def _match_vertices(grid: ShapeGrid, tol: float, notes: list[str], expected: dict[int, int]) -> dict[int, int]:
     """Vertex id -> gmsh point: the ``expected`` tag where it lies there, else the nearest within ``tol``."""
     from scipy.spatial import cKDTree
@@ -212,8 +222,9 @@ def map_entities(grid: ShapeGrid, *, coincident: dict[int, int] | None = None) -
             continue
         if e.id in by_tag:
             try:
-                ok = np.max(np.linalg.norm(_curve_values(e.id, e.params) - e.points, axis=1)) <= tol
-            except Exception:  # gmsh raises if the parameters are outside the curve's range
+                ok = _within_range(e.id, e.params) and bool(
+                    np.max(np.linalg.norm(_curve_values(e.id, e.params) - e.points, axis=1)) <= tol)
+            except Exception:  # gmsh raises on a curve it cannot evaluate
                 ok = False
             if ok:
                 edges[e.id] = CurveMatch(tag=e.id, params=np.asarray(e.params, dtype=float), by_order=True)
