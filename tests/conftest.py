@@ -160,6 +160,28 @@ def stadium_cap(radius: float = 1.0, length: float = 20.0, n: int = 120):
     return BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(edge).Wire(), True).Face(), curve
 
 
+def half_ellipsoid():
+    """The lower half of an ellipsoid with semi-axes 1.038, 0.36 and 0.2076 as one face: a sphere made a
+    rational B-spline surface by OCCT's non-uniform scaling, cut at its equator, as in gmsh's
+    ellipses.brep; its pole is a degenerate edge, its seam an edge on the face twice. gmsh's
+    Frontal-Delaunay turns a triangle or a few over beside the pole."""
+    import math
+
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_GTransform, BRepBuilderAPI_MakeFace
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeSphere
+    from OCP.gp import gp_GTrsf, gp_Mat
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    scale = gp_GTrsf()
+    scale.SetVectorialPart(gp_Mat(1.038, 0, 0, 0, 0.36, 0, 0, 0, 0.2076))
+    ellipsoid = BRepBuilderAPI_GTransform(BRepPrimAPI_MakeSphere(1.0).Shape(), scale, True).Shape()
+    surface = BRep_Tool.Surface_s(TopoDS.Face_s(TopExp_Explorer(ellipsoid, TopAbs_FACE).Current()))
+    return BRepBuilderAPI_MakeFace(surface, 0.0, 2 * math.pi, -math.pi / 2, 0.0, 1e-7).Face()
+
+
 def listed_cone_and_sphere():
     """A cone fused with a sphere on its apex, in a compound that lists the solid's vertices and edges, last
     first, before the solid (as gmsh writes a whole model to BREP; its benchmark simple_plane.brep is one):

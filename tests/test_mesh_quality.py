@@ -10,7 +10,7 @@ from cadedge.mesh.collapse import collapse_edges
 from cadedge.mesh.optimize import climb_nodes, flip_edges, improve_plane, smooth_nodes
 from cadedge.mesh.quality import flat_triangles, triangle_angles
 
-from conftest import FIXTURES
+from conftest import FIXTURES, half_ellipsoid
 
 
 def _plane(points: np.ndarray, rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -469,6 +469,56 @@ def test_a_folded_node_is_counted_and_the_optimiser_unfolds_it(gmsh_cylinder):
     assert count_folded(side) > 0
     assert smooth_face(side)
     assert count_folded(side) == 0
+
+
+def test_a_dart_s_fold_is_undone_by_swapping_its_diagonal_where_no_node_may_move():
+    """Triangle (1, 0, 3) lies inside (0, 1, 2), turned over; no node may move. Swapping their shared
+    edge gives two triangles facing the right way; a curve segment (``fixed``) is never swapped."""
+    from cadedge.mesh.folds import folded, reference_normals
+    from cadedge.mesh.moves import flip_folds, untangle_nodes
+
+    x = np.array([[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.3, 0.0]])
+    tri = np.array([[0, 1, 2], [1, 0, 3]])
+    up = np.tile([0.0, 0.0, 1.0], (4, 1))
+    assert folded(x, tri, reference_normals(up, tri)).tolist() == [False, True]
+    assert untangle_nodes(x, tri, np.zeros(4, dtype=bool), _plane, reference_normals(up, tri))[1] is None
+    out = flip_folds(x, tri, set(), up)
+    assert not folded(x, out, reference_normals(up, out)).any()
+    assert sorted(map(sorted, out.tolist())) == [[0, 2, 3], [1, 2, 3]]
+    assert np.array_equal(flip_folds(x, tri, {(0, 1)}, up), tri)
+
+
+def test_a_frontal_delaunay_mesh_is_kept_once_its_folds_beside_a_pole_are_undone(tmp_path):
+    """gmsh throws away a Frontal-Delaunay mesh with a single triangle turned against its surface and
+    meshes the face by MeshAdapt: on half ellipsoids beside their pole, 0.5 s -> 13 s a face (gmsh's
+    ellipses.brep at ALD 1e-3: 13 faces out of time). Judged here once the folds are undone, the mesh is
+    kept, with no fold left."""
+    gmsh = pytest.importorskip("gmsh")
+    from OCP.BRepTools import BRepTools
+
+    from cadedge.mesh.folds import count_folded
+    from cadedge.mesh.generate import keep_or_adapt
+    from cadedge.mesh.strategies import STRATEGIES
+
+    path = tmp_path / "half_ellipsoid.brep"
+    assert BRepTools.Write_s(half_ellipsoid(), str(path))
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.occ.importShapes(str(path))
+        gmsh.model.occ.synchronize()
+        for option in ("Mesh.MeshSizeMin", "Mesh.MeshSizeMax"):
+            gmsh.option.setNumber(option, 0.015)
+        gmsh.option.setNumber("Mesh.Algorithm", 6)
+        gmsh.option.setNumber("Mesh.AlgorithmSwitchOnFailure", 0)
+        gmsh.model.mesh.generate(2)
+        made = len(gmsh.model.mesh.getElementsByType(2, 1)[0])
+        assert count_folded(1) > 0
+        assert keep_or_adapt([1], STRATEGIES[0]) == {}
+        assert count_folded(1) == 0
+        assert len(gmsh.model.mesh.getElementsByType(2, 1)[0]) == made  # Frontal-Delaunay's, not MeshAdapt's
+    finally:
+        gmsh.finalize()
 
 
 def test_untangle_moves_a_node_back_into_its_ring():

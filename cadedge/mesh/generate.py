@@ -16,6 +16,7 @@ Faces that fail every strategy are reported with gmsh's own messages.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import time
 from typing import Callable
@@ -146,6 +147,10 @@ def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
         if h is not None:
             gmsh.option.setNumber("Mesh.MeshSizeMax", max(min(h, restore["Mesh.MeshSizeMax"]),
                                                           gmsh.option.getNumber("Mesh.MeshSizeMin")))
+    switch = strategy.algorithm in DELAUNAY_BASED and gmsh.option.getNumber("Mesh.AlgorithmSwitchOnFailure") == 1
+    if switch:  # gmsh's own switch judges a face by a single fold: judged here instead (keep_or_adapt)
+        restore["Mesh.AlgorithmSwitchOnFailure"] = 1
+        gmsh.option.setNumber("Mesh.AlgorithmSwitchOnFailure", 0)
     visible = [(2, s) for s in surfaces]
     gmsh.model.setVisibility(visible, 1)
     _clear_log()
@@ -169,7 +174,32 @@ def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
         else:
             clear([(2, s)])
             out[s] = _reason(s, log, exc, alone=len(surfaces) == 1)
+    if switch:
+        out.update(keep_or_adapt([s for s in surfaces if out[s] is None], strategy))
     return out
+
+
+#: gmsh's Delaunay-based 2-D algorithms (Delaunay, Frontal-Delaunay): with ``Mesh.AlgorithmSwitchOnFailure``
+#: gmsh throws such a mesh away when a single triangle of it faces against the surface (``isMeshValid`` in
+#: its ``meshGFace.cpp``) and meshes the face again by MeshAdapt.
+DELAUNAY_BASED = (5, 6)
+
+
+def keep_or_adapt(surfaces: list[int], strategy: Strategy) -> dict[int, str | None]:
+    """Delaunay-based meshes of ``surfaces`` (by ``strategy``, made with gmsh's switch off) judged as gmsh's
+    switch would judge them, but once their folds are undone (:func:`~cadedge.mesh.optimize.unfolds`): a
+    face left with a folded triangle is meshed again by MeshAdapt at the same sizes, as gmsh would. A
+    single fold near a pole (the half ellipsoids of gmsh's ellipses.brep: one triangle of 11 621, beside
+    the pole of a rational B-spline surface) sent every such face to MeshAdapt, 0.5 -> 13 s a face, and
+    at ALD 1e-3 a chunk of seven of them past the 60 s of an attempt; its fold is undone in a few moves.
+    Per surface, None if it passed, else the reason (the surface is then cleared)."""
+    from .optimize import unfolds
+
+    again = [s for s in surfaces if not unfolds(s)]
+    if not again:
+        return {}
+    clear([(2, s) for s in again])
+    return _attempt_many(again, dataclasses.replace(strategy, algorithm=1))
 
 
 def _unrolled(surface: int, strategy: Strategy) -> str | None:

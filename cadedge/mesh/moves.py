@@ -198,6 +198,63 @@ def _swap_keeps_shape(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray
     return ok & (~ridge | bend)
 
 
+def _swappable(tri: np.ndarray, n: int, fixed_keys: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The edges of ``tri`` (over ``n`` nodes) held by exactly two triangles of one orientation and not in
+    ``fixed_keys`` (``a * (n + 1) + b``, ``a < b``): their triangles ``t1 = (a, b, c)`` and ``t2 = (b, a, d)``
+    as ``t1, t2, a, b, c, d``, and the sorted keys of all the edges. Swapping one makes ``(a, d, c)`` and
+    ``(d, b, c)``."""
+    a = tri.ravel()
+    b = np.roll(tri, -1, axis=1).ravel()
+    c = np.roll(tri, -2, axis=1).ravel()
+    owner = np.repeat(np.arange(len(tri)), 3)
+    key = np.minimum(a, b) * (n + 1) + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    pair = np.flatnonzero(ks[1:] == ks[:-1])
+    pair = pair[((pair + 2 >= len(ks)) | (ks[np.minimum(pair + 2, len(ks) - 1)] != ks[pair]))
+                & ((pair == 0) | (ks[pair - 1] != ks[pair]))]  # edges with exactly two triangles
+    h1, h2 = order[pair], order[pair + 1]
+    keep = (a[h1] == b[h2]) & (b[h1] == a[h2]) & ~np.isin(ks[pair], fixed_keys)
+    h1, h2 = h1[keep], h2[keep]
+    return owner[h1], owner[h2], a[h1], b[h1], c[h1], c[h2], ks
+
+
+def flip_folds(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], up: np.ndarray, *,
+               rounds: int = UNTANGLE_ROUNDS) -> np.ndarray:
+    """Swap the diagonal between a folded triangle (against its nodes' oriented unit surface normals
+    ``up``, see :mod:`cadedge.mesh.folds`) and a neighbour wherever the two new triangles hold fewer folded
+    ones than the two old; edges in ``fixed`` (the curve segments) never. Where moving nodes cannot
+    (:func:`untangle_nodes`): near the pole of a half ellipsoid (gmsh's ellipses.brep) Frontal-Delaunay
+    leaves triangles turned over in its parameters among neighbours spread round the pole, each of whose
+    nodes would have to move a whole triangle's length; four swaps undo its four folds. The new triangles
+    may be thin: the face optimiser's later moves lift them and never fold one. Returns the new triangles
+    (same count)."""
+    tri = np.array(tri, dtype=np.int64)
+    fixed_keys = np.array(sorted(a * (len(x) + 1) + b for a, b in fixed), dtype=np.int64)
+    for _ in range(rounds):
+        bad = folded(x, tri, reference_normals(up, tri))
+        if not bad.any():
+            break
+        t1, t2, pa, pb, pc, pd, ks = _swappable(tri, len(x), fixed_keys)
+        near = (bad[t1] | bad[t2]) & (pc != pd)
+        t1, t2, pa, pb, pc, pd = t1[near], t2[near], pa[near], pb[near], pc[near], pd[near]
+        new1 = np.column_stack([pa, pd, pc])
+        new2 = np.column_stack([pd, pb, pc])
+        gain = (bad[t1].astype(int) + bad[t2] - folded(x, new1, reference_normals(up, new1))
+                - folded(x, new2, reference_normals(up, new2)))
+        new_key = np.minimum(pc, pd) * (len(x) + 1) + np.maximum(pc, pd)
+        ok = (gain > 0) & ~np.isin(new_key, ks)
+        taken, made = np.zeros(len(tri), dtype=bool), set()
+        for k in np.flatnonzero(ok)[np.argsort(-gain[ok], kind="stable")]:  # a few: the folds' edges
+            if not (taken[t1[k]] or taken[t2[k]] or new_key[k] in made):
+                tri[t1[k]], tri[t2[k]] = new1[k], new2[k]
+                taken[[t1[k], t2[k]]] = True
+                made.add(new_key[k])
+        if not taken.any():
+            break
+    return tri
+
+
 def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
                rounds: int = FLIP_ROUNDS, up: np.ndarray | None = None) -> np.ndarray:
     """Swap the diagonal of pairs of triangles wherever that raises the smaller of their two smallest
@@ -208,23 +265,9 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
     tri = np.array(tri, dtype=np.int64)
     fixed_keys = np.array(sorted(a * (len(x) + 1) + b for a, b in fixed), dtype=np.int64)
     for _ in range(rounds):
-        a = tri.ravel()
-        b = np.roll(tri, -1, axis=1).ravel()
-        c = np.roll(tri, -2, axis=1).ravel()
-        owner = np.repeat(np.arange(len(tri)), 3)
-        key = np.minimum(a, b) * (len(x) + 1) + np.maximum(a, b)
-        order = np.argsort(key, kind="stable")
-        ks = key[order]
-        pair = np.flatnonzero(ks[1:] == ks[:-1])
-        pair = pair[((pair + 2 >= len(ks)) | (ks[np.minimum(pair + 2, len(ks) - 1)] != ks[pair]))
-                    & ((pair == 0) | (ks[pair - 1] != ks[pair]))]  # edges with exactly two triangles
-        h1, h2 = order[pair], order[pair + 1]
-        keep = (a[h1] == b[h2]) & (b[h1] == a[h2]) & ~np.isin(ks[pair], fixed_keys)
-        h1, h2 = h1[keep], h2[keep]
-        if not len(h1):
+        t1, t2, pa, pb, pc, pd, ks = _swappable(tri, len(x), fixed_keys)
+        if not len(t1):
             break
-        t1, t2 = owner[h1], owner[h2]
-        pa, pb, pc, pd = a[h1], b[h1], c[h1], c[h2]
         new1 = np.column_stack([pa, pd, pc])
         new2 = np.column_stack([pd, pb, pc])
         before = np.minimum(min_angles(x, tri[t1]), min_angles(x, tri[t2]))

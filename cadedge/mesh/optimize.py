@@ -38,6 +38,7 @@ area far less.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,7 +47,7 @@ from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
 from .folds import NodeNormals, _normals, folded, orientation, reference_normals, surface_normals
 from .gridded import NAME as GRID
-from .moves import CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, smooth_nodes, untangle_nodes
+from .moves import CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, flip_folds, smooth_nodes, untangle_nodes
 from .project import Projector
 from .quality import min_angles
 
@@ -262,17 +263,30 @@ def _start(surface: int, mesh) -> _Face:
     return _Face(mesh.x, mesh.tri, mesh.movable, mesh.uv, np.zeros(len(mesh.tags), dtype=bool), up)
 
 
-def _unfold(face: _Face, project: Projector) -> _Face:
+def _unfold(face: _Face, project: Projector, fixed: set[tuple[int, int]]) -> _Face:
     """``face`` with its folded triangles (:mod:`cadedge.mesh.folds`) unfolded where moving its interior
-    nodes can (:func:`~cadedge.mesh.moves.untangle_nodes`), or ``face`` itself if none is folded or none
-    could be."""
+    nodes can (:func:`~cadedge.mesh.moves.untangle_nodes`), then where swapping a fold's edges can
+    (:func:`~cadedge.mesh.moves.flip_folds`, never a segment of ``fixed``); ``face`` itself if none is
+    folded or nothing could be done."""
     if face.up is None:
         return face
-    ref = reference_normals(face.up, face.tri, orientation(face.up, face.tri, face.x))
-    if not folded(face.x, face.tri, ref).any():
+    sign = orientation(face.up, face.tri, face.x)
+    if not folded(face.x, face.tri, reference_normals(face.up, face.tri, sign)).any():
         return face
+    out = _untangle(face, project, sign)
+    if folded(out.x, out.tri, reference_normals(out.up, out.tri, sign)).any():
+        tri = flip_folds(out.x, out.tri, fixed, sign * out.up)
+        if not np.array_equal(tri, out.tri):
+            out = _untangle(dataclasses.replace(out, tri=tri), project, sign)
+    return out
+
+
+def _untangle(face: _Face, project: Projector, sign: float) -> _Face:
+    """``face`` after :func:`~cadedge.mesh.moves.untangle_nodes` (orientation ``sign``), or ``face``
+    itself if no node moved."""
     project.uv = face.uv.copy()
-    x, params = untangle_nodes(face.x, face.tri, face.movable, project, ref)
+    x, params = untangle_nodes(face.x, face.tri, face.movable, project,
+                               reference_normals(face.up, face.tri, sign))
     if params is None:
         return face
     rows = np.flatnonzero(face.movable)
@@ -337,7 +351,7 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
             more = _improve(face, fixed, project, n, late, collapse=collapse, below=focus, collapse_below=focus)
         return more
 
-    base = best = _unfold(start, project)
+    base = best = _unfold(start, project, fixed)
     for _ in range(STAGE_ROUNDS if focus_first else 0):  # its worst triangles first, where time is short
         if late():
             break
@@ -396,8 +410,27 @@ def unfold_face(surface: int) -> bool:
     if mesh is None:
         return False
     start = _start(surface, mesh)
-    base = _unfold(start, Projector(surface))
+    base = _unfold(start, Projector(surface), mesh.fixed)
     return base is not start and _write(surface, mesh, base)
+
+
+def unfolds(surface: int) -> bool:
+    """Whether one meshed gmsh surface holds no folded triangle once its folds are undone where moving its
+    interior nodes can (:func:`_unfold`, written back): how a Delaunay-based mesh is judged
+    (:func:`cadedge.mesh.generate.keep_or_adapt`). False where more than :data:`FOLD_TRUST` of its
+    triangles are folded (not the mesher's folds: not undone here)."""
+    from .facemesh import read_face
+
+    mesh = read_face(surface)
+    if mesh is None:
+        return True
+    start = _start(surface, mesh)
+    if start.up is None:
+        return False
+    base = _unfold(start, Projector(surface), mesh.fixed)
+    if base is not start:
+        _write(surface, mesh, base)
+    return not folded(base.x, base.tri, reference_normals(base.up, base.tri, orientation(base.up, base.tri, base.x))).any()
 
 
 def _face_min_angle(surface: int) -> float:
