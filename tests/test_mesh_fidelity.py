@@ -105,6 +105,29 @@ def test_a_grid_ending_off_its_curve_within_its_vertices_tolerance_is_fitted():
         assert refitted.edges[i].segments == fitted.edges[i].segments > grid.edges[i].segments
 
 
+def test_face_grading_cuts_a_grid_ending_off_its_curve_within_its_vertices_tolerance():
+    """The face-wise grading (and the wedges' and apexes' cuts, through ``grading.cut_on_curve``) took a
+    grid ending further than 10 times its edge's tolerance from its curve's ends for another curve's,
+    as the boundary fit did (above): here the seam of a 20 x 2 cylinder, whose one segment its circles'
+    spacing grades into 21, ends 5e-5 off its line (edge tolerance 1e-7, vertices 1e-3): it was left whole."""
+    import dataclasses
+
+    import cadedge
+    from cadedge.mesh.grading import grade_faces
+    from cadedge.shapegrid import with_edges
+
+    grid = cadedge.refine_shape(cq.Workplane().cylinder(20.0, 2.0).val(), ald=1e-2)
+    seam = next(i for i, e in enumerate(grid.edges) if e.curve == "Line")
+    assert grid.edges[seam].segments == 1
+    graded = grade_faces(grid).edges[seam].segments
+    moved = list(grid.edges)
+    e = moved[seam]
+    moved[seam] = dataclasses.replace(e, points=e.points + np.array([5e-5, 0.0, 0.0]), tolerance=1e-7)
+    vertices = [dataclasses.replace(v, tolerance=1e-3) for v in grid.vertices]
+    off = dataclasses.replace(with_edges(grid, moved), vertices=vertices)
+    assert grade_faces(off).edges[seam].segments == graded > 1
+
+
 def test_every_face_and_edge_is_a_physical_group(tmp_path):
     out = tmp_path / "bracket.msh"
     result = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, output=out)

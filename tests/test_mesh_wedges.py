@@ -48,10 +48,10 @@ def _even(grid, pieces: int):
     faces' area target cuts them before the corners are seen (refined alone, a 60-degree arc has 3)."""
     from cadedge.mesh.grading import split_on_curve
     from cadedge.mesh.proximity import _LazyCurves
-    from cadedge.shapegrid import with_edges
+    from cadedge.shapegrid import end_tolerances, with_edges
 
-    curves = _LazyCurves(grid)
-    edges = [split_on_curve(e, curves, np.full(e.segments, max(1, pieces // e.segments)))
+    curves, ends = _LazyCurves(grid), end_tolerances(grid)
+    edges = [split_on_curve(e, curves, np.full(e.segments, max(1, pieces // e.segments)), ends=ends[e.id])
              if e.curve in ("Circle", "Hyperbola") else e for e in grid.edges]
     return with_edges(grid, edges)
 

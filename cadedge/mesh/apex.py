@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..shapegrid import ShapeGrid, with_edges
+from ..shapegrid import ShapeGrid, end_tolerances, with_edges
 from .developed import NARROW, WRAP
 from .grading import split_on_curve
 from .proximity import _LazyCurves
@@ -39,6 +39,7 @@ def grade_to_apexes(grid: ShapeGrid, cones: dict[int, tuple[np.ndarray, float]],
     if not cones:
         return grid
     curves = _LazyCurves(grid)
+    ends = end_tolerances(grid)
     edges = list(grid.edges)
     changed = False
     for i, e in enumerate(edges):
@@ -53,7 +54,7 @@ def grade_to_apexes(grid: ShapeGrid, cones: dict[int, tuple[np.ndarray, float]],
             tip = near <= max(e.tolerance, 1e-12 * float(rho.max()))  # a segment from the apex: the fan's
             need = np.ceil(e.segment_lengths / np.maximum(width, 1e-300))
             pieces = np.maximum(pieces, np.where(tip, 1, np.minimum(need, MAX_PIECES)).astype(int))
-        split = split_on_curve(e, curves, pieces) if np.any(pieces > 1) else None
+        split = split_on_curve(e, curves, pieces, ends=ends[e.id]) if np.any(pieces > 1) else None
         if split is not None:
             edges[i], changed = split, True
     return with_edges(grid, edges) if changed else grid

@@ -340,7 +340,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     from ..errors import GeometryError
     from ..occt.edgecurve import EdgeCurve
     from ..occt.topology import Topology
-    from ..shapegrid import with_edges
+    from ..shapegrid import end_tolerances, with_edges
     from ..splitting import fits_curve, insert_points, split_segments
     from .budget import filling_size
     from .gridded import grid_faces
@@ -364,10 +364,9 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     with np.errstate(divide="ignore", invalid="ignore"):
         width = np.where(perimeter > 0, 2.0 * areas / perimeter, np.inf)  # a strip's width, exactly
     edges = list(grid.edges)
-    # a grid ends on its vertices' points, which may lie as far from the curve's ends as the vertices'
-    # tolerances allow: dlr_f6.brep's edge 278 (tolerance 2e-7) ends 3.4e-5 off its curve, at vertices of
-    # 2e-4 and 1e-3, and was never fitted, its face 94 kept at 6.3e-3 against 1e-3 (8.6e-4 once fitted)
-    vertex_tolerance = {v.id: v.tolerance for v in grid.vertices}
+    # dlr_f6.brep's edge 278, its ends off its curve within its vertices' tolerances, was never fitted, its
+    # face 94 kept at 6.3e-3 against 1e-3 (8.6e-4 once fitted)
+    ends = end_tolerances(grid)
     for i, e in enumerate(edges):
         if e.degenerate or len(e.points) < 2 or not e.faces or not np.all(np.diff(e.params) > 0):
             continue
@@ -377,8 +376,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
             measured.edges[i] = None
             try:
                 curve = EdgeCurve(topo.edges[e.id - 1], e.id)
-                ends = max([e.tolerance] + [vertex_tolerance.get(v, 0.0) for v in e.vertices])
-                if not fits_curve(e.params, e.points, curve.evaluate, ends):
+                if not fits_curve(e.params, e.points, curve.evaluate, ends[e.id]):
                     continue  # the grid's parameters are not this curve's: leave the edge alone
                 mid_u = 0.5 * (e.params[:-1] + e.params[1:])
                 sagitta = _sagittas(e.params, e.points, curve.evaluate)

@@ -28,11 +28,12 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
     kept, so shared edges stay conforming). A few passes let the splits spread along the boundary.
     """
     from ..errors import InputError
-    from ..shapegrid import with_edges
+    from ..shapegrid import end_tolerances, with_edges
     from .proximity import _LazyCurves
     from .sizes import SizeField
 
     curves = _LazyCurves(grid)  # each edge's OCCT curve built once, on first use
+    ends = end_tolerances(grid)
     edges = list(grid.edges)
     by_face: dict[int, list[int]] = {}
     for i, e in enumerate(edges):
@@ -63,7 +64,7 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
             e = edges[i]
             if not np.any(k > 1) or not np.all(np.diff(e.params) > 0):
                 continue
-            split = split_on_curve(e, curves, k)
+            split = split_on_curve(e, curves, k, ends=ends[e.id])
             if split is not None:
                 edges[i], changed = split, True
         if not changed:
@@ -71,18 +72,19 @@ def grade_faces(grid, *, growth: float = 0.25, ratio: float = GRADE_RATIO, passe
     return with_edges(grid, edges)
 
 
-def split_on_curve(e, curves, pieces: np.ndarray):
+def split_on_curve(e, curves, pieces: np.ndarray, *, ends: float):
     """Edge grid ``e`` with segment ``k`` cut into ``pieces[k]`` pieces of equal arc length on its OCCT
     curve (``curves[e.id]``, grid points kept); None as for :func:`cut_on_curve`."""
     from ..splitting import equal_shares
 
-    return cut_on_curve(e, curves, equal_shares(pieces))
+    return cut_on_curve(e, curves, equal_shares(pieces), ends=ends)
 
 
-def cut_on_curve(e, curves, cuts: dict[int, np.ndarray]):
+def cut_on_curve(e, curves, cuts: dict[int, np.ndarray], *, ends: float):
     """Edge grid ``e`` with segment ``k`` cut at the shares ``cuts[k]`` (increasing, in (0, 1)) of its arc
     length on its OCCT curve (``curves[e.id]``, grid points kept); None when the curve cannot be built or
-    evaluated, or the grid's parameters are not that curve's (the edge is then left alone)."""
+    evaluated, or the grid's parameters are not that curve's: its ends further from the curve's than
+    ``ends`` allows (:func:`cadedge.shapegrid.end_tolerances`; the edge is then left alone)."""
     from OCP.Standard import Standard_Failure
 
     from ..errors import GeometryError
@@ -90,7 +92,7 @@ def cut_on_curve(e, curves, cuts: dict[int, np.ndarray]):
 
     try:
         curve = curves[e.id]
-        if not fits_curve(e.params, e.points, curve.evaluate, e.tolerance):
+        if not fits_curve(e.params, e.points, curve.evaluate, ends):
             return None
         u, p = cut_by_arc(e.params, e.points, cuts, curve.evaluate)
     except (GeometryError, Standard_Failure):

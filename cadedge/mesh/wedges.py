@@ -36,7 +36,7 @@ import dataclasses
 
 import numpy as np
 
-from ..shapegrid import ShapeGrid, with_edges
+from ..shapegrid import ShapeGrid, end_tolerances, with_edges
 from .grading import cut_on_curve
 from .proximity import _LazyCurves
 from .widths import BUDGET_FACTOR, MIN_BUDGET, WIDTH_RATIO, _segment_distances
@@ -140,6 +140,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     if not corners:
         return grid
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
+    ends = end_tolerances(grid)
     budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
     changed = False
     for c in corners:  # the tips first: the longer one cut at the shorter one's length
@@ -147,13 +148,14 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
         k, s = c.sides[int(np.argmax(tips))]
         if max(tips) > TIP_RATIO * min(tips) and not edges[k].tolerance > LOOSE_SHARE * min(tips):
             share = min(tips) / max(tips)
-            cut = cut_on_curve(edges[k], curves, {tip_segment(edges[k], s): [share if s else 1 - share]})
+            cut = cut_on_curve(edges[k], curves, {tip_segment(edges[k], s): [share if s else 1 - share]},
+                               ends=ends[edges[k].id])
             if cut is not None:
                 edges[k], changed = cut, True
     if keep is not None and areas is not None and target is not None:  # then lengthened where too short
         room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
         for c in corners:
-            changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, room)
+            changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, ends, room)
     tip_segments = {(k, tip_segment(edges[k], s)) for c in corners for k, s in c.sides}
     cuts: dict[int, dict[int, np.ndarray]] = {}  # edge index -> segment -> shares of it to cut at
     for c in corners:
@@ -173,7 +175,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
         new = sum(len(f) for f in at.values())
         if not new or added + new > budget:
             continue  # nothing to cut, or over the budget
-        cut = cut_on_curve(e, curves, at)
+        cut = cut_on_curve(e, curves, at, ends=ends[e.id])
         if cut is not None:
             edges[i], changed, added = cut, True, added + new
     return with_edges(grid, edges) if changed else grid
@@ -200,15 +202,17 @@ def _no_piece_under(cuts: dict[int, np.ndarray], lengths: np.ndarray, least: flo
     return out
 
 
-def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, room: np.ndarray) -> bool:
+def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, ends: dict[int, float],
+                   room: np.ndarray) -> bool:
     """Drop the points near corner ``c`` that ``kept`` (the edges as refined) does not hold and cut both
     tips at the length where they are :data:`JUMP_AIM` times the first graded piece beside them (up to
     :data:`LAST_AIM` where the faces' area allows no more); True if ``edges`` changed. A corner whose tips
     (made equal) are that long already, cannot get that long without dropping a kept point, or whose
     chords would move a face's area by more than its ``room`` (by face id - 1; what is used is taken from
-    it) is left alone. In a cusp the wedge's width grows as the square of the distance from the
-    vertex, so a longer tip stands beside pieces that are relatively longer, and its forced triangle is
-    wider; what the chords cut off grows as the cube of the tips' length."""
+    it) is left alone (``ends``: edge id -> how far a grid may end from its curve, see
+    :func:`~cadedge.mesh.grading.cut_on_curve`). In a cusp the wedge's width grows as the square of the
+    distance from the vertex, so a longer tip stands beside pieces that are relatively longer, and its
+    forced triangle is wider; what the chords cut off grows as the cube of the tips' length."""
     sides = [_from_vertex(edges[k], s) for k, s in c.sides]
     reach = []  # per side: distances of its points from the vertex, which may be dropped, the jumps
     for (k, s), mine, other in zip(c.sides, sides, sides[::-1]):
@@ -245,7 +249,7 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, roo
         beyond = dist[~drop & (dist > 0)][0]
         if beyond > (1.0 + 1e-3) * end:
             share = end / beyond
-            e = cut_on_curve(e, curves, {tip_segment(e, s): [share if s else 1.0 - share]})
+            e = cut_on_curve(e, curves, {tip_segment(e, s): [share if s else 1.0 - share]}, ends=ends[e.id])
             if e is None:
                 return False
         new.append(e)
