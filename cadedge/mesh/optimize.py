@@ -47,7 +47,8 @@ from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
 from .folds import NodeNormals, _normals, folded, orientation, reference_normals, surface_normals
 from .gridded import NAME as GRID
-from .moves import CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, flip_folds, smooth_nodes, untangle_nodes
+from .moves import (CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, flip_folds, smooth_nodes,
+                    untangle_nodes)
 from .project import Projector
 from .quality import min_angles
 
@@ -403,34 +404,34 @@ def _write(surface: int, mesh, face: _Face) -> bool:
 
 def unfold_face(surface: int) -> bool:
     """Unfold the folded triangles of one meshed gmsh surface (:func:`_unfold`), before its area is
-    measured (:func:`cadedge.mesh.areas.unfolded_areas`). Returns whether a node moved."""
-    from .facemesh import read_face
-
-    mesh = read_face(surface)
-    if mesh is None:
-        return False
-    start = _start(surface, mesh)
-    base = _unfold(start, Projector(surface), mesh.fixed)
-    return base is not start and _write(surface, mesh, base)
+    measured (:func:`cadedge.mesh.areas.unfolded_areas`). Returns whether its mesh changed."""
+    return _unfold_written(surface)[0]
 
 
 def unfolds(surface: int) -> bool:
     """Whether one meshed gmsh surface holds no folded triangle once its folds are undone where moving its
-    interior nodes can (:func:`_unfold`, written back): how a Delaunay-based mesh is judged
-    (:func:`cadedge.mesh.generate.keep_or_adapt`). False where more than :data:`FOLD_TRUST` of its
-    triangles are folded (not the mesher's folds: not undone here)."""
+    interior nodes or swapping the folds' edges can (:func:`_unfold`, written back): how a Delaunay-based
+    mesh is judged (:func:`cadedge.mesh.generate.keep_or_adapt`). False where more than :data:`FOLD_TRUST`
+    of its triangles are folded (not the mesher's folds: not undone here)."""
+    return _unfold_written(surface)[1]
+
+
+def _unfold_written(surface: int) -> tuple[bool, bool]:
+    """Unfold one meshed gmsh surface (:func:`_unfold`) and hand the result to gmsh: whether its mesh
+    changed, and whether it is left with no folded triangle (False where its folds are not the mesher's,
+    see :data:`FOLD_TRUST`)."""
     from .facemesh import read_face
 
     mesh = read_face(surface)
     if mesh is None:
-        return True
+        return False, True
     start = _start(surface, mesh)
     if start.up is None:
-        return False
+        return False, False
     base = _unfold(start, Projector(surface), mesh.fixed)
-    if base is not start:
-        _write(surface, mesh, base)
-    return not folded(base.x, base.tri, reference_normals(base.up, base.tri, orientation(base.up, base.tri, base.x))).any()
+    changed = base is not start and _write(surface, mesh, base)
+    sign = orientation(base.up, base.tri, base.x)
+    return changed, not folded(base.x, base.tri, reference_normals(base.up, base.tri, sign)).any()
 
 
 def _face_min_angle(surface: int) -> float:
