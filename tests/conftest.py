@@ -173,7 +173,8 @@ def half_ellipsoid():
     from OCP.gp import gp_GTrsf, gp_Mat
     from OCP.TopAbs import TopAbs_FACE
     from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
+
+    from cadedge.occt.compat import TopoDS  # OCP 8.0 has no OCP.TopoDS.TopoDS.Face_s
 
     scale = gp_GTrsf()
     scale.SetVectorialPart(gp_Mat(1.038, 0, 0, 0, 0.36, 0, 0, 0, 0.2076))
