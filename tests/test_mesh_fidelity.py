@@ -276,6 +276,28 @@ def test_a_sharp_face_corner_is_named_as_forcing_a_small_angle():
     assert any("corner" in line and "forced" in line for line in result.report.lines())
 
 
+def test_a_cusp_beside_wider_corners_at_one_vertex_is_a_corner_of_its_own():
+    """A face's corners at a B-rep vertex are its fans of triangles round the node, parted by boundary
+    segments: where a slot's tangent sides meet a face's outline (gmsh's PeriodicFaceWithLargeTolerance.brep)
+    a cusp lies between two wider corners, and the sum of all three (here 93 degrees) hid the cusp's 3; the
+    triangle spanning the cusp was named unforced. Here corners of 45, 3 and 45 degrees meet at node 0."""
+    from cadedge.mesh.quality import corner_angles, small_angles, triangle_angles
+
+    def at(degrees, r=1.0):
+        return [r * np.cos(np.radians(degrees)), r * np.sin(np.radians(degrees)), 0.0]
+
+    nodes = np.array([[0.0, 0, 0], at(0), at(45), at(90), at(93), at(100), at(145)])
+    tris = np.array([[0, 1, 2], [0, 3, 4], [0, 5, 6]])
+    angles = triangle_angles(nodes, tris)
+    sides = {(0, 1), (0, 2), (0, 3), (0, 4), (0, 5), (0, 6)}
+    assert sorted(corner_angles(tris, angles, 0, sides)) == pytest.approx([3.0, 45.0, 45.0])
+    fan = np.array([[0, 1, 2], [0, 3, 4], [0, 4, 6]])  # (0, 4) an inner edge: 90-145 one corner
+    assert sorted(corner_angles(fan, triangle_angles(nodes, fan), 0, sides - {(0, 4), (0, 5)})) == \
+        pytest.approx([45.0, 55.0])
+    small = small_angles(nodes, tris, np.ones(3, dtype=int), nodes[[0]], angles)
+    assert [s.forced for s in small] == [True]  # before: not forced (93 degrees at the vertex)
+
+
 def test_strip_width_is_the_distance_to_the_second_nearest_boundary_edge():
     from cadedge.mesh.quality import strip_width
 

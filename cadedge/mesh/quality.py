@@ -182,6 +182,36 @@ def _off_boundary(p: np.ndarray, length: float, offsets: Sequence[tuple[np.ndarr
     return None
 
 
+def corner_angles(tri: np.ndarray, angles: np.ndarray, node: int, sides: set[tuple[int, int]]) -> list[float]:
+    """The angles (degrees) of a face's corners at mesh node ``node``: per fan of the face's triangles ``tri``
+    round it (their ``angles``), the sum of their angles there; fans part where a boundary segment
+    (``sides``, sorted node pairs) leaves the node. A vertex where a hole's outline touches the face's
+    outer one (gmsh's PeriodicFaceWithLargeTolerance.brep: a slot's tangent sides meeting the end circle)
+    has a cusp between two wider corners, and their sum hid the cusp's 0 degrees."""
+    rows, cols = np.nonzero(tri == node)
+    if not len(rows):
+        return [0.0]
+    fan = np.arange(len(rows))  # union-find over the triangles round the node, joined across inner edges
+    shared: dict[int, int] = {}
+    for k, (t, c) in enumerate(zip(rows.tolist(), cols.tolist())):
+        for other in (int(tri[t, (c + 1) % 3]), int(tri[t, (c + 2) % 3])):
+            if (min(node, other), max(node, other)) in sides:
+                continue
+            if other in shared:
+                fan[_root(fan, k)] = _root(fan, shared[other])
+            else:
+                shared[other] = k
+    roots = np.array([_root(fan, k) for k in range(len(rows))])
+    sums = np.bincount(np.unique(roots, return_inverse=True)[1], weights=angles[rows, cols])
+    return sums.tolist()
+
+
+def _root(parent: np.ndarray, k: int) -> int:
+    while parent[k] != k:
+        k = parent[k]
+    return int(k)
+
+
 def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray,
                  vertex_points: np.ndarray, angles: np.ndarray | None = None, *,
                  face_edges: Mapping[int, Sequence[np.ndarray]] | None = None,
@@ -231,7 +261,7 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         inner = set(np.unique(tris[low[faces[low] == f]]).tolist()) - boundary  # an apex is a slivers' node
         for node in boundary | inner if len(vpts) else ():
             if np.min(np.linalg.norm(vpts - nodes[node], axis=1)) <= 1e-9 * (1.0 + np.abs(nodes[node]).max()):
-                total = float(np.sum(fang[ftri == node]))
+                total = min(corner_angles(ftri, fang, node, sides))
                 if node in inner:
                     if total < apexes.get(f, (0, 3.0 * SLIVER_DEG))[1]:
                         apexes[f] = (node, total)
