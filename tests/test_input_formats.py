@@ -158,6 +158,32 @@ def test_bad_brep_files_say_which_problem(tmp_path, capfd):
     assert out == "" and err == ""  # OCCT never got to print its own complaints
 
 
+def test_a_brep_that_crashes_or_trips_occts_reader_is_one_clean_error(tmp_path, capfd):
+    """OCCT's BREP reader ran in the caller: a curve record of a type it does not know crashed the
+    process (SIGSEGV), a shape referring to a shape the file does not hold raised an exception OCP does
+    not map to Standard_Failure (a traceback), and a table count of a billion kept it reading for minutes.
+    Now the read runs in another process and each is one line naming the file."""
+    good = write_brep(FIXTURES / "bracket.step", tmp_path / "good.brep").read_bytes()
+    capfd.readouterr()
+    curves = re.search(rb"^Curves \d+\n", good, re.MULTILINE).end()
+    shapes = re.search(rb"^TShapes \d+\n", good, re.MULTILINE).end()
+    reference = re.compile(rb"^([+-])\d+ (\d+ )", re.MULTILINE).search(good, shapes)
+    cases = {
+        "type.brep": good[:curves] + b"9" + good[curves + 1:],
+        "index.brep": good[:reference.start()] + reference.group(1) + b"99999 " + reference.group(2)
+        + good[reference.end():],
+        "count.brep": re.sub(rb"^Curve2ds \d+", b"Curve2ds 999999999", good, count=1, flags=re.MULTILINE),
+    }
+    expected = {"type.brep": "corrupt BREP file: OCCT crashed reading it (signal SIGSEGV)",
+                "index.brep": "corrupt BREP file (OCCT could not read it: Standard_OutOfRange",
+                "count.brep": "corrupt BREP file (its Curve2ds table declares 999999999 records"}
+    for name, data in cases.items():
+        (tmp_path / name).write_bytes(data)
+        assert expected[name] in _error(tmp_path / name)
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+
+
 def test_a_brep_saved_by_occts_draw_is_read_whole(tmp_path):
     """Draw's ``save`` heads the shape with its drawable's type (as BRepTools::Write now does too)
     and ends it with a "0" line (OCCT's own sample files are written so); OCCT reads them, so the

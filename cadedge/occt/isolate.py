@@ -1,9 +1,10 @@
-"""OCCT's STEP and IGES transfers run outside the caller, so that an OCCT crash cannot take it down.
+"""OCCT's STEP, IGES and BREP reads run outside the caller, so that an OCCT crash cannot take it down.
 
 OCCT crashes (segmentation fault) on some malformed files: in the transfer of files with unresolved
 references (a file cut short with a trailer appended), but also of files its load check passes, such
 as a ``LINE`` whose vector attribute names a ``DIRECTION`` (a writer's slip), and in its entities'
-own accessors (an ``ORIENTED_CLOSED_SHELL`` whose shell did not resolve). So a STEP or IGES file is
+own accessors (an ``ORIENTED_CLOSED_SHELL`` whose shell did not resolve), and in its BREP reader (a curve
+record of a type it does not know). So a STEP, IGES or BREP file is
 read, checked and transferred in another process (:func:`run_isolated`), which hands the shape back as
 an OCCT BREP file with the completeness, units and warnings as JSON. It notes how far it got (parsed;
 parsed, but damaged or cut short by the load check's account), so that a crash, a hang past
@@ -47,7 +48,8 @@ TIMEOUT = 600.0
 _ERRORS = {"InputError": InputError, "GeometryError": GeometryError}
 #: A transfer run isolated: called with a function that records how far it got (see :data:`_CRASHES`).
 Transfer = Callable[[Callable[[str], None]], Transferred]
-#: How a crash is put, by the last stage the child noted (``{kind}`` STEP or IGES, ``{how}`` the signal).
+#: How a crash is put, by the last stage the child noted (``{kind}`` STEP, IGES or BREP, ``{how}`` the
+#: signal).
 _CRASHES = {
     "": "corrupt {kind} file: OCCT crashed reading it ({how})",
     "parsed": "malformed {kind} file: OCCT crashed transferring it ({how}), though its load check found "
@@ -66,7 +68,7 @@ def can_fork() -> bool:
 
 
 def run_isolated(kind: str, path: Path, given: str, transfer: Transfer) -> Transferred:
-    """``transfer(note)``, the reading of ``path`` as ``kind`` (STEP or IGES), run in a fork of this
+    """``transfer(note)``, the reading of ``path`` as ``kind`` (STEP, IGES or BREP), run in a fork of this
     process or a new child (see the module doc); InputError naming ``given`` if that process dies."""
     with tempfile.TemporaryDirectory(prefix="cadedge-") as tmp:
         folder = Path(tmp)
@@ -209,8 +211,10 @@ def main(argv: list[str]) -> int:
     kind, path, given, folder = argv
     if kind == "STEP":
         from .step import transfer_step as read
-    else:
+    elif kind == "IGES":
         from .iges import transfer_iges as read
+    else:
+        from .brep import transfer_brep as read
     _write(lambda note: read(Path(path), given, isolate=False, note=note), Path(folder), given)
     return 0
 
