@@ -218,6 +218,28 @@ def test_strips_are_cut_finer_where_that_costs_few_segments(name, finer):
     assert fitted.segments <= 1.1 * min(fit_to_widths(grid, ratio=r).segments for r in (FINE_RATIO, WIDTH_RATIO))
 
 
+def test_thin_bands_over_the_split_budget_are_cut_alike(monkeypatch):
+    """Splits that do not fit the budget were made edge by edge until it ran out: the first thin faces
+    cut to their width, the rest left whole. A Braille plate's 47 bands 0.001 tall asked 253 900 segments
+    at 1e-2 (1.9 million triangles, 43 faces out of time); the budget is now capped
+    (``widths.MOST_ADDED``) and the ratio doubled until every band's splits fit it. Here six discs 0.01
+    tall on a plate and a cap of 2 000 segments."""
+    from cadedge import refine_shape
+    from cadedge.mesh import widths
+
+    plate = cq.Workplane().box(40, 30, 2)
+    discs = cq.Workplane().pushPoints([(x, y) for x in (-10, 0, 10) for y in (-6, 6)]).circle(2).extrude(0.01)
+    grid = refine_shape(plate.union(discs.translate((0, 0, 1))).val(), ald=1e-2)
+    monkeypatch.setattr(widths, "MOST_ADDED", 2_000)
+    fitted = widths.fit_to_widths(grid)
+    circles = [e for e in fitted.edges if e.curve == "Circle"]
+    assert len(circles) == 12
+    assert len({e.segments for e in circles}) == 1  # all at 162 (before: three at 624, nine left at 13)
+    assert circles[0].segments > 13 and fitted.segments - grid.segments <= 2_000 + 12 * circles[0].segments
+    width = 0.01
+    assert max(e.segment_lengths.max() for e in circles) <= widths.MAX_WIDTH_RATIO * width
+
+
 def test_large_faces_widths_by_kd_trees_match_the_exact_ones_within_reach(monkeypatch):
     """Faces with many boundary segments are searched near each segment only (k-d trees): every width
     under ``reach`` times its segment's length is the exact one, and none beyond is reported under it."""

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..shapegrid import ShapeGrid, with_edges
 from ..splitting import split_segments
+from .budget import MAX_FACE_TRIANGLES
 from .proximity import Looseness, _LazyCurves
 from .segments import segment_feet
 
@@ -42,10 +43,20 @@ FINE_RATIO = 1.5
 FINE_SHARE = 0.1
 #: Splitting halves segments towards a tiny edge each pass; 24 passes cover a ratio of 1.6e7.
 PASSES = 24
-#: The splits may add at most this many times the grid's segments (plus :data:`MIN_BUDGET`): a model with
-#: thousands of sliver faces is left with slivers rather than millions of boundary nodes.
+#: The splits may add at most this many times the grid's segments (plus :data:`MIN_BUDGET`), and never
+#: more than :data:`MOST_ADDED`: a model with thousands of sliver faces is left with slivers rather than
+#: millions of boundary nodes.
 BUDGET_FACTOR = 20.0
 MIN_BUDGET = 200_000
+#: Each boundary node added costs its faces about 8 triangles more (their sizes grow from it at 0.25 per
+#: unit length), so the splits add at most an eighth of a face's triangle budget
+#: (:data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`) in all: a Braille plate of 47 dots, each ringed by a
+#: band 0.001 tall (cadquery-contrib's Braille.py), took 253 900 segments and 1.9 million triangles at
+#: ALD 1e-2 under the relative budget alone, and 43 of its 108 faces ran out of the 300 s.
+MOST_ADDED = MAX_FACE_TRIANGLES // 8
+#: Where the splits at :data:`WIDTH_RATIO` do not fit the budget, the ratio is doubled until they do (up to
+#: this), so every thin face is cut alike rather than the first ones whole and the rest not at all.
+MAX_WIDTH_RATIO = 32.0
 #: At a face corner the boundary segments ending there are made at most this ratio of the shortest of
 #: them (halved, at most :data:`CORNER_PASSES` times).
 CORNER_RATIO = 1.5
@@ -151,24 +162,30 @@ def face_widths(edges: list, *, reach: float | None = None) -> dict[int, np.ndar
 
 def fit_to_widths(grid: ShapeGrid, *, ratio: float | None = None, passes: int = PASSES) -> ShapeGrid:
     """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width (by
-    default :data:`FINE_RATIO` where that adds at most :data:`FINE_SHARE` of the grid's segments, else
-    :data:`WIDTH_RATIO`), its face corners matched (:func:`match_corners`)."""
+    default :data:`FINE_RATIO` where that adds at most :data:`FINE_SHARE` of the grid's segments and fits
+    the budget, else :data:`WIDTH_RATIO`, doubled while the splits do not fit the budget, up to
+    :data:`MAX_WIDTH_RATIO`), its face corners matched (:func:`match_corners`)."""
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
     if ratio is not None:
-        return match_corners(_split_to_widths(grid, curves, ratio, passes), curves=curves)
-    fitted = _split_to_widths(grid, curves, FINE_RATIO, passes)
-    if fitted.segments > (1.0 + FINE_SHARE) * grid.segments:
-        coarse = _split_to_widths(grid, curves, WIDTH_RATIO, passes)
-        if fitted.segments > (1.0 + FINE_SHARE) * coarse.segments:
+        return match_corners(_split_to_widths(grid, curves, ratio, passes)[0], curves=curves)
+    fitted, short = _split_to_widths(grid, curves, FINE_RATIO, passes)
+    if short or fitted.segments > (1.0 + FINE_SHARE) * grid.segments:
+        ratio = WIDTH_RATIO
+        coarse, tight = _split_to_widths(grid, curves, ratio, passes)
+        while tight and ratio < MAX_WIDTH_RATIO:
+            ratio *= 2.0
+            coarse, tight = _split_to_widths(grid, curves, ratio, passes)
+        if short or fitted.segments > (1.0 + FINE_SHARE) * coarse.segments:
             fitted = coarse
     return match_corners(fitted, curves=curves)
 
 
-def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> ShapeGrid:
-    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width."""
+def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> tuple[ShapeGrid, bool]:
+    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width, and
+    whether the budget (:data:`BUDGET_FACTOR`, :data:`MIN_BUDGET`, :data:`MOST_ADDED`) left a split out."""
     edges = list(grid.edges)
-    budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
-    added = 0
+    budget = min(BUDGET_FACTOR * grid.segments + MIN_BUDGET, MOST_ADDED)
+    added, short = 0, False
     loose = Looseness(grid)
     for _ in range(passes):
         width = face_widths(edges, reach=1.0 / ratio)
@@ -182,15 +199,18 @@ def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> Shap
                 pieces = np.where(seg > ratio * w, np.ceil(seg / (ratio * np.maximum(w, 1e-300))), 1)
             pieces = np.nan_to_num(pieces, nan=1.0, posinf=1.0).astype(np.int64)
             new = int(np.sum(pieces - 1))
-            if not new or added + new > budget or loose.too_loose(e, float(np.min(seg / pieces))):
-                continue  # nothing to split, over the budget, or a loose edge (see proximity.py)
+            if new and added + new > budget:
+                short = True
+                continue
+            if not new or loose.too_loose(e, float(np.min(seg / pieces))):
+                continue  # nothing to split, or a loose edge (see proximity.py)
             params, points = split_segments(e.params, e.points, pieces, curves[e.id].evaluate)
             edges[i] = dataclasses.replace(e, params=params, points=points)
             added += new
             changed = True
         if not changed:
             break
-    return with_edges(grid, edges)
+    return with_edges(grid, edges), short
 
 
 def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int = CORNER_PASSES,
