@@ -338,7 +338,12 @@ def test_a_zero_width_strip_is_named_as_forcing_small_angles():
     assert result.ok, result.problems()
     small = result.report.small_angles
     strip = [s for s in small if s.forced and "wide there, between two sides of its boundary" in s.reason]
-    assert small and len(strip) >= 0.8 * len(small)  # before: none recognised (the strip has no corner)
+    assert len(strip) >= 3  # before the strip rule: none recognised (the strip has no corner)
+    # MeshAdapt's mesh of the shaft face (gmsh's switch, on a fold) had 83 triangles under 5 degrees, 79 of
+    # them in the strip; Frontal-Delaunay's, kept once unfolded, 6. Not forced: two at the strip's ends,
+    # where a vertex lies 2.3e-6 off a seam segment that passes it (the segment is not cut there), and one
+    # of 4 degrees (before: 4 not forced, 0.16-3.2 degrees).
+    assert len(small) <= 10 and len(small) - len(strip) <= 4
 
 
 def test_a_sliver_on_an_edge_off_its_face_is_forced_only_when_the_gap_is_near_its_size():
