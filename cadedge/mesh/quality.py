@@ -188,28 +188,22 @@ def corner_angles(tri: np.ndarray, angles: np.ndarray, node: int, sides: set[tup
     (``sides``, sorted node pairs) leaves the node. A vertex where a hole's outline touches the face's
     outer one (gmsh's PeriodicFaceWithLargeTolerance.brep: a slot's tangent sides meeting the end circle)
     has a cusp between two wider corners, and their sum hid the cusp's 0 degrees."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     rows, cols = np.nonzero(tri == node)
     if not len(rows):
         return [0.0]
-    fan = np.arange(len(rows))  # union-find over the triangles round the node, joined across inner edges
-    shared: dict[int, int] = {}
-    for k, (t, c) in enumerate(zip(rows.tolist(), cols.tolist())):
-        for other in (int(tri[t, (c + 1) % 3]), int(tri[t, (c + 2) % 3])):
-            if (min(node, other), max(node, other)) in sides:
-                continue
-            if other in shared:
-                fan[_root(fan, k)] = _root(fan, shared[other])
-            else:
-                shared[other] = k
-    roots = np.array([_root(fan, k) for k in range(len(rows))])
-    sums = np.bincount(np.unique(roots, return_inverse=True)[1], weights=angles[rows, cols])
-    return sums.tolist()
-
-
-def _root(parent: np.ndarray, k: int) -> int:
-    while parent[k] != k:
-        k = parent[k]
-    return int(k)
+    other = np.column_stack([tri[rows, (cols + 1) % 3], tri[rows, (cols + 2) % 3]]).ravel()
+    owner = np.repeat(np.arange(len(rows)), 2)
+    inner = np.array([(min(node, int(o)), max(node, int(o))) not in sides for o in other.tolist()], dtype=bool)
+    other, owner = other[inner], owner[inner]
+    order = np.argsort(other, kind="stable")
+    other, owner = other[order], owner[order]
+    same = other[1:] == other[:-1]  # two triangles round the node sharing an inner edge: one corner
+    graph = coo_matrix((np.ones(int(same.sum())), (owner[:-1][same], owner[1:][same])), shape=(len(rows),) * 2)
+    _, fan = connected_components(graph, directed=False)
+    return np.bincount(fan, weights=angles[rows, cols]).tolist()
 
 
 def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray,
