@@ -361,6 +361,26 @@ def test_projector_walks_from_each_nodes_parameters_and_searches_only_across_the
     assert project.searched == 1 and np.abs(on[0] - across).max() < 1e-7
 
 
+def test_the_curves_nodes_start_projections_from_their_own_parameters(gmsh_cylinder):
+    """A face's curve nodes get their surface parameters when the optimiser reads it: a point placed
+    near one (a corner split's trial position) is walked from them, never searched for."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh.facemesh import read_face
+    from cadedge.mesh.optimize import _start
+    from cadedge.mesh.project import Projector
+
+    mesh = read_face(side)
+    face = _start(side, mesh)
+    curve = ~mesh.movable
+    assert curve.any() and np.isnan(mesh.uv[curve]).all() and np.isfinite(face.uv).all()
+    project = Projector(side, face.uv)
+    project.cylinder = None  # the walk any curved surface gets
+    rows = np.flatnonzero(curve)
+    on, par = project(mesh.x[rows], rows)
+    assert project.searched == 0 and np.abs(on - mesh.x[rows]).max() < 1e-9
+    assert np.abs(np.asarray(gmsh.model.getValue(2, side, par.ravel().tolist())).reshape(-1, 3) - on).max() < 1e-9
+
+
 def test_projector_projects_onto_a_plane_in_closed_form(gmsh_cylinder):
     """The cylinder's caps are planes: their points are projected without gmsh, to the same foot points,
     parameters and normals as gmsh's own projection and evaluation."""

@@ -56,8 +56,8 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Split the inner edge of each triangle under ``below`` degrees whose three nodes are not
     ``movable``, where that raises the smallest angle there (see the module doc). ``fixed`` holds the
-    curve segments as sorted node pairs; ``project(points (k, 3))`` returns the points on the surface and
-    their parametric coordinates (k, d). ``normals``: the nodes' oriented surface normals, against which
+    curve segments as sorted node pairs; ``project(points (k, 3), rows (k,))`` returns the points (each
+    near node ``rows``) on the surface and their parametric coordinates (k, d). ``normals``: the nodes' oriented surface normals, against which
     no new triangle may fold (the new node's taken where it is placed; see :mod:`cadedge.mesh.folds`).
 
     Returns ``(x, tri, movable, params)``: coordinates with the new nodes appended, the triangles
@@ -110,7 +110,8 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
             trial = np.array([mid + s * length * inward / norm for s in OFFSETS])
             if slack == 0.0:  # no loss allowed now, none for smoothing to undo later: try more positions
                 trial = np.vstack([trial, _LATTICE @ x[[a, b, c, w]]])
-            on, uv = project(trial)
+            near = np.array([a, b, c, w])  # each trial's projection starts from its nearest node's parameters
+            on, uv = project(trial, near[np.argmin(((trial[:, None] - x[near][None]) ** 2).sum(axis=2), axis=1)])
             halves = []
             for row in (t, u):  # each triangle (.., a, .., b, ..) -> its a-half and its b-half, orientation kept
                 r = tri[row]

@@ -45,7 +45,7 @@ import numpy as np
 
 from .collapse import COLLAPSE_BELOW, collapse_edges
 from .corners import split_corner_triangles
-from .folds import NodeNormals, _normals, folded, orientation, reference_normals, surface_normals
+from .folds import NodeNormals, _normals, folded, node_params, normals_at, orientation, reference_normals
 from .gridded import NAME as GRID
 from .moves import (CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, flip_folds, smooth_nodes,
                     untangle_nodes)
@@ -127,7 +127,8 @@ def _area(x: np.ndarray, tri: np.ndarray) -> float:
 @dataclass
 class _Face:
     """One face's mesh while it is improved: coordinates, triangles (indices into them), which nodes may
-    move, the parametric coordinates of the interior nodes, which of them moved, and the unit surface
+    move, the parametric coordinates of the nodes (the curves' nodes' too, where gmsh finds them: they
+    start the projections of points placed near them), which of them moved, and the unit surface
     normals at the nodes (zero rows where unknown: a pole) that tell a folded triangle
     (:mod:`cadedge.mesh.folds`; None where folds are not the mesher's, see :data:`FOLD_TRUST`)."""
 
@@ -169,7 +170,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
     if isinstance(project, Projector):
         project.uv = uv  # the nodes' current parameters start their projections
 
-    def normals_at(params: np.ndarray) -> np.ndarray:
+    def normals_for(params: np.ndarray) -> np.ndarray:
         return project.normals(params) if isinstance(project, Projector) else np.zeros((len(params), 3))
 
     def took(params: np.ndarray | None, rows: np.ndarray) -> None:
@@ -179,7 +180,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         uv[rows[got]] = params[got]
         moved[rows[got]] = True
         if up is not None:  # a node moved across a ridge turns its normal
-            up[rows[got]] = normals_at(params[got])
+            up[rows[got]] = normals_for(params[got])
 
     def oriented() -> np.ndarray | None:
         return None if up is None else sign * up
@@ -188,7 +189,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         """The oriented normals of the nodes ``rows`` (all if None), for a move to judge folds by."""
         if up is None:
             return None
-        return NodeNormals(sign * (up if rows is None else up[rows]), lambda params: sign * normals_at(params))
+        return NodeNormals(sign * (up if rows is None else up[rows]), lambda params: sign * normals_for(params))
 
     for k in range(passes):
         if late():
@@ -205,7 +206,7 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
             if len(new_uv):  # new interior nodes: rows appended
                 uv = np.vstack([uv, new_uv])
                 moved = np.concatenate([moved, np.ones(len(new_uv), dtype=bool)])
-                up = None if up is None else np.vstack([up, normals_at(new_uv)])
+                up = None if up is None else np.vstack([up, normals_for(new_uv)])
                 if isinstance(project, Projector):
                     project.uv = uv
                 tri = flip_edges(x, tri, fixed, up=oriented())
@@ -257,11 +258,12 @@ def _start(surface: int, mesh) -> _Face:
     """The :class:`_Face` of gmsh surface ``surface`` as gmsh holds it (``mesh``, its
     :class:`~cadedge.mesh.facemesh.FaceMesh`), no node moved yet; its nodes' surface normals left out
     (no fold guarded against or undone) where more than :data:`FOLD_TRUST` of its triangles are folded."""
-    up = surface_normals(surface, mesh.x, mesh.uv, mesh.tags)
+    uv = node_params(surface, mesh.x, mesh.uv, mesh.tags)
+    up = normals_at(surface, uv)
     up[mesh.pinned] = 0.0  # on a fold (:func:`~cadedge.mesh.facemesh.crease_nodes`): neither flank's normal
     if folded(mesh.x, mesh.tri, reference_normals(up, mesh.tri, orientation(up, mesh.tri, mesh.x))).mean() > FOLD_TRUST:
         up = None
-    return _Face(mesh.x, mesh.tri, mesh.movable, mesh.uv, np.zeros(len(mesh.tags), dtype=bool), up)
+    return _Face(mesh.x, mesh.tri, mesh.movable, uv, np.zeros(len(mesh.tags), dtype=bool), up)
 
 
 def _unfold(face: _Face, project: Projector, fixed: set[tuple[int, int]]) -> _Face:
