@@ -97,6 +97,21 @@ def test_a_triangle_between_all_boundary_ones_is_split_where_its_node_can_be_pla
     assert triangle_angles(x2, tri2).min() > triangle_angles(x, tri).min() + 3.0
 
 
+def test_a_triangle_of_three_collinear_curve_nodes_is_split():
+    """Thread.py of cadquery-contrib at 1e-3: gmsh closed three consecutive nodes of a curve, collinear
+    to 1e-9, with one triangle (0.0008 degrees). Having no normal of its own, it was judged turned over
+    by every split; the pair's normal judges it now, and the split gives it an interior node."""
+    x = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.2, 0.0]])
+    tri = np.array([[0, 1, 2], [0, 2, 3]])
+    fixed = {(0, 1), (1, 2)}
+    movable = np.array([False, False, False, True])
+    x2, tri2, movable2, uv = split_corner_triangles(x, tri, movable, fixed, _plane)
+    assert len(uv) == 1 and len(tri2) == 4
+    assert triangle_angles(x2, tri2).min() > 20.0
+    normals = np.cross(x2[tri2[:, 1]] - x2[tri2[:, 0]], x2[tri2[:, 2]] - x2[tri2[:, 0]])
+    assert (normals[:, 2] > 0).all()
+
+
 def test_each_trial_position_is_projected_from_its_nearest_node():
     """The new node's trial positions are projected from the parameters of the nearest of the two
     triangles' nodes (a walk, not a search over the whole surface: on the Thread's helical B-spline

@@ -116,13 +116,14 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
             for row in (t, u):  # each triangle (.., a, .., b, ..) -> its a-half and its b-half, orientation kept
                 r = tri[row]
                 halves.append((np.where(r == b, -1, r), np.where(r == a, -1, r)))
-            normals0 = _normal(x[[tri[t], tri[t], tri[u], tri[u]]])
+            # the pair's normal (area-weighted): a triangle of three nearly collinear curve nodes has none
+            # of its own to keep
+            normal0 = _normal(x[[tri[t], tri[u]]]).sum(axis=0)
             quads = np.array([h for pair_ in halves for h in pair_])
             new = (quads == -1)[None, :, :, None]  # where the new node stands in the four triangles
             p = np.where(new, on[:, None, None, :], x[np.maximum(quads, 0)][None])  # (trials, 4, 3, 3)
             n = len(on)
-            ok = np.all(np.einsum("tij,ij->ti", _normal(p.reshape(-1, 3, 3)).reshape(n, 4, 3), normals0) > 0,
-                        axis=1)  # no triangle turned over
+            ok = np.all(_normal(p.reshape(-1, 3, 3)).reshape(n, 4, 3) @ normal0 > 0, axis=1)  # none turned over
             if normals is not None and ok.any():
                 ups = np.where(new, normals.at(uv)[:, None, None, :], normals.up[np.maximum(quads, 0)][None])
                 ok &= ~_folds(p, ups)
