@@ -47,7 +47,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--max-size", metavar="H", help="largest triangle size (default: --max-length, else the "
                                                    "largest edge spacing)")
     p.add_argument("--timeout", metavar="SECONDS", default=str(DEFAULT_TIMEOUT),
-                   help=f"bound on gmsh's work (default {DEFAULT_TIMEOUT:g}); one face attempt gets a fifth of it, "
+                   help=f"bound on the whole job, from reading INPUT on (default {DEFAULT_TIMEOUT:g}); one face "
+                        "attempt gets a fifth of it, "
                         "and a face's triangle budget grows with it above the default")
     p.add_argument("--workers", metavar="N", help="gmsh processes meshing a large model's faces at once (default: "
                                                   "one per core; 1: all faces in one process)")

@@ -36,6 +36,7 @@ from ..shapegrid import ShapeGrid
 
 if TYPE_CHECKING:  # gmsh, trimesh and scipy load only when a mesh is made (``cadedge --help`` stays fast)
     from .check import MeshCheck
+    from .jobclock import JobClock
     from .outcomes import FaceFailure
     from .sizes import SizeField
 
@@ -130,13 +131,14 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     a ready ShapeGrid); ``max_growth`` defaults to :data:`MESH_MAX_GROWTH` here (``None`` for pure ALD
     grids). Interior sizes grow from the edge spacings by ``growth`` per unit distance, capped
     at ``max_size`` (default: ``max_length``, else the largest edge spacing). ``mode`` is ``"nodes"`` or
-    ``"sizes"`` (see the module doc). gmsh's work is bounded by ``timeout`` seconds (default
-    :data:`~cadedge.mesh.isolate.DEFAULT_TIMEOUT`), one face attempt by ``face_timeout`` (default a fifth
-    of it); ``hooks`` are run inside the gmsh job with ``job_options`` (picklable) as ``job.options`` (see
-    :mod:`cadedge.mesh.worker`). Every face's area deficit ``1 - mesh area / B-rep area`` is aimed at
-    ``|deficit| <= surface_ald`` (default ``ald``; see :mod:`cadedge.mesh.fidelity`) and measured in
-    ``result.report``. ``allow_partial`` goes to :func:`cadedge.refine_shape` (a file OCCT transfers only
-    in part is an InputError without it). ``progress(text)``, if given, is called with what the job is doing
+    ``"sizes"`` (see the module doc). The whole job is bounded by ``timeout`` seconds from this call on
+    (default :data:`~cadedge.mesh.isolate.DEFAULT_TIMEOUT`; reading and refining included, the stages
+    fitting the grids to the faces left out past a share of it: :mod:`cadedge.mesh.jobclock`), one face
+    attempt by ``face_timeout`` (default a fifth of it); ``hooks`` are run inside the gmsh job with
+    ``job_options`` (picklable) as ``job.options`` (see :mod:`cadedge.mesh.worker`). Every face's area
+    deficit ``1 - mesh area / B-rep area`` is aimed at ``|deficit| <= surface_ald`` (default ``ald``; see
+    :mod:`cadedge.mesh.fidelity`) and measured in ``result.report``. ``allow_partial`` goes to
+    :func:`cadedge.refine_shape` (a file OCCT transfers only in part is an InputError without it). ``progress(text)``, if given, is called with what the job is doing
     at each step (refining edges, each face meshed, ...; the CLI's status line), from this process. A large
     job (at least :data:`~cadedge.mesh.shards.MIN_SEGMENTS` boundary segments, ``nodes`` mode) is meshed
     in up to ``workers`` gmsh processes at once (default: the CPUs this process may use; 1 meshes in one),
@@ -157,11 +159,14 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                          f"(use {', '.join(MESH_SUFFIXES)} or .geo)")
     if out is not None and not (out.parent if str(out.parent) else Path(".")).is_dir():
         raise InputError(f"{out}: output folder does not exist")
+    from .isolate import DEFAULT_TIMEOUT
+    from .jobclock import JobClock
     from .proximity import fit_to_sizes
     from .sizes import SizeField
     from .spacing_geo import write_geo
 
     t0 = time.perf_counter()
+    clock = JobClock(timeout or DEFAULT_TIMEOUT)
     say = progress or (lambda text: None)
     grid = _grid_of(source, ald, min_length, max_length, max_growth, allow_partial, say)
     if not grid.faces:
@@ -186,7 +191,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
     say("area target: measuring the B-rep faces and fitting their boundaries")
     refined = grid
-    grid, fidelity = prepare(grid, surface_ald)  # faces' area target: boundary fit, curvature sizes
+    grid, fidelity = prepare(grid, surface_ald,  # faces' area target: boundary fit, curvature sizes
+                             fit=clock.allows("the boundary fit for the area target"))
     hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
     if mode == "sizes":  # failed faces get their curves meshed at other sizes before the surface target
         hooks["after_generate"] = ["cadedge.mesh.sizes:retry_failed_faces"] + hooks.get("after_generate", [])
@@ -195,7 +201,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
         say("fitting the edge grids to the face sizes")
         try:
-            grid = fit_to_sizes(grid, make_field)
+            if clock.allows("the splits near small features"):
+                grid = fit_to_sizes(grid, make_field)
         except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
             notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
         from ..occt.cones import apex_cones
@@ -205,21 +212,29 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         from .widths import fit_to_widths
 
         cap = max_size or max_length or make_field(grid).max_size  # thin faces must not shrink the cap
-        grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
-        grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
-        grid = grade_wedges(grid, keep=refined, areas=fidelity["brep_areas"],  # segments shrink into
-                            target=surface_ald)  # a face's narrow corners
+        if clock.allows("the thin faces' splits"):
+            grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
+        if clock.allows("the face-wise grading"):
+            grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
+        if clock.allows("the grading into narrow corners"):
+            grid = grade_wedges(grid, keep=refined, areas=fidelity["brep_areas"],  # segments shrink into
+                                target=surface_ald)  # a face's narrow corners
         cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
-        grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
-        grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
-                          kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # faces'
-        grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # polygons: checked again, and
-                         kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # the grids' rows
+        if cones and clock.allows("the grading into cone tips"):
+            grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
+        if clock.allows("the planar faces' second fit"):
+            grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
+                              kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # faces'
+        if clock.allows("the gridded faces' fit"):
+            grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # polygons: checked again,
+                             kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # and the grids' rows
         max_size = cap
+    if clock.note():
+        notes.append(clock.note())
     fidelity["grid_faces"] = grid_face_ids(grid, fidelity["meshed_kinds"], surface_ald,  # the boundary's
                                            fidelity["brep_areas"])  # last word: which faces are grids
     field_ = make_field(grid)
-    result = _run_gmsh(grid, field_, mode, out, t0, timeout=timeout, face_timeout=face_timeout, hooks=hooks,
+    result = _run_gmsh(grid, field_, mode, out, t0, clock, face_timeout=face_timeout, hooks=hooks,
                        job_options=job_options, say=say, workers=workers)
     result.notes[:0] = notes
     from .report import report_of
@@ -229,11 +244,12 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     return result
 
 
-def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, *,
-              timeout: float | None, face_timeout: float | None, hooks: dict[str, list[str]] | None,
+def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, clock: JobClock, *,
+              face_timeout: float | None, hooks: dict[str, list[str]] | None,
               job_options: dict[str, Any] | None, say: Callable[[str], None],
               workers: int | None = None) -> MeshResult:
-    """Mesh in a child process (:func:`~cadedge.mesh.isolate.run_isolated`), then check in this one."""
+    """Mesh in a child process (:func:`~cadedge.mesh.isolate.run_isolated`, within what is left of the
+    job's time, ``clock``), then check in this one."""
     import dataclasses
 
     from ..occt.empty import without_empty
@@ -242,7 +258,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from .check import check_triangles
     from .coincident import meshed_as, merged_shape
     from .gmsh_model import shape_to_brep
-    from .isolate import DEFAULT_TIMEOUT, run_isolated
+    from .isolate import run_isolated
     from .outcomes import FaceFailure
     from .shards import default_workers
     from .status import MeshStatus
@@ -261,8 +277,9 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
                   hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident,
                   skip=invalid_face_skips(invalid), seams=Topology(grid.shape).shared_seams())
-    res = run_isolated(job, output=out, timeout=timeout or DEFAULT_TIMEOUT, face_timeout=face_timeout,
-                       progress=MeshStatus(say, faces=grid.faces), workers=workers or default_workers())
+    res = run_isolated(job, output=out, timeout=clock.timeout, face_timeout=face_timeout,
+                       progress=MeshStatus(say, faces=grid.faces), workers=workers or default_workers(),
+                       started=clock.started)
     faces = list(res.faces)
     if res.error is not None:
         failures = [FaceFailure(face=f, surface=f, reason=res.error) for f in range(1, grid.faces + 1)]

@@ -8,8 +8,9 @@ well, about 43 degrees there; gmsh alone, with near-uniform sizes, gets 41. The 
 all-boundary triangle with an inner edge (a face's narrow end, a fan at a sharp corner).
 
 The split is made where the smallest angle of the four new triangles is not much below that of the two
-triangles they replace (:data:`MIN_GAIN`: the smoothing that follows settles them); the node is placed at the best of a few positions along the inner edge's normal
-in the face, each projected onto the surface first. Nodes on curves never move; the new node is interior,
+triangles they replace (:data:`MIN_GAIN`: the smoothing that follows settles them); the node is placed
+at the best of a few positions along the inner edge's normal in the face, each projected onto the
+surface (from the parameters of the node nearest it) first. Nodes on curves never move; the new node is interior,
 so the face stays conforming with its neighbours. The caller keeps the result only if the face's smallest
 angle rose (see :func:`cadedge.mesh.optimize.smooth_face`).
 """
@@ -57,8 +58,9 @@ def split_corner_triangles(x: np.ndarray, tri: np.ndarray, movable: np.ndarray, 
     """Split the inner edge of each triangle under ``below`` degrees whose three nodes are not
     ``movable``, where that raises the smallest angle there (see the module doc). ``fixed`` holds the
     curve segments as sorted node pairs; ``project(points (k, 3), rows (k,))`` returns the points (each
-    near node ``rows``) on the surface and their parametric coordinates (k, d). ``normals``: the nodes' oriented surface normals, against which
-    no new triangle may fold (the new node's taken where it is placed; see :mod:`cadedge.mesh.folds`).
+    near node ``rows``) on the surface and their parametric coordinates (k, d). ``normals``: the nodes'
+    oriented surface normals, against which no new triangle may fold (the new node's taken where it is
+    placed; see :mod:`cadedge.mesh.folds`).
 
     Returns ``(x, tri, movable, params)``: coordinates with the new nodes appended, the triangles
     (orientation kept), the movable mask extended (new nodes are movable), and the parametric coordinates

@@ -256,7 +256,7 @@ def _run_child(job: MeshJob, tmp: str, limits: _Limits, progress: Callable[[str]
 
 def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = DEFAULT_TIMEOUT,
                  face_timeout: float | None = None, progress: Callable[[str], None] | None = None,
-                 workers: int = 1) -> JobResult:
+                 workers: int = 1, started: float | None = None) -> JobResult:
     """Run ``job`` in a child process (see the module doc); the mesh goes to ``output`` if anything meshed.
 
     ``face_timeout`` defaults to :data:`FACE_SHARE` of ``timeout``. ``progress(line)``, if given, gets every
@@ -265,17 +265,23 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
     ``output`` is written atomically and only when the result has triangles; ``job.output`` is set here
     to a file in a private folder. With ``workers`` over 1, a large ``nodes`` job's faces are meshed in
     up to that many children at once, each under its own watchdog, and their meshes joined (see
-    :mod:`cadedge.mesh.shards`; the mesh is then written with meshio, as for a stopped job).
+    :mod:`cadedge.mesh.shards`; the mesh is then written with meshio, as for a stopped job). ``started``
+    (``time.monotonic()``), if given, is when the job began (the caller's steps before it count against
+    ``timeout``: every deadline above counts from there; see :mod:`cadedge.mesh.jobclock`).
     """
     from .shards import plan
 
     face_timeout = face_timeout or FACE_SHARE * timeout
-    t0 = time.monotonic()
+    now = time.monotonic()
+    t0 = now if started is None else min(started, now)
     segments = face_segments(job.grid)
     limits = _Limits(deadline=t0 + timeout, kill_at=t0 + KILL_SHARE * timeout, timeout=timeout,
                      face_timeout=face_timeout, segments=segments)
-    job.deadline = time.time() + SOFT_SHARE * timeout
-    job.finish_by = time.time() + FINISH_SHARE * timeout
+    job.deadline = time.time() - (now - t0) + SOFT_SHARE * timeout
+    job.finish_by = time.time() - (now - t0) + FINISH_SHARE * timeout
+    if now >= limits.kill_at:  # the caller's steps used the time: a child's first attempt would be killed
+        return _failed(f"out of time: reading the shape and preparing its grids took {now - t0:.3g} s, past "
+                       f"{KILL_SHARE:.0%} of --timeout ({timeout:g} s); gmsh was not started", [])
     job.attempt_bound = face_timeout
     _remove_orphaned_folders()
     shards = plan(job.grid, workers, segments) if job.mode == "nodes" and job.faces is None else [job.faces]
