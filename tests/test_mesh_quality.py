@@ -261,6 +261,22 @@ def test_large_faces_widths_by_kd_trees_match_the_exact_ones_within_reach(monkey
     assert within > 10
 
 
+def test_a_faces_widths_in_one_call_are_those_edge_by_edge(monkeypatch):
+    """A face of a few short edges is measured in one call, every midpoint against every segment, the
+    pairs sharing a vertex left out: bit for bit the widths measured edge by edge."""
+    from cadedge import refine_shape
+    from cadedge.mesh import widths
+
+    shape = cq.Workplane().box(20, 5, 2).cut(cq.Workplane().box(0.05, 0.05, 2).translate((2, 2.5, 0))).val()
+    edges = list(refine_shape(shape, ald=1e-2, max_growth=2.0).edges)
+    monkeypatch.setattr(widths, "CALL_PAIRS", 10**9)  # every face in one call
+    whole = widths.face_widths(edges)
+    monkeypatch.setattr(widths, "CALL_PAIRS", 0)  # every edge in a call of its own
+    apart = widths.face_widths(edges)
+    assert whole.keys() == apart.keys() and all(np.array_equal(whole[i], apart[i]) for i in whole)
+    assert sum(np.isfinite(w).sum() for w in whole.values()) > 20
+
+
 def test_a_tiny_notch_is_graded_into_its_faces():
     """A 0.05 notch in a 20-long bar: the faces around it are graded down to the notch, not slivered."""
     bar = cq.Workplane().box(20, 5, 2)
