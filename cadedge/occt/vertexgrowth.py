@@ -253,6 +253,7 @@ def _split_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: 
     golden ratio, where splitting settles): (new edges, notes)."""
     notes: list[str] = []
     met: dict[int, bool] = {}
+    settled: dict[int, tuple[float | None, float | None]] = {}  # edge -> the caps under which it took no split
     lowest = min(float(e.segment_lengths.min()) for e in live) / g
     for _ in range(MAX_ROUNDS):
         caps = _caps(edges, g)
@@ -261,9 +262,15 @@ def _split_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: 
             if e.degenerate or e.segments == 0:
                 continue
             ends = (caps.get(e.vertices[0]), caps.get(e.vertices[1]))
+            if settled.get(k) == ends:  # the same edge under the same caps: no split again (a lattice of 25 300
+                continue  # edges spent a third of its grading on rounds over edges none of whose caps changed)
             floor = max(lowest, min([float(e.segment_lengths.min())] + [c / g for c in ends if c is not None]) / g)
             edges[k], inserted, met[k] = _fix_edge(e, curves[e.id], g, ends, floor)
             changed = changed or inserted > 0
+            if inserted:
+                settled.pop(k, None)
+            else:
+                settled[k] = ends
         if not changed:
             break
     else:
