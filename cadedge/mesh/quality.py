@@ -244,8 +244,16 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     vpts = np.asarray(vertex_points, dtype=float).reshape(-1, 3)
     wedges: dict[int, tuple[float, set[int], set[tuple[int, int]], np.ndarray | None]] = {}
     apexes: dict[int, tuple[int, float]] = {}  # face -> its narrowest closing vertex's node and total angle
+    from scipy.spatial import cKDTree
+
+    # each face's triangles, and the B-rep vertices in a k-d tree: a face at a time, every node against every
+    # vertex, took 4 minutes of the report on a lattice of 15 000 vertices and 2 000 faces with slivers
+    order = np.argsort(faces, kind="stable")
+    ordered = faces[order]
+    tree = cKDTree(vpts) if len(vpts) else None
     for f in np.unique(faces[low]).tolist():
-        mine = faces == f
+        lo, hi = np.searchsorted(ordered, [f, f + 1])
+        mine = order[lo:hi]
         ftri, fang = tris[mine], ang[mine]
         edges = np.sort(np.concatenate([ftri[:, [0, 1]], ftri[:, [1, 2]], ftri[:, [2, 0]]]), axis=1)
         uniq, counts = np.unique(edges, axis=0, return_counts=True)
@@ -253,8 +261,11 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         sides = {(int(a), int(b)) for a, b in uniq[counts == 1]}
         sharpest, corner = 180.0, None
         inner = set(np.unique(tris[low[faces[low] == f]]).tolist()) - boundary  # an apex is a slivers' node
-        for node in boundary | inner if len(vpts) else ():
-            if np.min(np.linalg.norm(vpts - nodes[node], axis=1)) <= 1e-9 * (1.0 + np.abs(nodes[node]).max()):
+        candidates = list(boundary | inner) if tree is not None else []
+        at_vertex = (tree.query(nodes[candidates])[0] <= 1e-9 * (1.0 + np.abs(nodes[candidates]).max(axis=1))
+                     if candidates else [])
+        for node, hit in zip(candidates, at_vertex):
+            if hit:
                 total = min(corner_angles(ftri, fang, node, sides))
                 if node in inner:
                     if total < apexes.get(f, (0, 3.0 * SLIVER_DEG))[1]:
