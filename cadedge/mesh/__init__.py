@@ -229,8 +229,8 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
             grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # polygons: checked again,
                              kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # and the grids' rows
         max_size = cap
-    if clock.note():
-        notes.append(clock.note())
+    if (left_out := clock.note()) is not None:
+        notes.append(left_out)
     fidelity["grid_faces"] = grid_face_ids(grid, fidelity["meshed_kinds"], surface_ald,  # the boundary's
                                            fidelity["brep_areas"])  # last word: which faces are grids
     field_ = make_field(grid)

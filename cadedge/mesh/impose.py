@@ -89,6 +89,8 @@ def _merge(blocks: list[tuple[int, int, np.ndarray, np.ndarray, np.ndarray | Non
     import os
     import tempfile
 
+    if not blocks and not lines:
+        return
     parts = [b"$MeshFormat\n4.1 1 8\n", np.array([1], dtype=np.int32).tobytes(), b"\n$EndMeshFormat\n"]
     if blocks:
         count = sum(len(b[2]) for b in blocks)
@@ -109,8 +111,6 @@ def _merge(blocks: list[tuple[int, int, np.ndarray, np.ndarray, np.ndarray | Non
                       rows.tobytes()]
             first += len(seg)
         parts.append(b"\n$EndElements\n")
-    if len(parts) == 3:
-        return
     with tempfile.TemporaryDirectory(prefix="cadedge-grids-") as tmp:
         path = os.path.join(tmp, "grids.msh")
         with open(path, "wb") as f:
