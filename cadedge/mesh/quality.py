@@ -241,11 +241,11 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         return []
     faces = np.asarray(triangle_faces, dtype=np.int64)
     nodes = np.asarray(nodes, dtype=float)
+    from scipy.spatial import cKDTree
+
     vpts = np.asarray(vertex_points, dtype=float).reshape(-1, 3)
     wedges: dict[int, tuple[float, set[int], set[tuple[int, int]], np.ndarray | None]] = {}
     apexes: dict[int, tuple[int, float]] = {}  # face -> its narrowest closing vertex's node and total angle
-    from scipy.spatial import cKDTree
-
     # each face's triangles, and the B-rep vertices in a k-d tree: a face at a time, every node against every
     # vertex, took 4 minutes of the report on a lattice of 15 000 vertices and 2 000 faces with slivers
     order = np.argsort(faces, kind="stable")

@@ -138,31 +138,27 @@ def face_widths(edges: list, *, reach: float | None = None) -> dict[int, np.ndar
         if len(idx) < 2:
             continue
         count = [len(edges[i].points) - 1 for i in idx]
-        if reach is not None and sum(count) ** 2 > _BLOCK:  # a large face: k-d trees, near pairs only
-            a = np.vstack([edges[i].points[:-1] for i in idx])
-            b = np.vstack([edges[i].points[1:] for i in idx])
-            owner = np.repeat(np.arange(len(idx)), count)
-            touching: dict[int, list[int]] = {}  # B-rep vertex -> the face's edges (local numbers) at it
-            for k, i in enumerate(idx):
-                for v in set(edges[i].vertices):
-                    touching.setdefault(v, []).append(k)
-            near = np.unique([k * len(idx) + j for at in touching.values() for k in at for j in at]
-                             + [k * (len(idx) + 1) for k in range(len(idx))])  # pairs sharing a vertex
-            got = _near_distances(0.5 * (a + b), reach * np.linalg.norm(b - a, axis=1), a, b,
-                                  lambda rows, cols: ~np.isin(owner[rows] * len(idx) + owner[cols], near))
-            for i, part in zip(idx, np.split(got, np.cumsum(count)[:-1])):
-                width[i] = np.minimum(width[i], part)
-            continue
         n = sum(count)
-        if n * n <= _BLOCK and n * n - sum(c * (n - c) for c in count) < CALL_PAIRS * (len(idx) - 1):
-            # a face of a few short edges: all its midpoints against all its segments in one call
+        large = reach is not None and n * n > _BLOCK  # k-d trees, near pairs only
+        few = n * n <= _BLOCK and n * n - sum(c * (n - c) for c in count) < CALL_PAIRS * (len(idx) - 1)
+        if large or few:  # the whole face at once; else (below) each edge against the others
             a = np.vstack([edges[i].points[:-1] for i in idx])
             b = np.vstack([edges[i].points[1:] for i in idx])
             owner = np.repeat(np.arange(len(idx)), count)
-            ends = [set(edges[i].vertices) for i in idx]
-            apart = np.array([[not p & q for q in ends] for p in ends])  # an edge meets itself, so not apart
-            d = segment_feet(0.5 * (a + b)[:, None], a[None], b[None])[0]
-            got = np.where(apart[owner][:, owner], d, np.inf).min(axis=1)
+            if large:
+                touching: dict[int, list[int]] = {}  # B-rep vertex -> the face's edges (local numbers) at it
+                for k, i in enumerate(idx):
+                    for v in set(edges[i].vertices):
+                        touching.setdefault(v, []).append(k)
+                near = np.unique([k * len(idx) + j for at in touching.values() for k in at for j in at]
+                                 + [k * (len(idx) + 1) for k in range(len(idx))])  # pairs sharing a vertex
+                got = _near_distances(0.5 * (a + b), reach * np.linalg.norm(b - a, axis=1), a, b,
+                                      lambda rows, cols: ~np.isin(owner[rows] * len(idx) + owner[cols], near))
+            else:  # a face of a few short edges: all its midpoints against all its segments in one call
+                ends = [set(edges[i].vertices) for i in idx]
+                apart = np.array([[not p & q for q in ends] for p in ends])  # an edge meets itself: not apart
+                d = segment_feet(0.5 * (a + b)[:, None], a[None], b[None])[0]
+                got = np.where(apart[owner][:, owner], d, np.inf).min(axis=1)
             for i, part in zip(idx, np.split(got, np.cumsum(count)[:-1])):
                 width[i] = np.minimum(width[i], part)
             continue
