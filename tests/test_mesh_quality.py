@@ -277,6 +277,82 @@ def test_a_faces_widths_in_one_call_are_those_edge_by_edge(monkeypatch):
     assert sum(np.isfinite(w).sum() for w in whole.values()) > 20
 
 
+def _flight_on_shaft():
+    """A helical flight fused to a longer shaft: the flight's end line lies on the shaft cylinder's seam,
+    2.3e-6 off it, its two vertices (tolerance 5e-6) on the seam, which is not split there."""
+    pitch, height, r = 20.0, 60.0, 6.0
+    section = cq.Workplane("XZ").center(r + 4.5, 0).rect(9.0, 2.0)
+    flight = section.sweep(cq.Workplane().add(cq.Wire.makeHelix(pitch, height, r)), isFrenet=True)
+    shaft = cq.Workplane("XY").circle(r + 0.5).extrude(height + 20).translate((0, 0, -10))
+    return shaft.union(flight).val()
+
+
+@pytest.mark.parametrize("path", ["edge by edge", "one call", "k-d trees"])
+def test_an_edge_passing_a_vertex_within_its_tolerance_touches_it(monkeypatch, path):
+    """The flight's end line and the helix meeting it were measured across their 2.3e-6 gap to the seam:
+    the end line alone asked 570 000 pieces (26 755 cut once loose edges could be cut finer) and the helix
+    was halved towards the gap down to 1.5e-5. The seam passes both vertices within their tolerance, so it
+    touches them, and no width is measured across the gap, whichever way a face is measured."""
+    from cadedge import refine_shape
+    from cadedge.mesh import widths
+
+    grid = refine_shape(_flight_on_shaft(), ald=1e-2)
+    touches = widths.touching_vertices(grid)
+    vertex_tol = {v.id: v.tolerance for v in grid.vertices}
+    passed = {e.id: touches[e.id] - set(e.vertices) for e in grid.edges}
+    assert {i for i, p in passed.items() if p} == {21}  # the seam, and no other edge
+    (seam,) = [e for e in grid.edges if e.id == 21]
+    end_line = [e for e in grid.edges if e.vertices and set(e.vertices) == passed[21]]
+    assert len(end_line) == 1 and all(vertex_tol[v] >= 2.3e-6 for v in passed[21])
+    monkeypatch.setattr(widths, "CALL_PAIRS", {"edge by edge": 0, "one call": 10**9, "k-d trees": 0}[path])
+    if path == "k-d trees":
+        monkeypatch.setattr(widths, "_BLOCK", 1)
+    edges = list(grid.edges)
+    bare = widths.face_widths(edges, reach=None if path != "k-d trees" else 1e3)
+    width = widths.face_widths(edges, reach=None if path != "k-d trees" else 1e3, touches=touches)
+    index = {e.id: i for i, e in enumerate(edges)}
+    assert bare[index[end_line[0].id]].min() < 1e-5 and width[index[end_line[0].id]].min() > 1.0
+    assert min(w.min() for w in width.values()) > 1e-3 > min(w.min() for w in bare.values())
+    fitted = widths.fit_to_widths(grid)
+    assert min(e.segment_lengths.min() for e in fitted.edges if not e.degenerate) > 0.1
+    assert fitted.segments < 2 * grid.segments
+
+
+def test_an_edge_too_loose_to_split_asks_nothing_of_the_split_budget():
+    """Measured across its gap to the seam (its vertices not taken as touching it), the flight's end line
+    asks 570 000 pieces at the fine ratio, over the budget, and is too loose to be cut so fine anyway: its
+    ask marked the budget short, and every thin face of the model was cut at a coarser ratio."""
+    from cadedge import refine_shape
+    from cadedge.mesh import widths
+
+    grid = refine_shape(_flight_on_shaft(), ald=1e-2)
+    own = {e.id: set(e.vertices) for e in grid.edges}
+    fitted, short = widths._split_to_widths(grid, grid.curves, own, widths.FINE_RATIO, widths.PASSES)
+    assert not short
+    (end_line,) = [e for e in fitted.edges if e.id == 20]
+    assert end_line.segments == 1 and end_line.length == pytest.approx(2.0, rel=1e-6)
+
+
+def test_an_edge_measured_near_its_faces_is_cut_down_to_a_hundred_times_its_offset():
+    """An edge whose tolerance bounds it loosely but whose distance from its faces is measured may be cut
+    into pieces down to MEASURED_SHARE (a hundredth) of that distance, not a thousandth: dlr_f6.brep at
+    1e-2 kept segments 2-4 times as long as strips 0.3-0.7 wide along edges measured 0.0008-0.0012 off,
+    and 64 triangles of 1.7-1.9 degrees there (17 once cut). The flight's edges carry tolerances of 5e-6
+    and lie 2-5e-7 off their faces."""
+    from cadedge import refine_shape
+    from cadedge.mesh.proximity import MEASURED_SHARE, TOLERANCE_SHARE, Looseness
+    from cadedge.occt.offsets import edge_offsets
+
+    grid = refine_shape(_flight_on_shaft(), ald=1e-2)
+    (edge, *_) = [e for e in grid.edges if e.tolerance > 1e-6 and len(e.faces) == 2]
+    off = max(d[edge.id] for d in edge_offsets(grid.shape, [edge], edge.faces).values())
+    assert 1e-7 < off < 0.2 * edge.tolerance
+    piece = off / MEASURED_SHARE
+    assert edge.tolerance > TOLERANCE_SHARE * piece  # the bound alone would leave it whole
+    loose = Looseness(grid)
+    assert not loose.too_loose(edge, 1.01 * piece) and loose.too_loose(edge, 0.99 * piece)
+
+
 def test_a_tiny_notch_is_graded_into_its_faces():
     """A 0.05 notch in a 20-long bar: the faces around it are graded down to the notch, not slivered."""
     bar = cq.Workplane().box(20, 5, 2)

@@ -25,6 +25,11 @@ RATIO = 3.0
 #: into are left alone: on a loose edge (vertices off the curve, curves off the faces) a new point can
 #: fall so far from the face's own boundary that gmsh builds near-degenerate triangles there.
 TOLERANCE_SHARE = 1e-3
+#: An edge whose distance from its faces' boundaries is measured, not bounded, may be cut into pieces down
+#: to a hundred times that distance: dlr_f6.brep at 1e-2 kept 23-39 segments 2-4 times as long as strips
+#: 0.3-0.7 wide along edges measured 0.0008-0.0012 off (tolerances up to 0.0024), and 89 triangles of
+#: 1.7-1.9 degrees in them.
+MEASURED_SHARE = 1e-2
 #: OCCT's ``Precision::Confusion``: no edge is held tighter than this, measured or not, so no piece is cut
 #: shorter than a thousand times it (a tee's ellipses, measured to 2e-8, were cut to 2e-5 mm pieces
 #: beside the point where its branch touches its run: 1.2-degree triangles).
@@ -34,16 +39,16 @@ PASSES = 3
 
 
 class Looseness:
-    """Whether an edge of ``grid`` is too loose to be cut into pieces of a given length
-    (:data:`TOLERANCE_SHARE`): by its tolerance, a bound, and where that bound says so, by the distance
-    it is measured to lie from its faces' boundaries (:func:`cadedge.occt.offsets.edge_offsets`, once an
-    edge). gmsh's benchmark cylinder.brep, a band 0.0005 tall round a 0.02 cylinder read with edge
-    tolerances of 1e-5, kept its circles' 0.0016 segments and 9.2% of its triangles under 20 degrees;
-    the circles lie on the band to 1e-15."""
+    """Whether an edge of ``grid`` is too loose to be cut into pieces of a given length: by its tolerance, a
+    bound (:data:`TOLERANCE_SHARE`), and where that bound says so, by the distance it is measured to lie
+    from its faces' boundaries (:data:`MEASURED_SHARE`; :func:`cadedge.occt.offsets.edge_offsets`, once an
+    edge; one with a face left unmeasured keeps its bound). gmsh's benchmark cylinder.brep, a band 0.0005
+    tall round a 0.02 cylinder read with edge tolerances of 1e-5, kept its circles' 0.0016 segments and
+    9.2% of its triangles under 20 degrees; the circles lie on the band to 1e-15."""
 
     def __init__(self, grid: ShapeGrid) -> None:
         self.shape = grid.shape
-        self.measured: dict[int, float] = {}
+        self.measured: dict[int, float | None] = {}
 
     def too_loose(self, e, piece: float) -> bool:
         if e.tolerance <= TOLERANCE_SHARE * piece:
@@ -55,8 +60,10 @@ class Looseness:
 
             per_face = [d[e.id] for d in edge_offsets(self.shape, [e], e.faces).values() if e.id in d]
             whole = len(per_face) == len(set(e.faces))  # every face measured, else the bound stands
-            self.measured[e.id] = max(max(per_face), CONFUSION) if whole else e.tolerance
-        return self.measured[e.id] > TOLERANCE_SHARE * piece
+            self.measured[e.id] = max(max(per_face), CONFUSION) if whole else None
+        if self.measured[e.id] is None:
+            return True
+        return self.measured[e.id] > MEASURED_SHARE * piece
 
 
 def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np.ndarray], np.ndarray]], *,

@@ -6,7 +6,11 @@ spans the face from one long edge to the other. The size field of :mod:`cadedge.
 see it, since it grows from spacings, not from distances. Here the local width of a face at a boundary
 segment is the distance from the segment's midpoint to the face's other boundary segments, leaving out
 the segment's own edge and the edges that share a B-rep vertex with it (a face that narrows to a corner
-has no width there: the corner's angle forces its triangles, see :mod:`cadedge.mesh.quality`). Segments
+has no width there: the corner's angle forces its triangles, see :mod:`cadedge.mesh.quality`). An edge
+that passes a vertex within the vertex's tolerance touches it as if it ended there
+(:func:`touching_vertices`): a helical flight fused to a shaft ends on the shaft's seam, 2.3e-6 off it at
+vertices of tolerance 5e-6, and measured across that gap the flight's end line and the helix that meets
+it were cut to pieces of 1.5e-5 (26 755 on the end line once loose edges could be cut finer). Segments
 longer than :data:`WIDTH_RATIO` (or :data:`FINE_RATIO`, where that costs few segments) times that width
 are split into pieces of equal arc length on their OCCT curve, pass after pass: near a tiny edge the
 splits halve towards it, so the boundary is graded down to the tiny edge's length instead of jumping to
@@ -122,12 +126,76 @@ def _near_distances(p: np.ndarray, reach: np.ndarray, a: np.ndarray, b: np.ndarr
     return out
 
 
-def face_widths(edges: list, *, reach: float | None = None) -> dict[int, np.ndarray]:
+def _spans(start: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """``start[i], start[i] + 1, ... start[i] + count[i] - 1`` for every ``i``, end to end."""
+    return np.repeat(start - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+
+
+def touching_vertices(grid: ShapeGrid) -> dict[int, set[int]]:
+    """Edge id -> the B-rep vertices it touches: its own, and those of its faces' other edges that its grid
+    passes within the vertex's tolerance (or its own, the larger), away from its ends: a vertex left on
+    an edge by a boolean operation without splitting it. (A vertex that near an edge's end is a tiny
+    edge away from its vertex there, and the boundary is graded down to that edge: Solid_56's torus,
+    a 0.0103 edge between vertices whose edges carry tolerances up to 0.019.) Candidates are the vertices within an edge's bounding sphere (one k-d
+    tree query for all edges), measured against all its segments in one call."""
+    from scipy.spatial import cKDTree
+
+    touches = {e.id: set(e.vertices) for e in grid.edges}
+    live = [e for e in grid.edges if not e.degenerate and len(e.points) >= 2]
+    if not live or not grid.vertices:
+        return touches
+    row = {v.id: r for r, v in enumerate(grid.vertices)}
+    at = np.array([v.point for v in grid.vertices], dtype=float)
+    tol = np.array([v.tolerance for v in grid.vertices])
+    count = np.array([len(e.points) - 1 for e in live])
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    a = np.vstack([e.points[:-1] for e in live])
+    b = np.vstack([e.points[1:] for e in live])
+    lo = np.minimum(np.minimum.reduceat(a, first), np.minimum.reduceat(b, first))
+    hi = np.maximum(np.maximum.reduceat(a, first), np.maximum.reduceat(b, first))
+    own_tol = np.array([e.tolerance for e in live])
+    near = cKDTree(at).query_ball_point(0.5 * (lo + hi), 0.5 * np.linalg.norm(hi - lo, axis=1)
+                                        + np.maximum(tol.max(), own_tol))
+    edge = np.repeat(np.arange(len(live)), [len(n) for n in near])
+    vert = np.fromiter((r for n in near for r in n), dtype=np.int64, count=len(edge))
+    # a candidate is a vertex of one of the edge's faces (codes face * V + vertex row), not one of its own
+    ends = np.array([[row.get(v, -1) for v in e.vertices] for e in live], dtype=np.int64).reshape(-1, 2)
+    edge_faces = [sorted(set(e.faces)) for e in live]
+    nf = np.array([len(f) for f in edge_faces])
+    face = np.fromiter((f for fs in edge_faces for f in fs), dtype=np.int64, count=int(nf.sum()))
+    codes = np.repeat(face, 2) * len(at) + np.repeat(ends, nf, axis=0).ravel()
+    on_face = np.unique(codes[np.repeat(ends, nf, axis=0).ravel() >= 0])
+    keep = (vert != ends[edge, 0]) & (vert != ends[edge, 1]) & (nf[edge] > 0)
+    edge, vert = edge[keep], vert[keep]
+    if not len(edge):
+        return touches
+    hit = np.isin(face[_spans(np.cumsum(nf)[edge] - nf[edge], nf[edge])] * len(at) + vert.repeat(nf[edge]),
+                  on_face)
+    keep = np.add.reduceat(hit, np.cumsum(nf[edge]) - nf[edge]) > 0
+    edge, vert = edge[keep], vert[keep]
+    if not len(edge):
+        return touches
+    per = count[edge]  # each candidate against every segment of its edge
+    seg = _spans(first[edge], per)
+    d = np.minimum.reduceat(segment_feet(at[vert].repeat(per, axis=0), a[seg], b[seg])[0], np.cumsum(per) - per)
+    reach = np.maximum(tol[vert], own_tol[edge])
+    ends_at = np.stack([a[first[edge]], b[first[edge] + count[edge] - 1]], axis=1)  # the edge's end points
+    inside = np.linalg.norm(ends_at - at[vert][:, None], axis=2).min(axis=1) > reach  # not by one of its ends
+    hit = (d <= reach) & inside
+    for k, r in zip(edge[hit].tolist(), vert[hit].tolist()):
+        touches[live[k].id].add(grid.vertices[r].id)
+    return touches
+
+
+def face_widths(edges: list, *, reach: float | None = None,
+                touches: dict[int, set[int]] | None = None) -> dict[int, np.ndarray]:
     """Per edge index, the width at each segment's midpoint: the smallest, over the faces the edge
-    bounds, of the distance to that face's boundary segments on edges sharing no vertex with it
-    (``inf`` where no such edge exists). With ``reach``, widths are sought only out to ``reach`` times the
-    segment's length: beyond that they may be ``inf`` (a split only needs widths under the segment's
-    length over the ratio, and large faces are then searched near each segment only)."""
+    bounds, of the distance to that face's boundary segments on edges touching no vertex it touches
+    (``touches``, by edge id, :func:`touching_vertices`; by default its own two) (``inf`` where no such
+    edge exists). With ``reach``, widths are sought only out to ``reach`` times the segment's length:
+    beyond that they may be ``inf`` (a split only needs widths under the segment's length over the
+    ratio, and large faces are then searched near each segment only)."""
+    at = (lambda e: touches.get(e.id, set(e.vertices))) if touches is not None else (lambda e: set(e.vertices))
     usable = [i for i, e in enumerate(edges) if not e.degenerate and len(e.points) >= 2]
     by_face: dict[int, list[int]] = {}
     for i in usable:
@@ -148,14 +216,14 @@ def face_widths(edges: list, *, reach: float | None = None) -> dict[int, np.ndar
             if large:
                 touching: dict[int, list[int]] = {}  # B-rep vertex -> the face's edges (local numbers) at it
                 for k, i in enumerate(idx):
-                    for v in set(edges[i].vertices):
+                    for v in at(edges[i]):
                         touching.setdefault(v, []).append(k)
                 near = np.unique([k * len(idx) + j for at in touching.values() for k in at for j in at]
                                  + [k * (len(idx) + 1) for k in range(len(idx))])  # pairs sharing a vertex
                 got = _near_distances(0.5 * (a + b), reach * np.linalg.norm(b - a, axis=1), a, b,
                                       lambda rows, cols: ~np.isin(owner[rows] * len(idx) + owner[cols], near))
             else:  # a face of a few short edges: all its midpoints against all its segments in one call
-                ends = [set(edges[i].vertices) for i in idx]
+                ends = [at(edges[i]) for i in idx]
                 apart = np.array([[not p & q for q in ends] for p in ends])  # an edge meets itself: not apart
                 d = segment_feet(0.5 * (a + b)[:, None], a[None], b[None])[0]
                 got = np.where(apart[owner][:, owner], d, np.inf).min(axis=1)
@@ -164,7 +232,7 @@ def face_widths(edges: list, *, reach: float | None = None) -> dict[int, np.ndar
             continue
         for i in idx:
             e = edges[i]
-            others = [edges[j] for j in idx if j != i and not set(edges[j].vertices) & set(e.vertices)]
+            others = [edges[j] for j in idx if j != i and not at(edges[j]) & at(e)]
             if not others:
                 continue
             a = np.vstack([o.points[:-1] for o in others])
@@ -179,29 +247,33 @@ def fit_to_widths(grid: ShapeGrid, *, ratio: float | None = None, passes: int = 
     the budget, else :data:`WIDTH_RATIO`, doubled while the splits do not fit the budget, up to
     :data:`MAX_WIDTH_RATIO`), its face corners matched (:func:`match_corners`)."""
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
+    touches = touching_vertices(grid)
     if ratio is not None:
-        return match_corners(_split_to_widths(grid, curves, ratio, passes)[0], curves=curves)
-    fitted, short = _split_to_widths(grid, curves, FINE_RATIO, passes)
+        return match_corners(_split_to_widths(grid, curves, touches, ratio, passes)[0], curves=curves)
+    fitted, short = _split_to_widths(grid, curves, touches, FINE_RATIO, passes)
     if short or fitted.segments > (1.0 + FINE_SHARE) * grid.segments:
         ratio = WIDTH_RATIO
-        coarse, tight = _split_to_widths(grid, curves, ratio, passes)
+        coarse, tight = _split_to_widths(grid, curves, touches, ratio, passes)
         while tight and ratio < MAX_WIDTH_RATIO:
             ratio *= 2.0
-            coarse, tight = _split_to_widths(grid, curves, ratio, passes)
+            coarse, tight = _split_to_widths(grid, curves, touches, ratio, passes)
         if short or fitted.segments > (1.0 + FINE_SHARE) * coarse.segments:
             fitted = coarse
     return match_corners(fitted, curves=curves)
 
 
-def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> tuple[ShapeGrid, bool]:
-    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width, and
-    whether the budget (:data:`BUDGET_FACTOR`, :data:`MIN_BUDGET`, :data:`MOST_ADDED`) left a split out."""
+def _split_to_widths(grid: ShapeGrid, curves, touches: dict[int, set[int]], ratio: float,
+                     passes: int) -> tuple[ShapeGrid, bool]:
+    """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width (edges
+    apart by ``touches``, :func:`face_widths`), and whether the budget (:data:`BUDGET_FACTOR`,
+    :data:`MIN_BUDGET`, :data:`MOST_ADDED`) left a split out; an edge too loose to split
+    (:class:`~cadedge.mesh.proximity.Looseness`) asks nothing of it."""
     edges = list(grid.edges)
     budget = min(BUDGET_FACTOR * grid.segments + MIN_BUDGET, MOST_ADDED)
     added, short = 0, False
     loose = Looseness(grid)
     for _ in range(passes):
-        width = face_widths(edges, reach=1.0 / ratio)
+        width = face_widths(edges, reach=1.0 / ratio, touches=touches)
         changed = False
         for i, w in width.items():
             e = edges[i]
@@ -212,11 +284,11 @@ def _split_to_widths(grid: ShapeGrid, curves, ratio: float, passes: int) -> tupl
                 pieces = np.where(seg > ratio * w, np.ceil(seg / (ratio * np.maximum(w, 1e-300))), 1)
             pieces = np.nan_to_num(pieces, nan=1.0, posinf=1.0).astype(np.int64)
             new = int(np.sum(pieces - 1))
-            if new and added + new > budget:
-                short = True
-                continue
             if not new or loose.too_loose(e, float(np.min(seg / pieces))):
                 continue  # nothing to split, or a loose edge (see proximity.py)
+            if added + new > budget:
+                short = True
+                continue
             params, points = split_segments(e.params, e.points, pieces, curves[e.id].evaluate)
             edges[i] = dataclasses.replace(e, params=params, points=points)
             added += new
