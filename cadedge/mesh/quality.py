@@ -182,6 +182,30 @@ def _off_boundary(p: np.ndarray, length: float, offsets: Sequence[tuple[np.ndarr
     return None
 
 
+def _pinch(p: np.ndarray, polylines: Sequence[np.ndarray]) -> str | None:
+    """Why a triangle (corners ``p``) standing on a segment of one of its face's edge grids
+    (``polylines``) is forced by its third node, a node of those grids too, lying near that segment; or
+    None.
+
+    The third node is ``h`` from the segment's line, its foot inside the segment, ``l1`` and ``l2`` from
+    its ends. Any triangle on that side of the segment leaves that node out, so its angle at one end is
+    under ``atan(h / l)`` there: none gets over ``atan(h / min(l1, l2))``. A boundary that passes within
+    ``h`` of itself: a flight's end vertex 2.3e-6 off the shaft's seam, which is not split there."""
+    tol = 1e-9 * (1.0 + float(np.abs(p).max()))
+    for k in range(3):
+        a, b, c = p[k], p[(k + 1) % 3], p[(k + 2) % 3]
+        dist, t = (float(x) for x in segment_feet(c, a, b))
+        length = float(np.linalg.norm(b - a))
+        nearer = min(t, 1.0 - t) * length
+        bound = float(np.degrees(np.arctan(dist / nearer))) if nearer > 0.0 else 90.0
+        if (bound < WEDGE_BOUND and _on_polyline(a, b, polylines)
+                and any(np.linalg.norm(np.asarray(line, dtype=float) - c, axis=1).min() <= tol for line in polylines)):
+            return (f"the face's boundary passes {dist:.2g} from itself there: a node of it lies that far from the "
+                    f"{length:.2g} boundary segment the triangle stands on, {nearer:.2g} from its nearer end (no "
+                    f"triangle on that segment gets much over {bound:.2g} degrees)")
+    return None
+
+
 def corner_angles(tri: np.ndarray, angles: np.ndarray, node: int, sides: set[tuple[int, int]]) -> list[float]:
     """The angles (degrees) of a face's corners at mesh node ``node``: per fan of the face's triangles ``tri``
     round it (their ``angles``), the sum of their angles there; fans part where a boundary segment
@@ -224,6 +248,10 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     of one (``face_edges``: face id -> its edges' grid polylines), so narrow (:func:`strip_width`) that no
     triangle as long as it gets much over :data:`WEDGE_BOUND` degrees there. Two edges that coincide in
     space make a strip of no width: a shaft's seam line with the end of a helical flight fused onto it.
+
+    Also forced: the triangle stands on a segment of the face's edge grids (``face_edges``), and its third
+    node, on those grids too, lies so near that segment (:func:`_pinch`) that no triangle on it gets much over
+    :data:`WEDGE_BOUND` degrees.
 
     Also forced: near a B-rep vertex inside the face's mesh round which its triangles' angles sum to under
     three times :data:`SLIVER_DEG` (a narrow cone's apex; :func:`_closing`), a triangle with its small
@@ -306,6 +334,10 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                 reason = (f"the face is about {width:.2g} wide there, between two sides of its boundary, and "
                           f"the triangle is {length:.2g} long (no triangle that long gets much over "
                           f"{bound:.2g} degrees there)")
+        if not forced and face_edges and f in face_edges:
+            why = _pinch(nodes[tris[t]], face_edges[f])
+            if why is not None:
+                forced, reason = True, why
         if not forced and offsets and f in offsets:
             p = nodes[tris[t]]
             why = _off_boundary(p, float(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1).max()), offsets[f])
