@@ -128,3 +128,26 @@ def test_each_trial_position_is_projected_from_its_nearest_node():
     for points, rows in calls:
         distance = np.linalg.norm(points[:, None] - x[None], axis=2)
         assert np.allclose(distance[np.arange(len(rows)), rows], distance.min(axis=1))
+
+
+def test_candidates_judged_in_batches_split_as_when_judged_one_by_one(monkeypatch):
+    """Every candidate split is judged first, a batch of them at a time (gmsh's SlenderSurface.brep, a
+    strip filled with 26 000 all-boundary triangles, spent 57 s judging them one by one): the splits are
+    those made judging each alone. A strip of uneven width between two curves, closed at its ends."""
+    from cadedge.mesh import corners
+
+    n = 30
+    rng = np.random.default_rng(1)
+    top = np.column_stack([0.28 * np.arange(n) + rng.uniform(-0.1, 0.1, n), 0.3 + rng.uniform(-0.15, 0.15, n),
+                           np.zeros(n)])
+    x = np.vstack([np.column_stack([0.28 * np.arange(n), np.zeros(n), np.zeros(n)]), top])
+    tri = np.array([t for i in range(n - 1) for t in ([i, i + 1, n + i], [i + 1, n + i + 1, n + i])])
+    fixed = ({(i, i + 1) for i in range(n - 1)} | {(n + i, n + i + 1) for i in range(n - 1)}
+             | {(0, n), (n - 1, 2 * n - 1)})
+    movable = np.zeros(len(x), dtype=bool)
+    batched = split_corner_triangles(x, tri, movable, fixed, _plane)
+    monkeypatch.setattr(corners, "_BATCH", 1)
+    alone = split_corner_triangles(x, tri, movable, fixed, _plane)
+    assert 0 < len(batched[3]) < len(tri) // 2  # some split, some not
+    assert all(np.array_equal(p, q) for p, q in zip(batched, alone))
+    assert triangle_angles(batched[0], batched[1]).min() > triangle_angles(x, tri).min()
