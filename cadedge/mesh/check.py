@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import trimesh
 
 from .quality import min_angles
 
@@ -124,6 +123,8 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     tri_faces = np.zeros(len(tris), dtype=np.int64) if triangle_faces is None else np.asarray(triangle_faces)
     problems: list[str] = []
+    import trimesh  # here, not at the top: the CLI's parser imports this module's callers (``--help``)
+
     mesh = trimesh.Trimesh(nodes, tris, process=False, validate=False)
     edges = mesh.edges_sorted  # (3m, 2), edge k belongs to triangle k // 3
     n = max(len(nodes), 1)
