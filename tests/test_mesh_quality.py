@@ -318,6 +318,21 @@ def test_an_edge_passing_a_vertex_within_its_tolerance_touches_it(monkeypatch, p
     assert fitted.segments < 2 * grid.segments
 
 
+def test_a_vertex_near_an_edges_end_does_not_touch_it():
+    """A vertex within its tolerance of an edge's end is a short edge away from the vertex there, not
+    left on the edge: the boundary is graded down to that short edge as before (Solid_56's torus, a
+    0.0103 edge between vertices whose edges carry tolerances up to 0.019). A unit cube whose vertices
+    carry a tolerance of 1.5: every vertex is that near every edge of its faces, at their ends."""
+    import dataclasses
+
+    from cadedge import refine_shape
+    from cadedge.mesh.widths import touching_vertices
+
+    grid = refine_shape(cq.Workplane().box(1, 1, 1).val(), ald=1e-2)
+    loose = dataclasses.replace(grid, vertices=[dataclasses.replace(v, tolerance=1.5) for v in grid.vertices])
+    assert touching_vertices(loose) == {e.id: set(e.vertices) for e in grid.edges}
+
+
 def test_an_edge_too_loose_to_split_asks_nothing_of_the_split_budget():
     """Measured across its gap to the seam (its vertices not taken as touching it), the flight's end line
     asks 570 000 pieces at the fine ratio, over the budget, and is too loose to be cut so fine anyway: its

@@ -136,8 +136,9 @@ def touching_vertices(grid: ShapeGrid) -> dict[int, set[int]]:
     passes within the vertex's tolerance (or its own, the larger), away from its ends: a vertex left on
     an edge by a boolean operation without splitting it. (A vertex that near an edge's end is a tiny
     edge away from its vertex there, and the boundary is graded down to that edge: Solid_56's torus,
-    a 0.0103 edge between vertices whose edges carry tolerances up to 0.019.) Candidates are the vertices within an edge's bounding sphere (one k-d
-    tree query for all edges), measured against all its segments in one call."""
+    a 0.0103 edge between vertices whose edges carry tolerances up to 0.019.) Candidates are the
+    vertices within an edge's bounding sphere (one k-d tree query for all edges), measured against all
+    its segments in one call."""
     from scipy.spatial import cKDTree
 
     touches = {e.id: set(e.vertices) for e in grid.edges}
@@ -163,8 +164,8 @@ def touching_vertices(grid: ShapeGrid) -> dict[int, set[int]]:
     edge_faces = [sorted(set(e.faces)) for e in live]
     nf = np.array([len(f) for f in edge_faces])
     face = np.fromiter((f for fs in edge_faces for f in fs), dtype=np.int64, count=int(nf.sum()))
-    codes = np.repeat(face, 2) * len(at) + np.repeat(ends, nf, axis=0).ravel()
-    on_face = np.unique(codes[np.repeat(ends, nf, axis=0).ravel() >= 0])
+    end_rows = np.repeat(ends, nf, axis=0).ravel()
+    on_face = np.unique((np.repeat(face, 2) * len(at) + end_rows)[end_rows >= 0])
     keep = (vert != ends[edge, 0]) & (vert != ends[edge, 1]) & (nf[edge] > 0)
     edge, vert = edge[keep], vert[keep]
     if not len(edge):
@@ -195,7 +196,10 @@ def face_widths(edges: list, *, reach: float | None = None,
     edge exists). With ``reach``, widths are sought only out to ``reach`` times the segment's length:
     beyond that they may be ``inf`` (a split only needs widths under the segment's length over the
     ratio, and large faces are then searched near each segment only)."""
-    at = (lambda e: touches.get(e.id, set(e.vertices))) if touches is not None else (lambda e: set(e.vertices))
+
+    def touched(e) -> set[int]:
+        return touches.get(e.id, set(e.vertices)) if touches is not None else set(e.vertices)
+
     usable = [i for i, e in enumerate(edges) if not e.degenerate and len(e.points) >= 2]
     by_face: dict[int, list[int]] = {}
     for i in usable:
@@ -216,14 +220,14 @@ def face_widths(edges: list, *, reach: float | None = None,
             if large:
                 touching: dict[int, list[int]] = {}  # B-rep vertex -> the face's edges (local numbers) at it
                 for k, i in enumerate(idx):
-                    for v in at(edges[i]):
+                    for v in touched(edges[i]):
                         touching.setdefault(v, []).append(k)
                 near = np.unique([k * len(idx) + j for at in touching.values() for k in at for j in at]
                                  + [k * (len(idx) + 1) for k in range(len(idx))])  # pairs sharing a vertex
                 got = _near_distances(0.5 * (a + b), reach * np.linalg.norm(b - a, axis=1), a, b,
                                       lambda rows, cols: ~np.isin(owner[rows] * len(idx) + owner[cols], near))
             else:  # a face of a few short edges: all its midpoints against all its segments in one call
-                ends = [at(edges[i]) for i in idx]
+                ends = [touched(edges[i]) for i in idx]
                 apart = np.array([[not p & q for q in ends] for p in ends])  # an edge meets itself: not apart
                 d = segment_feet(0.5 * (a + b)[:, None], a[None], b[None])[0]
                 got = np.where(apart[owner][:, owner], d, np.inf).min(axis=1)
@@ -232,7 +236,7 @@ def face_widths(edges: list, *, reach: float | None = None,
             continue
         for i in idx:
             e = edges[i]
-            others = [edges[j] for j in idx if j != i and not at(edges[j]) & at(e)]
+            others = [edges[j] for j in idx if j != i and not touched(edges[j]) & touched(e)]
             if not others:
                 continue
             a = np.vstack([o.points[:-1] for o in others])
