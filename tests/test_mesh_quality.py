@@ -333,6 +333,28 @@ def test_a_vertex_near_an_edges_end_does_not_touch_it():
     assert touching_vertices(loose) == {e.id: set(e.vertices) for e in grid.edges}
 
 
+def test_the_opening_of_a_band_not_quite_closed_is_no_strip():
+    """A cylinder face cut from 0 to 2 pi - 1e-5 (an unsewn band, as pythonocc-demos' surf114.igs holds):
+    its two lines run 1e-4 apart across an opening outside the face, its circles are loops not quite
+    closed. Measured across the opening, the lines were cut to 50 044 segments; the edges at one end of
+    a loop touch the vertex at its other end, and the band keeps its grid."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.Geom import Geom_CylindricalSurface
+    from OCP.gp import gp_Ax3
+
+    from cadedge import refine_shape
+    from cadedge.mesh import widths
+
+    face = BRepBuilderAPI_MakeFace(Geom_CylindricalSurface(gp_Ax3(), 10.0), 0.0, 2 * np.pi - 1e-5, 0.0, 20.0,
+                                   1e-7).Face()
+    grid = refine_shape(face, ald=1e-2)
+    lines = [e for e in grid.edges if e.curve == "Line"]
+    assert len(lines) == 2 and not set(lines[0].vertices) & set(lines[1].vertices)
+    touches = widths.touching_vertices(grid)
+    assert touches[lines[0].id] == touches[lines[1].id] == {v for e in lines for v in e.vertices}
+    assert widths.fit_to_widths(grid).segments < 2 * grid.segments
+
+
 def test_an_edge_too_loose_to_split_asks_nothing_of_the_split_budget():
     """Measured across its gap to the seam (its vertices not taken as touching it), the flight's end line
     asks 570 000 pieces at the fine ratio, over the budget, and is too loose to be cut so fine anyway: its

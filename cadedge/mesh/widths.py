@@ -131,6 +131,37 @@ def _spans(start: np.ndarray, count: np.ndarray) -> np.ndarray:
     return np.repeat(start - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
 
 
+#: An edge whose two vertices are closer than this share of its length (a loop not quite closed) spans
+#: an opening its faces do not: the edges at one of its ends touch the vertex at the other.
+LOOP_SHARE = 1e-3
+
+
+def _across_loops(live: list, touches: dict[int, set[int]]) -> None:
+    """Add to ``touches`` the vertices across every open loop among the ``live`` edges (:data:`LOOP_SHARE`).
+
+    pythonocc-demos' surf114.igs holds an unsewn spline band: its two long sides (27.4 long) run 1.5-3.9e-5
+    apart across the opening, its short sides are loops of 7.7 from one long side's end to the other's.
+    Measured across that opening, which is outside the face, one long side was cut into 41 783 pieces
+    and gmsh hung on the face."""
+    ends = np.array([[e.points[0], e.points[-1]] for e in live])
+    length = np.array([e.length for e in live])
+    opening = np.linalg.norm(ends[:, 0] - ends[:, 1], axis=1)
+    loops = [e for e, o, n in zip(live, opening, length) if e.vertices[0] != e.vertices[-1] and o <= LOOP_SHARE * n]
+    if not loops:
+        return
+    at: dict[tuple[int, int], list[int]] = {}  # (face, vertex) -> the edges of that face at that vertex
+    for e in live:
+        for f in set(e.faces):
+            for v in set(e.vertices):
+                at.setdefault((f, v), []).append(e.id)
+    for e in loops:
+        u, v = e.vertices[0], e.vertices[-1]
+        for f in set(e.faces):
+            for near, far in ((u, v), (v, u)):
+                for other in at.get((f, near), []):
+                    touches[other].add(far)
+
+
 def touching_vertices(grid: ShapeGrid) -> dict[int, set[int]]:
     """Edge id -> the B-rep vertices it touches: its own, and those of its faces' other edges that its grid
     passes within the vertex's tolerance (or its own, the larger), away from its ends: a vertex left on
@@ -138,13 +169,14 @@ def touching_vertices(grid: ShapeGrid) -> dict[int, set[int]]:
     edge away from its vertex there, and the boundary is graded down to that edge: Solid_56's torus,
     a 0.0103 edge between vertices whose edges carry tolerances up to 0.019.) Candidates are the
     vertices within an edge's bounding sphere (one k-d tree query for all edges), measured against all
-    its segments in one call."""
+    its segments in one call. And across an open loop (:func:`_across_loops`), the vertex at its far end."""
     from scipy.spatial import cKDTree
 
     touches = {e.id: set(e.vertices) for e in grid.edges}
     live = [e for e in grid.edges if not e.degenerate and len(e.points) >= 2]
     if not live or not grid.vertices:
         return touches
+    _across_loops(live, touches)
     row = {v.id: r for r, v in enumerate(grid.vertices)}
     at = np.array([v.point for v in grid.vertices], dtype=float)
     tol = np.array([v.tolerance for v in grid.vertices])
