@@ -798,6 +798,18 @@ def test_a_face_with_few_small_angles_is_left_to_the_optimiser(gmsh_cylinder):
     assert not lines and ctx.outcomes[side].strategy == "Frontal-Delaunay"
 
 
+def test_meshadapt_may_take_twice_the_triangles_where_it_halves_the_share_under_20_degrees():
+    """surf114's second lens face at 1e-2: MeshAdapt took it from 26.7% to 4.0% under 20 degrees (0.1 ->
+    2.6 degrees) with 1 274 -> 2 294 triangles, and was refused for exceeding 1.5 times the count."""
+    from cadedge.mesh.adapt import better
+
+    old = (0.097, 0.267, 1274)
+    assert better((2.59, 0.0397, 2294), old)
+    assert not better((2.59, 0.0397, 2 * 1274 + 1), old)  # twice at most
+    assert not better((2.59, 0.14, 2294), old)  # not halved: 1.5 times at most
+    assert better((2.59, 0.14, 1900), old)
+
+
 def test_flat_triangles_are_those_with_a_node_on_the_opposite_edge_not_needles():
     """A node on the opposite edge (to rounding, on a line off the axes) or two nodes at one point is
     flat; a triangle 2e-6 radians short of flat is not, nor a needle with a 1e-9 radian tip (as at a cusp
