@@ -124,8 +124,8 @@ def strip_widths(points: np.ndarray, polylines: Sequence[np.ndarray]) -> np.ndar
     from its boundary: the smallest ``w`` such that every point of the group is within ``w`` of two
     different ones of the face's boundary ``polylines`` (its edges' grids), or of a polyline and its far
     side (:func:`_line_widths`); ``inf`` if there is no such ``w``. All groups of a face in one pass
-    over its polylines: measured one triangle at a time, cadquery-contrib's lattice (86 777 slivers)
-    spent 65 s of its report here."""
+    over its polylines: measured one triangle at a time, cadquery-contrib's lattice (43 323 slivers in
+    the mesh delivered under the default timeout) spent 44 s of its report here, 15.7 s now."""
     p = np.asarray(points, dtype=float)
     groups, k = p.shape[:2]
     if not len(polylines) or not groups:
