@@ -300,10 +300,10 @@ def test_an_edge_passing_a_vertex_within_its_tolerance_touches_it(monkeypatch, p
     touches = widths.touching_vertices(grid)
     vertex_tol = {v.id: v.tolerance for v in grid.vertices}
     passed = {e.id: touches[e.id] - set(e.vertices) for e in grid.edges}
-    assert {i for i, p in passed.items() if p} == {21}  # the seam, and no other edge
-    (seam,) = [e for e in grid.edges if e.id == 21]
-    end_line = [e for e in grid.edges if e.vertices and set(e.vertices) == passed[21]]
-    assert len(end_line) == 1 and all(vertex_tol[v] >= 2.3e-6 for v in passed[21])
+    (seam,) = [e for e in grid.edges if passed[e.id]]  # the seam, and no other edge
+    assert seam.curve == "Line" and len(seam.faces) == 1
+    end_line = [e for e in grid.edges if set(e.vertices) == passed[seam.id]]
+    assert len(end_line) == 1 and all(vertex_tol[v] >= 2.3e-6 for v in passed[seam.id])
     monkeypatch.setattr(widths, "CALL_PAIRS", {"edge by edge": 0, "one call": 10**9, "k-d trees": 0}[path])
     if path == "k-d trees":
         monkeypatch.setattr(widths, "_BLOCK", 1)
@@ -366,7 +366,9 @@ def test_an_edge_too_loose_to_split_asks_nothing_of_the_split_budget():
     own = {e.id: set(e.vertices) for e in grid.edges}
     fitted, short = widths._split_to_widths(grid, grid.curves, own, widths.FINE_RATIO, widths.PASSES)
     assert not short
-    (end_line,) = [e for e in fitted.edges if e.id == 20]
+    touches = widths.touching_vertices(grid)
+    (seam,) = [e for e in grid.edges if touches[e.id] != set(e.vertices)]
+    (end_line,) = [e for e in fitted.edges if set(e.vertices) == touches[seam.id] - set(seam.vertices)]
     assert end_line.segments == 1 and end_line.length == pytest.approx(2.0, rel=1e-6)
 
 
