@@ -43,6 +43,12 @@ OFFSETS = (0.0, 0.1, 0.2, 0.3, 0.4)
 #: all-boundary ones): 25.2 degrees.
 _LATTICE = np.array([w for w in np.ndindex(3, 3, 3, 3)], dtype=float) + 1.0
 _LATTICE /= _LATTICE.sum(axis=1, keepdims=True)
+#: Trial triangles (four per trial position) judged in one batch: the candidates are judged together, a
+#: block of them at a time, and only the trials that beat their candidate's floor are checked for
+#: turning over or folding. gmsh's SlenderSurface.brep, a strip 0.0004 wide filled with 26 000
+#: all-boundary triangles once its edges are cut to its width, took 63 s judged one by one, 17 s now:
+#: the same mesh.
+_BATCH = 40_000
 
 
 def _folds(p: np.ndarray, up: np.ndarray) -> np.ndarray:
@@ -50,14 +56,6 @@ def _folds(p: np.ndarray, up: np.ndarray) -> np.ndarray:
     nodes' normals ``up`` (trials, k, 3, 3)."""
     rows = np.arange(3 * p.shape[0] * p.shape[1]).reshape(-1, 3)
     return folded(p.reshape(-1, 3), rows, reference_normals(up.reshape(-1, 3), rows)).reshape(p.shape[:2]).any(axis=1)
-
-
-#: Trial triangles (four per trial position) judged in one batch: the candidates are judged together, a
-#: block of them at a time, and only the trials that beat their candidate's floor are checked for
-#: turning over or folding. gmsh's SlenderSurface.brep, a strip 0.0004 wide filled with 26 000
-#: all-boundary triangles once its edges are cut to its width, took 63 s judged one by one, 17 s now:
-#: the same mesh.
-_BATCH = 40_000
 
 
 def _judge(x: np.ndarray, tri: np.ndarray, cand: np.ndarray, floor: np.ndarray, lattice: bool, project,
@@ -95,7 +93,7 @@ def _judge(x: np.ndarray, tri: np.ndarray, cand: np.ndarray, floor: np.ndarray, 
     live = np.flatnonzero((q > floor[:, None]) & (norm > 0)[:, None])  # flat (candidate, trial) indices
     row = live // k
     # the pair's normal (area-weighted): a triangle of three nearly collinear curve nodes has none of its own
-    normal0 = _normal(x[pair[row].reshape(-1, 3)]).reshape(-1, 2, 3).sum(axis=1)
+    normal0 = _normal(x[pair.reshape(-1, 3)]).reshape(n, 2, 3).sum(axis=1)[row]
     pl = points[at.reshape(n * k, 4, 3)[live]]  # (live, 4, 3, 3)
     ok = np.all(np.einsum("mjd,md->mj", _normal(pl.reshape(-1, 3, 3)).reshape(-1, 4, 3), normal0) > 0, axis=1)
     if normals is not None and ok.any():
