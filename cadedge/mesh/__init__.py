@@ -181,7 +181,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
-    from .boundary_fit import fit_grids, fit_planes
+    from .boundary_fit import fit_curved, fit_grids, fit_planes
     from .fidelity import HOOKS, prepare
     from .gridded import grid_face_ids
 
@@ -225,6 +225,10 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         if clock.allows("the planar faces' second fit"):
             grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
                               kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # faces'
+        if fidelity["curved_credits"] and clock.allows("the curved faces' second fit"):
+            grid, fidelity["curved_credits"] = fit_curved(  # the splits may have left a credited face's
+                grid, surface_ald, brep_areas=fidelity["brep_areas"],  # slivers uncancelled: checked again
+                kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])
         if clock.allows("the gridded faces' fit"):
             grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # polygons: checked again,
                              kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # and the grids' rows
