@@ -228,20 +228,21 @@ def fit_curved(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[
     areas = np.asarray(brep_areas, dtype=float)
     limit = AIM * surface_ald * areas
     credit = dict(credit)
+    measured = _Measured()  # every refit below is of ``grid``: its edges are probed once
 
-    def over(g, faces: set[int]) -> set[int]:  # the faces whose signed slivers are over the limit
+    def over(g, faces: set[int], probed: _Measured | None = None) -> set[int]:  # signed slivers over the limit
         _, _, signed = _fit_boundaries(g, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=credit,
-                                       only=faces)
+                                       only=faces, measured=probed)
         return {f for f in faces if abs(signed[f - 1]) > limit[f - 1]}
 
     fitted, refitted = grid, set()
-    short = over(grid, {f for f in credit if kinds[f - 1] != "Plane"})
+    short = over(grid, {f for f in credit if kinds[f - 1] != "Plane"}, measured)
     while short:
         credit = {f: c / 2.0 if f in short else c for f, c in credit.items()}
         credit = {f: c for f, c in credit.items() if c >= CURVED_CREDIT[0] or f not in short}
         refitted |= short
         fitted = _fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=credit,
-                                 only=refitted)[0]
+                                 only=refitted, measured=measured)[0]
         short = over(fitted, short & set(credit))
     return fitted, credit
 
