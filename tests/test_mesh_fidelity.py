@@ -523,15 +523,20 @@ def test_a_chamfer_rings_cone_is_credited_no_more_than_a_cone_may_be():
     assert np.all(np.abs(_independent_deficits(result)) <= 1e-3)
 
 
-def test_a_planar_face_whose_slivers_are_within_its_budget_gets_no_credit():
+def test_a_planar_face_whose_slivers_could_split_no_segment_gets_no_credit():
     """A planar face's cancellation credit (its unsigned sliver sum over its exact polygon's deficit) is
-    for faces the unsigned rule would split: a face bounded by lines has slivers of rounding only, and
+    for faces the unsigned rule could split: a face bounded by lines has slivers of rounding only, and
     a KiCad barrel jack's 2e-6 ribbons were credited on that noise (1.6e-16 over 9e-11 of 3.4e-7), then
-    cut to their width in 93 385 pieces an edge. Only the face over its budget is credited."""
-    areas = np.array([3.4e-7, 2.0])
-    gross = np.array([1.6e-16, 0.1])  # the ribbon's rounding; a curved outline's real slivers
-    deficits = {1: 9e-11, 2: 0.004}
-    assert _planar_credits(gross, deficits, areas, AIM * 1e-2) == {2: pytest.approx(0.5 * 0.1 / (0.004 * 2.0))}
+    cut to their width in 93 385 pieces an edge. A face whose slivers together are within its shortest
+    segment's share of its budget gets none; one whose slivers are within its whole budget but may be
+    over a segment's share keeps its credit."""
+    areas = np.array([3.4e-7, 2.0, 2.0])
+    gross = np.array([1.6e-16, 0.1, 0.01])  # the ribbon's rounding; curved outlines' slivers
+    deficits = {1: 9e-11, 2: 0.004, 3: 0.0004}
+    share = np.array([2.2e-6 / 0.6, 0.01, 0.01])  # shortest segment over perimeter
+    credits = _planar_credits(gross, deficits, areas, AIM * 1e-2, share)
+    assert credits == {2: pytest.approx(0.5 * 0.1 / (0.004 * 2.0)), 3: pytest.approx(0.5 * 0.01 / (0.0004 * 2.0))}
+    assert 0.01 < AIM * 1e-2 * areas[2]  # face 3's slivers are within its budget, but not a segment's share
 
 
 def test_a_cone_rings_credit_is_halved_where_a_neighbour_cut_one_circle_finer():

@@ -174,7 +174,7 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
         fitted = fit(grid, curved)[0]
     if not planes:  # the grids' rows still: cut before other passes split the lines unevenly
         return fit_grids(fitted, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=curved), curved
-    credit = _planar_credits(gross, net(grid), areas, limit)
+    credit = _planar_credits(gross, net(grid), areas, limit, _shortest_shares(grid, len(areas)))
     for _ in range(PLANAR_ROUNDS):
         if not credit:
             break
@@ -192,18 +192,32 @@ def fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray | None = 
     return fit_grids(fitted, surface_ald, brep_areas=areas, kinds=kinds, ratio=ratio, credit=curved), curved
 
 
-def _planar_credits(gross: np.ndarray, deficits: dict[int, float], areas: np.ndarray,
-                    limit: float) -> dict[int, float]:
+def _planar_credits(gross: np.ndarray, deficits: dict[int, float], areas: np.ndarray, limit: float,
+                    share: np.ndarray) -> dict[int, float]:
     """Face id -> budget factor of each planar face whose boundary slivers cancel: its unsigned estimate
     ``gross`` (as :func:`_fit_boundaries` sums it, index ``id - 1``) over its exact polygon's deficit
-    (``deficits``, relative), halved, where that is over 1 and the unsigned estimate is over the face's
-    budget (``limit`` times its area; elsewhere the unsigned rule splits nothing). A face bounded by
-    lines has slivers of rounding only: a KiCad barrel jack's ribbons 1-2e-6 wide and 0.3 long (sliver
-    sums of 1.6e-16, polygons 9e-11 off) were credited on that noise, and the credited faces' width rule
+    (``deficits``, relative), halved, where that is over 1 and the unsigned rule could split one of its
+    segments: a segment is split when its sliver is over its share of the face's budget (``limit`` times
+    its area) by length, so not where all the face's slivers together are within the shortest segment's
+    share (``share``: the face's shortest boundary segment over its perimeter). A face bounded by lines
+    has slivers of rounding only: a KiCad barrel jack's ribbons 1-2e-6 wide and 0.3 long (sliver sums of
+    1.6e-16, polygons 9e-11 off) were credited on that noise, and the credited faces' width rule
     (:data:`THIN_RATIO`) cut their edges into 93 385 pieces each; gmsh then hung on the face beside them."""
     credit = {f: 0.5 * gross[f - 1] / max(d * areas[f - 1], 1e-300) for f, d in deficits.items()
-              if gross[f - 1] > limit * areas[f - 1]}
+              if gross[f - 1] > limit * areas[f - 1] * share[f - 1]}
     return {f: c for f, c in credit.items() if c > 1.0}
+
+
+def _shortest_shares(grid, faces: int) -> np.ndarray:
+    """Each face's shortest boundary segment over its perimeter (index ``id - 1``, ``faces`` of them)."""
+    shortest = np.full(faces, np.inf)
+    for e in grid.edges:
+        if len(e.points) > 1:
+            for f in e.faces:
+                if 1 <= f <= faces:
+                    shortest[f - 1] = min(shortest[f - 1], float(e.segment_lengths.min()))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.nan_to_num(shortest / face_perimeters(grid, faces), nan=0.0, posinf=0.0)
 
 
 def _curved_credits(gross: np.ndarray, signed: np.ndarray, kinds: list[str], budget: np.ndarray) -> dict[int, float]:
