@@ -14,7 +14,8 @@ cq = pytest.importorskip("cadquery")
 from cadedge.cli import main  # noqa: E402
 from cadedge.mesh import mesh_shape  # noqa: E402
 from cadedge.mesh.boundary_fit import (CONE_CREDIT, CURVED_CREDIT, _fit_boundaries, _plane_deficits,  # noqa: E402
-                                       _planar_credits, _planes, _sagittas, fit_boundaries, fit_curved)
+                                       _planar_credits, _planes, _sagittas, _shortest_shares,
+                                       fit_boundaries, fit_curved)
 from cadedge.mesh.fidelity import AIM, brep_face_areas, meshed_kinds, not_converging, prepare, surface_types  # noqa: E402
 from cadedge.mesh.quality import triangle_angles  # noqa: E402
 from cadedge.mesh.report import build_report, tolerance_bands  # noqa: E402
@@ -537,6 +538,19 @@ def test_a_planar_face_whose_slivers_could_split_no_segment_gets_no_credit():
     credits = _planar_credits(gross, deficits, areas, AIM * 1e-2, share)
     assert credits == {2: pytest.approx(0.5 * 0.1 / (0.004 * 2.0)), 3: pytest.approx(0.5 * 0.01 / (0.0004 * 2.0))}
     assert 0.01 < AIM * 1e-2 * areas[2]  # face 3's slivers are within its budget, but not a segment's share
+
+
+def test_a_faces_shortest_segment_share_leaves_out_its_degenerate_edges():
+    """A cone's apex is a degenerate edge of two points at one place: counted, its segment of length 0
+    made the cone face's shortest share 0, and any rounding of its slivers would have earned a credit."""
+    import cadedge
+
+    grid = cadedge.refine_shape(cq.Solid.makeCone(5, 0, 10), ald=1e-2)
+    shares = _shortest_shares(grid, 2)
+    lengths = [e.segment_lengths.min() for e in grid.edges if 1 in e.faces and not e.degenerate]
+    perimeter = sum(e.length for e in grid.edges if 1 in e.faces)
+    assert any(e.degenerate for e in grid.edges)
+    assert shares[0] == pytest.approx(min(lengths) / perimeter)
 
 
 def test_a_cone_rings_credit_is_halved_where_a_neighbour_cut_one_circle_finer():

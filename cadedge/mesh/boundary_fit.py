@@ -209,10 +209,12 @@ def _planar_credits(gross: np.ndarray, deficits: dict[int, float], areas: np.nda
 
 
 def _shortest_shares(grid, faces: int) -> np.ndarray:
-    """Each face's shortest boundary segment over its perimeter (index ``id - 1``, ``faces`` of them)."""
+    """Each face's shortest boundary segment over its perimeter (index ``id - 1``, ``faces`` of them); a
+    degenerate edge (a cone's apex: two points at one place) has no segment to split and is left out, as
+    :func:`_fit_boundaries` leaves it out: its share of 0 would credit any rounding."""
     shortest = np.full(faces, np.inf)
     for e in grid.edges:
-        if len(e.points) > 1:
+        if not e.degenerate and len(e.points) > 1:
             for f in e.faces:
                 if 1 <= f <= faces:
                     shortest[f - 1] = min(shortest[f - 1], float(e.segment_lengths.min()))
