@@ -218,3 +218,30 @@ def test_a_wedge_beside_a_loose_edge_is_graded_on_both_sides():
     for f in wedges:
         assert f.min_angle > opening - 0.05 and f.below_20 < 0.05, (f.min_angle, f.below_20)
     assert not [a for a in report.small_angles if a.angle < 5 and not a.forced]
+
+
+@pytest.mark.corpus
+def test_tips_that_a_later_area_fit_cut_are_matched_again_before_meshing():
+    """build123d's M6 countersunk screw at 1e-3: after its narrow corners were graded, the curved faces'
+    second fit cut the head cone's circle in thirds, and the two corners at its end were left with tips
+    of 0.059 and 0.019 (KiCad's USB-C receptacle: the planar fit cut one tip of a strip 0.0004 wide,
+    and the triangles on the other, 25 times the strip's width, had 4.6 degrees). The grids imposed as
+    boundary nodes have every narrow corner's tips matched again."""
+    from cadedge.mesh import DEFAULT_GROWTH
+    from cadedge.mesh.fidelity import prepare
+    from cadedge.mesh.jobclock import JobClock
+    from cadedge.mesh.node_grids import fit_node_grids
+    from cadedge.mesh.sizes import SizeField
+    from conftest import CORPUS
+
+    refined = refine_shape(CORPUS / "gumyr__build123d__M6-1x12-countersunk-screw.step", ald=1e-3)
+    fitted, fidelity = prepare(refined, 1e-3)
+    grid, _, notes = fit_node_grids(fitted, refined, fidelity, 1e-3, growth=DEFAULT_GROWTH,
+                                    make_field=lambda g: SizeField(g, growth=DEFAULT_GROWTH), cap=None,
+                                    clock=JobClock(600.0))
+    assert not notes
+    corners = narrow_corners(grid.edges)
+    assert len(corners) >= 2
+    for c in corners:
+        tips = [tip_length(grid.edges[i], s) for i, s in c.sides]
+        assert max(tips) <= TIP_RATIO * min(tips), (c, tips)

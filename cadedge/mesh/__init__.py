@@ -161,7 +161,6 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         raise InputError(f"{out}: output folder does not exist")
     from .isolate import DEFAULT_TIMEOUT
     from .jobclock import JobClock
-    from .proximity import fit_to_sizes
     from .sizes import SizeField
     from .spacing_geo import write_geo
 
@@ -181,7 +180,6 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                           triangles=np.zeros((0, 3), dtype=np.int64), triangle_faces=np.zeros(0, dtype=np.int64),
                           failures=[], check=None, output=out, seconds=time.perf_counter() - t0,
                           notes=[f"wrote {out} and {out.with_suffix('.brep')} (spacing export, not meshed)"])
-    from .boundary_fit import fit_curved, fit_grids, fit_planes
     from .fidelity import HOOKS, prepare
     from .gridded import grid_face_ids
 
@@ -199,40 +197,13 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     job_options = {**(job_options or {}), "fidelity": fidelity}
     notes = []
     if mode == "nodes":  # imposed boundary nodes must be fine where the face around them is
-        say("fitting the edge grids to the face sizes")
-        try:
-            if clock.allows("the splits near small features"):
-                grid = fit_to_sizes(grid, make_field)
-        except Exception as exc:  # OCCT failing on one edge's curve: mesh the grids as refined, and say so
-            notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
-        from ..occt.cones import apex_cones
-        from .apex import grade_to_apexes
-        from .grading import grade_faces
-        from .wedges import grade_wedges
-        from .widths import fit_to_widths
+        from .node_grids import fit_node_grids
 
-        cap = max_size or max_length or make_field(grid).max_size  # thin faces must not shrink the cap
-        if clock.allows("the thin faces' splits"):
-            grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
-        if clock.allows("the face-wise grading"):
-            grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
-        if clock.allows("the grading into narrow corners"):
-            grid = grade_wedges(grid, keep=refined, areas=fidelity["brep_areas"],  # segments shrink into
-                                target=surface_ald)  # a face's narrow corners
-        cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
-        if cones and clock.allows("the grading into cone tips"):
-            grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
-        if clock.allows("the planar faces' second fit"):
-            grid = fit_planes(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # the splits moved planar
-                              kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # faces'
-        if fidelity["curved_credits"] and clock.allows("the curved faces' second fit"):
-            grid, fidelity["curved_credits"] = fit_curved(  # the splits may have left a credited face's
-                grid, surface_ald, brep_areas=fidelity["brep_areas"],  # slivers uncancelled: checked again
-                kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])
-        if clock.allows("the gridded faces' fit"):
-            grid = fit_grids(grid, surface_ald, brep_areas=fidelity["brep_areas"],  # polygons: checked again,
-                             kinds=fidelity["meshed_kinds"], credit=fidelity["curved_credits"])  # and the grids' rows
-        max_size = cap
+        say("fitting the edge grids to the face sizes")
+        grid, max_size, fit_notes = fit_node_grids(grid, refined, fidelity, surface_ald, growth=growth,
+                                                   make_field=make_field, cap=max_size or max_length,
+                                                   clock=clock)
+        notes += fit_notes
     if (left_out := clock.note()) is not None:
         notes.append(left_out)
     fidelity["grid_faces"] = grid_face_ids(grid, fidelity["meshed_kinds"], surface_ald,  # the boundary's

@@ -45,6 +45,8 @@ from .widths import BUDGET_FACTOR, MIN_BUDGET, WIDTH_RATIO, _segment_distances
 WEDGE_DEG = 20.0
 #: Tips within this ratio of each other are left as they are.
 TIP_RATIO = 1.2
+#: Corners sharing edge ends have their tips matched in at most this many rounds.
+TIP_ROUNDS = 4
 #: A segment is cut into at most this many pieces.
 MAX_PIECES = 200
 #: A corner is graded only where its tips are at most this many times longer than the pieces beside
@@ -142,16 +144,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
     ends = end_tolerances(grid)
     budget = BUDGET_FACTOR * grid.segments + MIN_BUDGET
-    changed = False
-    for c in corners:  # the tips first: the longer one cut at the shorter one's length
-        tips = [tip_length(edges[k], s) for k, s in c.sides]
-        k, s = c.sides[int(np.argmax(tips))]
-        if max(tips) > TIP_RATIO * min(tips) and not edges[k].tolerance > LOOSE_SHARE * min(tips):
-            share = min(tips) / max(tips)
-            cut = cut_on_curve(edges[k], curves, {tip_segment(edges[k], s): [share if s else 1 - share]},
-                               ends=ends[edges[k].id])
-            if cut is not None:
-                edges[k], changed = cut, True
+    changed = _match_tips(edges, corners, curves, ends)
     if keep is not None and areas is not None and target is not None:  # then lengthened where too short
         room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
         for c in corners:
@@ -179,6 +172,29 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
         if cut is not None:
             edges[i], changed, added = cut, True, added + new
     return with_edges(grid, edges) if changed else grid
+
+
+def _match_tips(edges: list, corners: list[Corner], curves, ends: dict[int, float]) -> bool:
+    """Cut the longer tip of each corner at the shorter one's length (in place; True if any was cut).
+    Corners at one vertex share edge ends (a faceted part's facets meet at a vertex in several narrow
+    corners), so a tip cut for one corner may leave the next one unequal: repeated until none is cut,
+    at most :data:`TIP_ROUNDS` times (tips only get shorter)."""
+    changed = False
+    for _ in range(TIP_ROUNDS):
+        cut_any = False
+        for c in corners:
+            tips = [tip_length(edges[k], s) for k, s in c.sides]
+            k, s = c.sides[int(np.argmax(tips))]
+            if max(tips) > TIP_RATIO * min(tips) and not edges[k].tolerance > LOOSE_SHARE * min(tips):
+                share = min(tips) / max(tips)
+                cut = cut_on_curve(edges[k], curves, {tip_segment(edges[k], s): [share if s else 1 - share]},
+                                   ends=ends[edges[k].id])
+                if cut is not None:
+                    edges[k], cut_any = cut, True
+        changed |= cut_any
+        if not cut_any:
+            break
+    return changed
 
 
 def _no_piece_under(cuts: dict[int, np.ndarray], lengths: np.ndarray, least: float) -> dict[int, np.ndarray]:
