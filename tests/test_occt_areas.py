@@ -49,6 +49,23 @@ def rectangle_area(face) -> float:
     return float(wu @ jac @ wv)
 
 
+def test_a_deflection_occt_refuses_gives_no_domain_area():
+    """A face of zero area (SparkFun's FlexyPin STEP file has three) made the area check ask OCCT's mesher
+    for a deflection of 0: it raises Standard_NumericError, which ``except Standard_Failure`` did not
+    catch, and ``cadedge mesh`` stopped with an internal error. No check now, OCCT's integrations stand."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp
+
+    from cadedge.occt.compat import TopTools_IndexedMapOfShape
+
+    faces = TopTools_IndexedMapOfShape()
+    TopExp.MapShapes_s(BRepPrimAPI_MakeCylinder(1.0, 2.0).Shape(), TopAbs_FACE, faces)
+    face = TopoDS.Face_s(faces.FindKey(1))
+    assert domain_area(face, 0.0) is None
+    assert domain_area(face, 0.01) == pytest.approx(4 * math.pi, rel=1e-6)
+
+
 def test_an_offset_face_gets_its_integrated_area():
     """OCCT's adaptive integration gains 3.8e-4 on this face (1641.30 for 1640.68); the area returned
     is the integral to 1e-7."""

@@ -47,6 +47,28 @@ def test_compat_collections_and_casts():
     assert compat.TopTools_ListOfShape().Size() == 0 and compat.TColStd_SequenceOfAsciiString().Size() == 0
 
 
+def test_occt_errors_hold_the_occt_exceptions_ocp_binds_apart():
+    """OCP binds each OCCT exception as its own subclass of Exception (a Standard_NumericError is no
+    Standard_Failure in Python); ``OCCT_ERRORS`` holds them all, and a failure OCCT raises is caught."""
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.Standard import Standard_Failure, Standard_NumericError, Standard_OutOfRange
+    from OCP.StdFail import StdFail_NotDone
+
+    assert not issubclass(Standard_NumericError, Standard_Failure)
+    assert {Standard_Failure, Standard_NumericError, Standard_OutOfRange, StdFail_NotDone} <= set(compat.OCCT_ERRORS)
+    assert all(issubclass(c, Exception) and c.__module__.startswith("OCP") for c in compat.OCCT_ERRORS)
+    with pytest.raises(compat.OCCT_ERRORS):
+        BRepMesh_IncrementalMesh(BRepPrimAPI_MakeBox(1.0, 2.0, 3.0).Shape(), 0.0, False, 0.5, False)
+
+
+def test_no_module_catches_standard_failure_alone():
+    """``except Standard_Failure`` misses the other OCCT exceptions (see above): ``OCCT_ERRORS`` instead."""
+    bad = [f"{p.relative_to(ROOT)}:{i}" for p in _ocp_modules()
+           for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), start=1)
+           if re.search(r"except\b.*\bStandard_Failure\b", line)]
+    assert not bad
+
+
 def test_compat_arrays_build_a_bspline():
     poles = compat.TColgp_Array1OfPnt(1, 3)
     for i, (x, y) in enumerate([(0.0, 0.0), (1.0, 2.0), (2.0, 0.0)], start=1):

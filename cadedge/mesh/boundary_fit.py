@@ -404,9 +404,8 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     ``measured``: what an earlier call measured of the same ``grid`` (filled here), so that fitting it
     again with other credits does not probe its edges again.
     """
-    from OCP.Standard import Standard_Failure
-
     from ..errors import GeometryError
+    from ..occt.compat import OCCT_ERRORS
     from ..occt.edgecurve import EdgeCurve
     from ..occt.topology import Topology
     from ..shapegrid import end_tolerances, with_edges
@@ -454,7 +453,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                         probes[f] = _face_probe(topo.faces[f - 1], sided=kinds[f - 1] != "Plane")
                 measured.edges[i] = curve, sagitta, [(f, *probes[f](curve.edge, mid_u, np.diff(e.params)))
                                                      for f in e.faces]
-            except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
+            except (GeometryError, *OCCT_ERRORS):  # OCCT cannot evaluate this edge: keep its grid
                 continue
         if measured.edges[i] is None:
             continue

@@ -85,9 +85,8 @@ def cut_on_curve(e, curves, cuts: dict[int, np.ndarray], *, ends: float):
     length on its OCCT curve (``curves[e.id]``, grid points kept); None when the curve cannot be built or
     evaluated, or the grid's parameters are not that curve's: its ends further from the curve's than
     ``ends`` allows (:func:`cadedge.shapegrid.end_tolerances`; the edge is then left alone)."""
-    from OCP.Standard import Standard_Failure
-
     from ..errors import GeometryError
+    from ..occt.compat import OCCT_ERRORS
     from ..splitting import cut_by_arc, fits_curve, insert_points
 
     try:
@@ -95,7 +94,7 @@ def cut_on_curve(e, curves, cuts: dict[int, np.ndarray], *, ends: float):
         if not fits_curve(e.params, e.points, curve.evaluate, ends):
             return None
         u, p = cut_by_arc(e.params, e.points, cuts, curve.evaluate)
-    except (GeometryError, Standard_Failure):
+    except (GeometryError, *OCCT_ERRORS):
         return None
     params, points = insert_points(e.params, e.points, u, p)
     return dataclasses.replace(e, params=params, points=points)

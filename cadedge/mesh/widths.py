@@ -342,9 +342,8 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
     *tips*, :mod:`cadedge.mesh.wedges`, which makes them equal, as long as the shorter) is halved only
     where its halves are no shorter than the corner's other tip (within :data:`TIP_SLACK`). Grid points
     are kept and edge ends never move; an edge OCCT cannot evaluate keeps its grid."""
-    from OCP.Standard import Standard_Failure
-
     from ..errors import GeometryError
+    from ..occt.compat import OCCT_ERRORS
     from .wedges import narrow_corners, tip_length, tip_segment
 
     curves = curves if curves is not None else (grid.curves if grid.curves is not None else _LazyCurves(grid))
@@ -379,7 +378,7 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
                 continue
             try:
                 params, points = split_segments(e.params, e.points, k, curves[e.id].evaluate)
-            except (GeometryError, Standard_Failure):  # OCCT cannot evaluate this edge: keep its grid
+            except (GeometryError, *OCCT_ERRORS):  # OCCT cannot evaluate this edge: keep its grid
                 continue
             edges[i] = dataclasses.replace(e, params=params, points=points)
             changed = True

@@ -41,7 +41,6 @@ from OCP.GeomAbs import (GeomAbs_Circle, GeomAbs_CN, GeomAbs_Ellipse, GeomAbs_Li
                          GeomAbs_SurfaceOfExtrusion)
 from OCP.GProp import GProp_GProps
 from OCP.gp import gp_Pnt, gp_Pnt2d, gp_Vec, gp_Vec2d
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FORWARD, TopAbs_REVERSED
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
@@ -49,7 +48,7 @@ from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
 
 from ..errors import GeometryError
 from ..grid import polygon_area
-from .compat import TColStd_Array1OfReal, TopoDS
+from .compat import OCCT_ERRORS, TColStd_Array1OfReal, TopoDS
 from .topology import Topology, walked_wires
 
 #: Precision asked of OCCT's adaptive integration.
@@ -204,7 +203,7 @@ def extrusion_area(face: TopoDS_Face) -> float | None:
                 if np.any(start != end):
                     total += piece(lambda t, p=start, q=end: (p + np.outer(t, q - p), np.tile(q - p, (len(t), 1))),
                                    0.0, 1.0)
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return None
     return abs(total) if np.isfinite(total) else None
 
@@ -242,7 +241,7 @@ def plane_area(face: TopoDS_Face) -> float | None:
                  for edges in walked]
         if all(c.kind in _EXACT_EDGES for loop in loops for c, _ in loop):
             return None
-    except (GeometryError, Standard_Failure):
+    except (GeometryError, *OCCT_ERRORS):
         return None
     origin, axes = plane[0], np.array(plane[1:])
     areas: list[float] = []
@@ -309,7 +308,7 @@ def domain_area(face: TopoDS_Face, deflection: float) -> float | None:
         points = np.einsum("qk,tkd->qtd", _BARY, corners).reshape(-1, 2)
         inner = float(_WEIGHTS @ (_area_element(surface, points).reshape(len(_WEIGHTS), -1) @ areas))
         slivers = _slivers(copy, tri, loc, surface)
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return None
     return None if slivers is None else inner + slivers
 
@@ -367,7 +366,7 @@ def closure(face: TopoDS_Face, area: float) -> float:
             if previous is not None and abs(total - previous) <= AREA_EPS * area:
                 break
             previous = total
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return 0.0
     return total
 

@@ -94,8 +94,8 @@ def _read(path: Path, given: str, faces: int, solids: int, warning: str | None) 
     with quiet_occt():
         try:
             ok = BRepTools.Read_s(shape, str(path), BRep_Builder())
-        except Exception as exc:  # OCCT's exceptions (OCP maps some, such as Standard_OutOfRange, apart
-            # from Standard_Failure): an index out of its table, a shape referring to itself
+        except Exception as exc:  # OCCT's exceptions (compat.OCCT_ERRORS) and the binding's own: an index
+            # out of its table, a shape referring to itself
             raise InputError(f"{given}: corrupt BREP file (OCCT could not read it: {type(exc).__name__}: "
                              f"{exc})") from exc
     if not ok:

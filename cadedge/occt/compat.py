@@ -45,6 +45,32 @@ class _TopoDSNamespace:
 
 TopoDS = _topods_module.TopoDS if hasattr(_topods_module.TopoDS, "Edge_s") else _TopoDSNamespace()
 
-__all__ = ["TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
+
+def _occt_errors() -> tuple[type[Exception], ...]:
+    """Every OCCT exception class OCP binds, found in its modules (``OCP.OCP``'s on both lines).
+
+    OCP binds each OCCT exception as its own subclass of Python's ``Exception``: ``Standard_NumericError``
+    is a ``Standard_Failure`` in C++ but not in Python, and ``except Standard_Failure`` let it through.
+    SparkFun's FlexyPin STEP file has a face whose area check gave ``BRepMesh_IncrementalMesh`` a
+    deflection it refused (``Standard_NumericError``): ``cadedge mesh`` stopped with an internal error."""
+    import types
+
+    import OCP
+    from OCP.Standard import Standard_Failure
+
+    found = {Standard_Failure}
+    for root in {OCP, getattr(OCP, "OCP", OCP)}:
+        for name in dir(root):
+            module = getattr(root, name, None)
+            if isinstance(module, types.ModuleType) and module.__name__.startswith("OCP"):
+                found.update(v for v in vars(module).values()
+                             if isinstance(v, type) and issubclass(v, Exception) and v.__module__.startswith("OCP"))
+    return tuple(sorted(found, key=lambda c: c.__name__))
+
+
+#: Every OCCT exception OCP raises (see :func:`_occt_errors`): ``except OCCT_ERRORS`` where OCCT may fail.
+OCCT_ERRORS = _occt_errors()
+
+__all__ = ["OCCT_ERRORS", "TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
            "TColgp_Array1OfPnt", "TColgp_Array2OfPnt", "TColgp_HArray1OfPnt", "TDF_LabelSequence",
            "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]

@@ -13,12 +13,11 @@ import numpy as np
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.GeomAbs import GeomAbs_Cone
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_VERTEX
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS_Shape
 
-from .compat import TopoDS
+from .compat import OCCT_ERRORS, TopoDS
 from .topology import Topology
 
 #: A vertex this close to a cone's apex, as a share of the apex's distance from the cone's reference
@@ -51,6 +50,6 @@ def apex_cones(shape: TopoDS_Shape, faces: list[int] | None = None) -> dict[int,
                     out[i] = (np.array(apex.Coord()), sine)
                     break
                 explorer.Next()
-        except Standard_Failure:
+        except OCCT_ERRORS:
             continue
     return out

@@ -14,7 +14,7 @@ from typing import Any
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GCPnts import GCPnts_AbscissaPoint
-from OCP.Standard import Standard_Failure
+from .compat import OCCT_ERRORS
 from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
 
 from ..errors import GeometryError
@@ -68,12 +68,12 @@ def describe_edge(topology: Topology, i: int) -> EdgeDescription:
     try:
         adaptor = BRepAdaptor_Curve(edge)
         kind = curve_type_name(adaptor.GetType())
-    except Standard_Failure as exc:
+    except OCCT_ERRORS as exc:
         raise GeometryError(f"edge {i + 1}: OCCT cannot adapt its curve: {exc}") from exc
     degenerate = topology.is_degenerate(i)
     try:
         length = 0.0 if degenerate else float(GCPnts_AbscissaPoint.Length_s(adaptor))
-    except Standard_Failure as exc:
+    except OCCT_ERRORS as exc:
         raise GeometryError(f"edge {i + 1}: OCCT cannot measure its length: {exc}") from exc
     return EdgeDescription(id=i + 1, curve=kind, degenerate=degenerate, closed=topology.is_closed(i),
                            seam=topology.is_seam(i), vertices=topology.edge_vertices[i],

@@ -15,7 +15,7 @@ import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GeomAbs import GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse, GeomAbs_Line
 from OCP.GCPnts import GCPnts_AbscissaPoint
-from OCP.Standard import Standard_Failure
+from .compat import OCCT_ERRORS
 from OCP.TopoDS import TopoDS_Edge
 
 from ..errors import GeometryError
@@ -45,7 +45,7 @@ class EdgeCurve:
             self.adaptor = BRepAdaptor_Curve(self.edge)
             self.domain = (float(self.adaptor.FirstParameter()), float(self.adaptor.LastParameter()))
             self.kind = self.adaptor.GetType()
-        except Standard_Failure as exc:
+        except OCCT_ERRORS as exc:
             raise GeometryError(f"{self._name()}: OCCT cannot adapt its curve: {exc}") from exc
         self.fast = fast_evaluator(self.adaptor, self.domain)
 
@@ -72,7 +72,7 @@ class EdgeCurve:
         try:
             for k, uk in enumerate(u.tolist()):
                 out[k] = value(uk).Coord()
-        except Standard_Failure as exc:
+        except OCCT_ERRORS as exc:
             raise GeometryError(f"{self._name()}: OCCT failed to evaluate u={uk!r}: {exc}") from exc
         return out
 
@@ -106,7 +106,7 @@ class EdgeCurve:
                 if len(table):
                     return float(table.exact[0])
             return float(GCPnts_AbscissaPoint.Length_s(self.adaptor, a, b, LENGTH_TOL))
-        except Standard_Failure:
+        except OCCT_ERRORS:
             return None  # the refiner then relies on its own estimate
 
     def _knots(self, a: float, b: float) -> np.ndarray:

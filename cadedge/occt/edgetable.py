@@ -25,7 +25,7 @@ from OCP.Geom import Geom_Circle, Geom_Ellipse, Geom_Hyperbola, Geom_Line
 from OCP.gp import gp_Pnt
 from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
                          GeomAbs_Hyperbola, GeomAbs_Line)
-from OCP.Standard import Standard_Failure
+from .compat import OCCT_ERRORS
 
 from .. import explore, kernels, target
 from .curvedump import CIRCLE, DEGREE, DIM, KIND, KNOTS, PERIODIC, TYPE, CurveSet
@@ -100,7 +100,7 @@ class EdgeTable:
                 else:
                     continue
                 index = base + add(curve)
-            except Standard_Failure:
+            except OCCT_ERRORS:
                 continue  # the per-edge path reports what OCCT cannot do
             if t == GeomAbs_BSplineCurve:
                 splines[index] = curve
@@ -181,7 +181,7 @@ class EdgeTable:
         for r in curved[np.isnan(got)].tolist():
             try:
                 self.exact[r] = float(GCPnts_AbscissaPoint.Length_s(self.adaptor(r), *self.domain[r], LENGTH_TOL))
-            except Standard_Failure:
+            except OCCT_ERRORS:
                 failed.append(r)
         if failed:
             self._keep(np.setdiff1d(np.arange(len(self.rows)), failed))
@@ -257,13 +257,13 @@ class EdgeTable:
         coord = point.Coord
         try:
             out = [(ad.D0(x, point), coord())[1] for ad, x in zip(adaptors, u)]
-        except Standard_Failure:  # again one by one, to know which
+        except OCCT_ERRORS:  # again one by one, to know which
             out = []
             for ad, x, r in zip(adaptors, u, rows):
                 try:
                     ad.D0(x, point)
                     out.append(coord())
-                except Standard_Failure:
+                except OCCT_ERRORS:
                     ok[r] = False
                     out.append((math.nan,) * 3)
         return np.array(out, dtype=float).reshape(-1, 3)

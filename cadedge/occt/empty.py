@@ -10,7 +10,7 @@ holds no geometry, so leaving it out loses nothing; the faces, edges and vertice
 from __future__ import annotations
 
 from OCP.BRepTools import BRepTools_ReShape
-from OCP.Standard import Standard_Failure
+from .compat import OCCT_ERRORS
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID, TopAbs_VERTEX
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS_Shape
@@ -37,7 +37,7 @@ def without_empty(shape: TopoDS_Shape) -> tuple[TopoDS_Shape, list[str]]:
             reshape.Remove(s)
     try:
         pruned = reshape.Apply(shape)
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return shape, []
     for kind in (TopAbs_FACE, TopAbs_EDGE, TopAbs_VERTEX):
         before, after = indexed(shape, kind), indexed(pruned, kind)

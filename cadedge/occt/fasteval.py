@@ -20,7 +20,7 @@ import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.GeomAbs import (GeomAbs_BezierCurve, GeomAbs_BSplineCurve, GeomAbs_Circle, GeomAbs_Ellipse,
                          GeomAbs_Line)
-from OCP.Standard import Standard_Failure
+from .compat import OCCT_ERRORS
 
 from ..kernels import de_boor
 
@@ -112,7 +112,7 @@ def fast_evaluator(adaptor: BRepAdaptor_Curve, domain: tuple[float, float]) -> P
         u = np.linspace(a, b, CHECK_POINTS)
         u[1:-1] += (b - a) / (CHECK_POINTS - 1) * 0.1234  # off the knots and symmetric points
         ref = np.array([adaptor.Value(x).Coord() for x in u.tolist()], dtype=float)
-    except (Standard_Failure, ValueError):
+    except (*OCCT_ERRORS, ValueError):
         return None
     got = np.asarray(fn(u), dtype=float)
     size = max(float(np.abs(ref).max()), float(np.ptp(ref, axis=0).max()), math.ulp(1.0))

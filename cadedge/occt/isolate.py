@@ -172,7 +172,7 @@ def _write(transfer: Transfer, out: Path, given: str) -> None:
         t = transfer(note)
     except CadedgeError as exc:
         doc = {"error": {"type": type(exc).__name__, "message": str(exc)}}
-    except Exception as exc:  # an OCCT exception OCP did not turn into Standard_Failure, a bug of ours
+    except Exception as exc:  # an OCCT exception (compat.OCCT_ERRORS), or a bug of ours
         doc = {"error": {"type": "GeometryError", "message": f"{given}: OCCT failed to read the file: "
                                                             f"{type(exc).__name__}: {exc}"}}
     else:

@@ -20,14 +20,13 @@ from typing import Any, Iterator
 
 from OCP.Interface import Interface_CheckIterator
 from OCP.Message import Message
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_SOLID
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS_Shape
 
 from ..errors import GeometryError, InputError
-from .compat import TopTools_IndexedMapOfShape
+from .compat import OCCT_ERRORS, TopTools_IndexedMapOfShape
 
 #: Millimetres per unit for the length unit names files declare (lower-cased).
 MM_PER_UNIT = {"millimetre": 1.0, "millimeter": 1.0, "mm": 1.0, "centimetre": 10.0, "centimeter": 10.0,
@@ -118,7 +117,7 @@ def transfer_roots(reader: Any, given: str, kind: str, load: Counter[str]) -> tu
     try:
         done_roots = reader.TransferRoots()
         shape = reader.OneShape()
-    except Standard_Failure as exc:
+    except OCCT_ERRORS as exc:
         raise GeometryError(f"{given}: OCCT failed to transfer the {kind} file: {exc}") from exc
     transfer = check_counts(reader.WS().TransferReader().LastCheckList())
     return done_roots, shape, check_messages(load, f"{kind} load") + check_messages(transfer, f"{kind} transfer"), \

@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.BRepTools import BRepTools_ReShape
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS_Shape
 
-from .compat import TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
+from .compat import OCCT_ERRORS, TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape
 from .topology import indexed, list_items
 
 
@@ -30,7 +29,7 @@ def merge_vertices(shape: TopoDS_Shape, into: dict[int, int]) -> tuple[TopoDS_Sh
                         vertices.FindKey(new).Oriented(TopAbs_FORWARD))
     try:
         merged = reshape.Apply(shape)
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return shape, {}
     kept = [vertices.FindKey(i) for i in range(1, vertices.Size() + 1) if i not in into]
     after = indexed(merged, TopAbs_VERTEX)
@@ -45,6 +44,6 @@ def merge_vertices(shape: TopoDS_Shape, into: dict[int, int]) -> tuple[TopoDS_Sh
     try:
         if not all(BRepCheck_Analyzer(faces.FindKey(i)).IsValid() for i in range(1, faces.Size() + 1)):
             return shape, {}
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return shape, {}
     return merged, dict(into)

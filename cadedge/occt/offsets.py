@@ -19,10 +19,9 @@ import numpy as np
 from OCP.BRepAdaptor import BRepAdaptor_Curve
 from OCP.gp import gp_Pnt
 from OCP.ShapeAnalysis import ShapeAnalysis_Curve
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
 
-from .compat import TopoDS
+from .compat import OCCT_ERRORS, TopoDS
 from .topology import indexed, orientations_in
 
 #: Nodes of an edge's grid measured at most (evenly picked, its ends always).
@@ -59,6 +58,6 @@ def edge_offsets(shape, edges: Iterable, faces: Iterable[int]) -> dict[int, dict
                 if traces:
                     out.setdefault(f, {})[e.id] = max(project.Project(trace, p, 0.0, gp_Pnt(), 0.0, True)
                                                       for trace in traces for p in points)
-            except Standard_Failure:
+            except OCCT_ERRORS:
                 continue
     return out

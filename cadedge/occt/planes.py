@@ -14,7 +14,7 @@ from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Surface
 from OCP.GeomAbs import GeomAbs_Plane
 from OCP.GeomLib import GeomLib_IsPlanarSurface
-from OCP.Standard import Standard_Failure
+from .compat import OCCT_ERRORS
 from OCP.TopoDS import TopoDS_Face, TopoDS_Shape
 
 from .topology import Topology
@@ -38,7 +38,7 @@ def plane_of(face: TopoDS_Face) -> Frame | None:
             if not test.IsPlanar():
                 return None
             position = test.Plan().Position()
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return None
     return (np.array(position.Location().Coord()), np.array(position.XDirection().Coord()),
             np.array(position.YDirection().Coord()))

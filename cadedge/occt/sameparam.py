@@ -24,12 +24,11 @@ from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Curve2d, BRepAdaptor_
 from OCP.BRepLib import BRepLib
 from OCP.BRepTools import BRepTools_ReShape
 from OCP.ShapeBuild import ShapeBuild_Edge
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX
 from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Iterator, TopoDS_Shape
 
-from .compat import TopoDS, TopTools_IndexedDataMapOfShapeListOfShape
+from .compat import OCCT_ERRORS, TopoDS, TopTools_IndexedDataMapOfShapeListOfShape
 from .topology import indexed, list_items, orientations_in
 
 #: An edge is out of step where its pcurve's point lies farther than this share of the edge grid's
@@ -115,7 +114,7 @@ def in_step(shape: TopoDS_Shape, shortest: Mapping[int, float]) -> tuple[TopoDS_
             new = _copied(edge)
             BRepLib.SameParameter_s(new, min(BRep_Tool.Tolerance_s(new), 0.1 * bound), True)  # forced
             after = _out_of_step(new, uses)
-        except Standard_Failure:
+        except OCCT_ERRORS:
             continue
         if after <= bound:
             reshape.Replace(edge.Oriented(TopAbs_FORWARD), new)
@@ -124,7 +123,7 @@ def in_step(shape: TopoDS_Shape, shortest: Mapping[int, float]) -> tuple[TopoDS_
         return shape, []
     try:
         out = reshape.Apply(shape)
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return shape, []
     for kind in (TopAbs_FACE, TopAbs_EDGE, TopAbs_VERTEX):
         if indexed(out, kind).Size() != indexed(shape, kind).Size():

@@ -21,11 +21,10 @@ from collections.abc import Sequence
 
 import numpy as np
 from OCP.BinTools import BinTools_ShapeSet
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_FORWARD, TopAbs_Orientation
 
 from ..kernels import parse_shapes
-from .compat import TopoDS
+from .compat import OCCT_ERRORS, TopoDS
 from .curvedump import Curves
 
 
@@ -122,7 +121,7 @@ def read(shape) -> ShapeDump | None:
         root = shape_set.Add(shape)
         buf = io.BytesIO()
         shape_set.Write(buf)
-    except Standard_Failure:
+    except OCCT_ERRORS:
         return None
     try:
         raw = parse_shapes(buf.getvalue(), root, int(shape.Orientation()))

@@ -11,15 +11,14 @@ import functools
 
 from OCP.BRep import BRep_Tool
 from OCP.BRepAdaptor import BRepAdaptor_Curve
-from OCP.Standard import Standard_Failure
 from OCP.BRepTools import BRepTools_WireExplorer
 from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_FORWARD, TopAbs_VERTEX, TopAbs_WIRE
 from OCP.TopExp import TopExp, TopExp_Explorer
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Face, TopoDS_Shape, TopoDS_Vertex
 
 from ..errors import GeometryError
-from .compat import (TopoDS, TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape,
-                     TopTools_ListOfShape)
+from .compat import (OCCT_ERRORS, TopoDS, TopTools_IndexedDataMapOfShapeListOfShape,
+                     TopTools_IndexedMapOfShape, TopTools_ListOfShape)
 
 #: The curve type names reported for edges, from ``GeomAbs_CurveType`` without the prefix.
 CURVE_TYPES = ("Line", "Circle", "Ellipse", "Hyperbola", "Parabola", "BezierCurve", "BSplineCurve",
@@ -182,7 +181,7 @@ class Topology:
         """
         try:
             kind = BRepAdaptor_Curve(self.edges[i]).GetType()
-        except Standard_Failure as exc:
+        except OCCT_ERRORS as exc:
             raise GeometryError(f"edge {i + 1}: OCCT cannot adapt its curve: {exc}") from exc
         return curve_type_name(kind)
 

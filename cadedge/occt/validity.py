@@ -10,12 +10,11 @@ wires, edges and vertices, so a large model pays only for the faces that failed.
 from __future__ import annotations
 
 from OCP.BRepCheck import BRepCheck_Analyzer, BRepCheck_Face, BRepCheck_NoError, BRepCheck_Wire
-from OCP.Standard import Standard_Failure
 from OCP.TopAbs import TopAbs_WIRE
 from OCP.TopExp import TopExp_Explorer
 from OCP.TopoDS import TopoDS_Edge, TopoDS_Shape
 
-from .compat import TopoDS
+from .compat import OCCT_ERRORS, TopoDS
 from .topology import Topology
 
 #: BRepCheck's statuses in words; the others by their name without the ``BRepCheck_`` prefix.
@@ -61,7 +60,7 @@ def face_problems(shape: TopoDS_Shape, faces: list[int]) -> dict[int, str]:
             while explorer.More():
                 found += _wire_checks(face, TopoDS.Wire_s(explorer.Current()))
                 explorer.Next()
-        except (Standard_Failure, TypeError) as exc:  # OCCT's failure, or a binding that cannot convert
+        except (*OCCT_ERRORS, TypeError) as exc:  # OCCT's failure, or a binding that cannot convert
             out[fid] = f"the check itself failed ({exc})"
             continue
         names = [getattr(s, "name", str(s)).removeprefix("BRepCheck_") for s in found if s != BRepCheck_NoError]
