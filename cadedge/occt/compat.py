@@ -6,6 +6,8 @@ OCP 8.0 (OpenCASCADE 8.0: build123d 0.13) no longer binds OCCT's typedef'd colle
 typedef names. OCP 8.0 also binds ``TopoDS`` (the down-casts) as a namespace whose functions lose the
 ``_s`` of static methods: ``TopoDS.Edge`` where 7.9 has ``TopoDS.Edge_s``; :data:`TopoDS` here answers
 to the 7.9 spelling on both lines. Every other OCP class and method cadedge uses is the same on both.
+
+Also :data:`OCCT_ERRORS`, the OCCT exceptions as OCP binds them on both lines: each its own class.
 """
 
 from __future__ import annotations
@@ -71,6 +73,7 @@ def _occt_errors() -> tuple[type[Exception], ...]:
 #: Every OCCT exception OCP raises (see :func:`_occt_errors`): ``except OCCT_ERRORS`` where OCCT may fail.
 OCCT_ERRORS = _occt_errors()
 
-__all__ = ["OCCT_ERRORS", "TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_SequenceOfAsciiString",
-           "TColgp_Array1OfPnt", "TColgp_Array2OfPnt", "TColgp_HArray1OfPnt", "TDF_LabelSequence",
-           "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape", "TopTools_ListOfShape"]
+__all__ = ["OCCT_ERRORS", "TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal",
+           "TColStd_SequenceOfAsciiString", "TColgp_Array1OfPnt", "TColgp_Array2OfPnt", "TColgp_HArray1OfPnt",
+           "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape",
+           "TopTools_ListOfShape"]
