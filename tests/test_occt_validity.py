@@ -3,6 +3,7 @@ build123d so the check runs on both OCP lines (OCP 8 cannot read BRepCheck's lis
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 b3d = pytest.importorskip("build123d")
@@ -47,10 +48,24 @@ def test_a_failed_faces_reason_says_when_the_face_itself_is_invalid():
     assert out[1].reason == "gmsh's reason"  # face 2 passes the check
 
 
+def test_a_face_of_no_area_is_tried_only_as_gmsh_alone_would_mesh_it():
+    """A face whose B-rep area is 0 (:func:`~cadedge.mesh.fidelity.without_degenerate`) is barred from the
+    other strategies as an invalid one is: SparkFun's FlexyPin STEP file has cylinder faces of no area
+    between coinciding curves, and one of them hung gmsh for 60 s twice among the 12 strategies."""
+    grid = refine_shape(b3d.Box(1, 2, 3), ald=1e-2)
+    areas = np.array([6.0, 0.0, 6.0, 3.0, 3.0, 2.0])
+    problems = _invalid_faces(grid, areas)
+    assert problems == {2: "it has no area"}
+    assert _invalid_faces(grid) == {}
+    failures = _with_brep_checks([FaceFailure(face=2, surface=2, reason="gmsh's reason")], problems)
+    assert failures[0].reason == "gmsh's reason; the B-rep face itself is invalid (it has no area)"
+    assert set(range(len(STRATEGIES))) - set(invalid_face_skips(problems)[2]) == set(INVALID_FACE_STRATEGIES)
+
+
 def test_an_invalid_face_is_tried_only_as_gmsh_alone_would_mesh_it():
     """Every strategy but the first and gmsh's own curve mesh is barred, with the check's words; the
     failed face's reason counts the two tried apart from those not tried."""
-    skips = invalid_face_skips({3: "a wire not closed"})
+    skips = invalid_face_skips({3: "OCCT's BRepCheck: a wire not closed"})
     barred = skips[3]
     assert set(range(len(STRATEGIES))) - set(barred) == set(INVALID_FACE_STRATEGIES)
     assert [STRATEGIES[k].name for k in INVALID_FACE_STRATEGIES] == [

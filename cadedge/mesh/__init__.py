@@ -248,7 +248,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     if tolerance:  # the job judges what the edges' tolerances excuse by the tolerances they now need
         meshed = dataclasses.replace(meshed, edges=[dataclasses.replace(e, tolerance=tolerance[e.id])
                                                     if e.id in tolerance else e for e in meshed.edges])
-    invalid = _invalid_faces(grid)
+    invalid = _invalid_faces(grid, (job_options or {}).get("fidelity", {}).get("brep_areas"))
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
                   hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident,
                   skip=invalid_face_skips(invalid), seams=Topology(grid.shape).shared_seams())
@@ -307,16 +307,22 @@ def _shortest_segments(grid: ShapeGrid) -> dict[int, float]:
     return {e.id: float(e.segment_lengths.min()) for e in grid.edges if not e.degenerate and len(e.points) >= 2}
 
 
-def _invalid_faces(grid: ShapeGrid) -> dict[int, str]:
-    """Face id -> what OCCT's own check finds wrong with it (:func:`cadedge.occt.validity.face_problems`),
-    for every face that fails it: such a face gets only the strategies gmsh alone would use
-    (:data:`~cadedge.mesh.strategies.INVALID_FACE_STRATEGIES`), and if it fails the fault is said to be the
-    model's. Up front it costs milliseconds (0.16 s for 917_fusee's 249 faces)."""
+def _invalid_faces(grid: ShapeGrid, areas: np.ndarray | None = None) -> dict[int, str]:
+    """Face id -> what is wrong with it, for every face OCCT's own check fails
+    (:func:`cadedge.occt.validity.face_problems`) or, given the faces' B-rep ``areas`` (by id - 1, 0 for a
+    face of no area: :func:`cadedge.mesh.fidelity.without_degenerate`), that has no area: such a face gets
+    only the strategies gmsh alone would use (:data:`~cadedge.mesh.strategies.INVALID_FACE_STRATEGIES`),
+    and if it fails the fault is said to be the model's. SparkFun's FlexyPin STEP file has three cylinder
+    faces of no area between coinciding curves: one hung gmsh for 60 s twice among its 12 strategies, and
+    the job ran out of time before a real face was tried again. Up front OCCT's check costs milliseconds
+    (0.16 s for 917_fusee's 249 faces)."""
     if grid.shape is None or not grid.faces:
         return {}
     from ..occt.validity import face_problems
 
-    return face_problems(grid.shape, list(range(1, grid.faces + 1)))
+    checked = face_problems(grid.shape, list(range(1, grid.faces + 1)))
+    arealess = {} if areas is None else {i: "it has no area" for i, a in enumerate(areas, start=1) if a == 0}
+    return {**arealess, **{face: f"OCCT's BRepCheck: {why}" for face, why in checked.items()}}
 
 
 def _with_brep_checks(failures: list[FaceFailure], problems: dict[int, str]) -> list[FaceFailure]:
@@ -324,8 +330,8 @@ def _with_brep_checks(failures: list[FaceFailure], problems: dict[int, str]) -> 
     what OCCT's check finds: the fault is then the model's."""
     import dataclasses
 
-    return [dataclasses.replace(f, reason=f"{f.reason}; the B-rep face itself is invalid (OCCT's BRepCheck: "
-                                          f"{problems[f.face]})") if f.face in problems else f for f in failures]
+    return [dataclasses.replace(f, reason=f"{f.reason}; the B-rep face itself is invalid ({problems[f.face]})")
+            if f.face in problems else f for f in failures]
 
 
 def _ids(ids: list[int], limit: int = 10) -> str:

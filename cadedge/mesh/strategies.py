@@ -71,14 +71,16 @@ EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "ex
 #: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
 #: would mesh it, on the imposed curves and on its own: other sizes and algorithms do not mend its wires.
 #: On a seam-tangent hole read back from STEP they hung 60 s each, 199 s before the face was named; on a
-#: sweep mitred at a corner each of its four broken faces went through all 12 strategies.
+#: sweep mitred at a corner each of its four broken faces went through all 12 strategies. A face of no area
+#: is tried the same way: no sizes or algorithm give it one.
 INVALID_FACE_STRATEGIES = (0, next(k for k, s in enumerate(STRATEGIES) if s.own_curves))
 
 
 def invalid_face_skips(problems: dict[int, str]) -> dict[int, dict[int, str]]:
     """``skip`` entries (see :func:`~cadedge.mesh.generate.mesh_faces`) barring every strategy but
-    :data:`INVALID_FACE_STRATEGIES` on the faces of ``problems`` (face id -> what OCCT's check finds)."""
-    return {face: {k: f"not tried: the B-rep face is invalid (OCCT's BRepCheck: {why})"
+    :data:`INVALID_FACE_STRATEGIES` on the faces of ``problems`` (face id -> what is wrong with it: what
+    OCCT's check finds, or that it has no area)."""
+    return {face: {k: f"not tried: the B-rep face is invalid ({why})"
                    for k in range(len(STRATEGIES)) if k not in INVALID_FACE_STRATEGIES}
             for face, why in problems.items()}
 
