@@ -10,8 +10,9 @@ by the planar fit (the gap's sliver), and every triangle on the 0.01 line tip sp
 4.6 degrees that the B-rep did not force. The build123d M6 screw's cone face had its circle cut in
 thirds by the curved faces' second fit, its tips left at 0.059 and 0.019. So the narrow corners are
 graded once more at the end, the longer tip cut at the shorter one's length and the sides graded by the
-wedge's width again; cutting only shortens chords, so every face's slivers stay within what the fits
-left (a credited face's cancellation aside: its tips are short beside its sides).
+wedge's width again. Cutting only shortens chords, so no sliver grows; a credited face's slivers cancel,
+and a cut can unbalance them, but on every file that changed (the screw, the USB-C receptacle, faceted,
+917_fusee) no face's deficit moved past its target.
 """
 
 from __future__ import annotations
