@@ -394,10 +394,15 @@ def test_a_face_of_no_area_does_not_ask_its_edges_for_billions_of_segments():
     """Gs001 of the dodgy-STEP catalogue (3.9 KB) holds a face of area 2.3e-13 inside 14 mm of edges: the
     boundary fit cut its segments to that area's budget, asked 780 million pieces of one, and the caller's
     process grew to 24 GB and was killed. Such a face is degenerate (no area target), and no edge is cut
-    into more than MAX_PIECES segments whatever a face asks."""
+    into more than MAX_PIECES segments whatever a face asks. A face narrower than its edges' tolerance is
+    not cut for either: OCCT's Alias test file trj3_s1-al-214.stp has faces of 1.6e-7 mm2 inside one edge
+    2.6 mm long of tolerance 0.046, whose edges took 58 000 segments each (466 592 in all at 1e-2)."""
+    import dataclasses
+
     from cadedge import refine_shape
     from cadedge.mesh.boundary_fit import MAX_PIECES
     from cadedge.mesh.fidelity import without_degenerate
+    from cadedge.shapegrid import with_edges
 
     grid = refine_shape(FIXTURES / "cylinder.step", ald=1e-2)
     areas = brep_face_areas(grid.shape)
@@ -406,10 +411,14 @@ def test_a_face_of_no_area_does_not_ask_its_edges_for_billions_of_segments():
     assert list(without_degenerate(grid, tiny) == 0) == [False, True, False]
     assert np.array_equal(without_degenerate(grid, areas), areas)
     kinds = meshed_kinds(grid.shape)
-    fitted, _ = fit_boundaries(grid, 1e-2, brep_areas=tiny, kinds=kinds)
+    assert all(e.tolerance >= 1e-7 for e in grid.edges)  # the face, 1e-12 wide, is within them: not cut for
+    within, _ = fit_boundaries(grid, 1e-2, brep_areas=tiny, kinds=kinds)
+    assert max(e.segments for e in within.edges) < 1000
+    tight = with_edges(grid, [dataclasses.replace(e, tolerance=1e-15) for e in grid.edges])
+    fitted, _ = fit_boundaries(tight, 1e-2, brep_areas=tiny, kinds=kinds)  # 1e-12 wide, held to 1e-15
     cut = {e.id: e.segments for e in fitted.edges}
     assert 0.5 * MAX_PIECES < max(cut.values()) <= MAX_PIECES + max(e.segments for e in grid.edges)
-    degenerate, _ = fit_boundaries(grid, 1e-2, brep_areas=without_degenerate(grid, tiny), kinds=kinds)
+    degenerate, _ = fit_boundaries(tight, 1e-2, brep_areas=without_degenerate(grid, tiny), kinds=kinds)
     assert max(e.segments for e in degenerate.edges) < 1000  # no area target on the face: nothing asked
 
 
@@ -522,6 +531,30 @@ def test_a_chamfer_rings_cone_is_credited_no_more_than_a_cone_may_be():
     assert result.ok, result.problems()
     assert all(f.status == "ok" for f in result.report.faces)
     assert np.all(np.abs(_independent_deficits(result)) <= 1e-3)
+
+
+def test_a_credited_thin_faces_splits_hold_to_the_thin_faces_budget(monkeypatch):
+    """A credited planar face's edges are cut to twice its width (``THIN_RATIO``) only where that fits the
+    thin faces' budget of :mod:`cadedge.mesh.widths`: NX's piattello plate has twelve planar strips 0.001
+    wide along 14 mm arcs, whose arcs took 7 000 segments each at 1e-2, the cylinders beside them 92 000
+    triangles each, and 69 of its 313 faces ran out of time. Here a tube's 0.05-wide end rings: cut to
+    their width within the budget; past it (the budget made 100 segments) left to the widths' splits,
+    which hold to it as well, and every face still within the target, its slivers named as forced."""
+    import cadedge
+    import cadedge.mesh.widths as widths
+
+    tube = cq.Workplane("XY").circle(10.0).circle(9.95).extrude(2.0).val()
+    grid = cadedge.refine_shape(tube, ald=1e-2)
+    circles = [i for i, e in enumerate(grid.edges) if e.curve == "Circle"]
+    fitted, _ = fit_boundaries(grid, 1e-2)
+    assert min(fitted.edges[i].segments for i in circles) > 0.9 * 2 * np.pi * 10.0 / (2 * 0.05)
+    monkeypatch.setattr(widths, "MOST_ADDED", 100)
+    fitted, _ = fit_boundaries(grid, 1e-2)
+    assert max(fitted.edges[i].segments for i in circles) < 100
+    result = mesh_shape(tube, ald=1e-2)
+    assert result.ok, result.problems()
+    assert np.all(np.abs(_independent_deficits(result)) <= 1e-2)
+    assert result.report.small_angles and all(s.forced for s in result.report.small_angles)
 
 
 def test_a_planar_face_whose_slivers_could_split_no_segment_gets_no_credit():

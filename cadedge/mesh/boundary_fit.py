@@ -115,6 +115,11 @@ def _left_side(face, uv: np.ndarray, tangent: np.ndarray, spans: np.ndarray) -> 
 #: A planar face given a cancellation credit keeps its boundary segments within this many times its mean
 #: width ``2 area / perimeter``: periodic_u_cst's 1 mm strip, credited down to 4.4 mm segments, was filled
 #: with 11-degree triangles (6% of them under 20 degrees); the unsigned rule had split it finer than that.
+#: These splits are made only where they fit the thin faces' budget of :mod:`cadedge.mesh.widths`
+#: (:func:`_thin_splits_fit`; else the widths' splits, which cut every thin face coarser to fit it): NX's
+#: piattello plate (OCCT's test data) has twelve planar strips 0.001 wide along 14 mm arcs of radius 3,
+#: and cut to 2 widths their arcs took 7 000 segments each (2 714 -> 179 986 in all at ALD 1e-2); the
+#: 276 mm2 cylinders beside them took 92 000 triangles each, and 69 of the 313 faces ran out of the 300 s.
 THIN_RATIO = 2.0
 #: An edge is cut into at most about this many segments (the default per-face triangle budget,
 #: :data:`~cadedge.mesh.budget.MAX_FACE_TRIANGLES`: a face cannot have more boundary segments than
@@ -431,10 +436,12 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
     perimeter = face_perimeters(grid, len(areas))
     with np.errstate(divide="ignore", invalid="ignore"):
         width = np.where(perimeter > 0, 2.0 * areas / perimeter, np.inf)  # a strip's width, exactly
+    within_tolerance = ~(areas > 0) | (width < _edge_tolerances(grid, len(areas)))  # no target to cut for
     edges = list(grid.edges)
     # dlr_f6.brep's edge 278, its ends off its curve within its vertices' tolerances, was never fitted, its
     # face 94 kept at 6.3e-3 against 1e-3 (8.6e-4 once fitted)
     ends = end_tolerances(grid)
+    plans = []  # per edge: (index, curve, pieces, most, narrowest credited face, grid rows, grid cut)
     for i, e in enumerate(edges):
         if e.degenerate or len(e.points) < 2 or not e.faces or not np.all(np.diff(e.params) > 0):
             continue
@@ -462,6 +469,7 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
         straight = e.curve == "Line" or bool(np.all(np.linalg.norm(sagitta, axis=1) <= STRAIGHT_TOL * chord))
         edge_ratio = min(ratio, STRAIGHT_RATIO) if straight else ratio
         pieces = np.ones(len(chord), dtype=int)
+        thin = np.inf  # the narrowest credited face of this edge (THIN_RATIO): split after the loop
         most = max(1, MAX_PIECES // len(chord))  # a segment's pieces at most: the edge's, MAX_PIECES in all
         rows = None  # the GridFit of a grid face this edge is a line of
         torus = None  # the GridFit of a grid torus this edge bounds (0: held until fit_grids cuts it)
@@ -473,24 +481,33 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
                 sliver * np.sign(np.sum(tangential * inward, axis=1)))
             allowed = budget[f - 1] * chord / max(perimeter[f - 1], 1e-300)
             with np.errstate(divide="ignore", invalid="ignore"):
-                k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
-                k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
-                if areas[f - 1] > 0:  # a face of no area (degenerate) has no area target to cut segments for
-                    k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
-                    k_thin = np.ceil(chord / (THIN_RATIO * width[f - 1])) if f in credit else 1
+                if within_tolerance[f - 1]:  # no area (degenerate), or all of it within its edges' tolerance
+                    k_curv = k_area = 1
                 else:
-                    k_area = k_thin = 1
+                    k_curv = np.where(curv > 0, np.ceil(chord * curv / (edge_ratio * h_factor[f - 1])), 1)
+                    k_curv = np.minimum(k_curv, np.maximum(np.floor(chord / filled[f - 1]), 1))
+                    k_area = np.where(sliver > allowed, np.ceil(np.sqrt(sliver / allowed)), 1)
+                    if f in credit:
+                        thin = min(thin, width[f - 1])
             if f in grids and kinds[f - 1] == "Torus":  # its columns and rows, cut below
                 k_curv, torus = 1, grids[f]
             elif straight and f in grids:  # a grid's rows, cut below (not by the curvature rule)
                 k_curv, rows = 1, grids[f] or rows
-            asked = np.nan_to_num(np.maximum(np.maximum(k_area, k_curv), k_thin), nan=1.0, posinf=1.0)
+            asked = np.nan_to_num(np.maximum(k_area, k_curv), nan=1.0, posinf=1.0)
             pieces = np.maximum(pieces, np.minimum(asked, most).astype(int))
         if torus is not None and not torus:  # uncut: the torus's columns, cut later, suit its neighbours too
             continue
         cut = torus.cut(e.id, e.params) if torus else None  # the grid's columns or rows, finer than any
         if cut is not None:  # other rule asks
             pieces[:] = 1
+            thin = np.inf
+        plans.append((i, curve, pieces, most, thin, rows, cut))
+    thin_cuts = _thin_splits_fit([(edges[i].segment_lengths, pieces, most, thin)
+                                  for i, _, pieces, most, thin, _, _ in plans], grid.segments)
+    for i, curve, pieces, most, thin, rows, cut in plans:
+        e = edges[i]
+        if thin_cuts and np.isfinite(thin) and thin > 0:
+            pieces = np.maximum(pieces, np.minimum(np.ceil(e.segment_lengths / (THIN_RATIO * thin)), most).astype(int))
         params, points = e.params, e.points
         if np.any(pieces > 1):
             params, points = split_segments(params, points, pieces, curve.evaluate, spacing="parameter")
@@ -502,6 +519,38 @@ def _fit_boundaries(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: 
         if len(params) > len(e.params):
             edges[i] = replace(e, params=params, points=points)
     return with_edges(grid, edges), gross, net
+
+
+def _edge_tolerances(grid, faces: int) -> np.ndarray:
+    """The largest tolerance of each face's edges (index ``id - 1``). A face narrower than it (mean width
+    ``2 area / perimeter``) is not cut for: its boundary may lie anywhere across it. OCCT's Alias test
+    file trj3_s1-al-214.stp has faces of 1.6e-7 mm2 inside one loose edge 2.6 mm long (tolerance
+    0.046): cut for their area target, each such edge took 58 000 segments (1 061 -> 466 592 in all at
+    ALD 1e-2) and the faces beside them were never meshed."""
+    out = np.zeros(faces)
+    for e in grid.edges:
+        for f in set(e.faces):
+            if 0 < f <= faces:
+                out[f - 1] = max(out[f - 1], e.tolerance)
+    return out
+
+
+def _thin_splits_fit(plans: list[tuple[np.ndarray, np.ndarray, int, float]], segments: int) -> bool:
+    """Whether the pieces that cutting credited faces' edges to :data:`THIN_RATIO` times their width adds
+    fit the budget of thin faces' splits (:data:`~cadedge.mesh.widths.BUDGET_FACTOR` times the grid's
+    ``segments`` plus :data:`~cadedge.mesh.widths.MIN_BUDGET`, at most
+    :data:`~cadedge.mesh.widths.MOST_ADDED`); where they do not, the thin faces are left to the widths'
+    own splits, which hold to that budget by cutting every thin face coarser. ``plans``: per edge, its
+    segments' lengths, the pieces the other rules cut them into, the most pieces a segment may take,
+    and its narrowest credited face's width (``inf``: none)."""
+    from .widths import BUDGET_FACTOR, MIN_BUDGET, MOST_ADDED
+
+    rows = [p for p in plans if np.isfinite(p[3]) and p[3] > 0]
+    if not rows:
+        return True
+    added = sum(int(np.sum(np.maximum(np.minimum(np.ceil(chord / (THIN_RATIO * width)), most), pieces) - pieces))
+                for chord, pieces, most, width in rows)
+    return added <= min(BUDGET_FACTOR * segments + MIN_BUDGET, MOST_ADDED)
 
 
 #: Where along each segment's parameter span :func:`_sagittas` looks for the curve's farthest point.
