@@ -152,3 +152,23 @@ def add_free_surface(ctx) -> None:
 
     gmsh.model.occ.addRectangle(100.0, 100.0, 0.0, 1.0, 1.0)
     gmsh.model.occ.synchronize()
+
+
+def spin_in_gmsh(ctx) -> None:
+    """``before_face``: on the first attempt at ``FAULT_FACE``, make gmsh compute forever inside its 2-D
+    meshing of that face (a size callback that never returns there), as gmsh's own hangs do: the batch
+    that holds the face hangs after gmsh has announced it."""
+    import gmsh
+
+    from cadedge.mesh.interior import SIZES
+
+    if ctx.face != FAULT_FACE or ctx.strategy != 0:
+        return
+    surface = ctx.emap.faces[FAULT_FACE]
+
+    def size(dim, tag, x, y, z, lc):
+        while dim == 2 and tag == surface:
+            pass
+        return SIZES(dim, tag, x, y, z, lc)
+
+    gmsh.model.mesh.setSizeCallback(size)

@@ -69,6 +69,43 @@ def test_a_hang_in_gmsh_costs_one_attempt(cylinder):
     assert f"meshing faces: {result.grid.faces}/{result.grid.faces} meshed" in " ".join(said)
 
 
+def test_a_batch_that_hangs_inside_gmsh_is_pinned_on_the_face_gmsh_was_meshing(cylinder):
+    """A batch of first attempts that hangs is done again face by face; the face gmsh was meshing when it
+    hung (its progress, printed to the child's trace) is not tried again by the same strategy alone: on
+    SparkFun's FlexyPin and an ABC-dataset part, a face that hung in its batch hung 60 s again alone
+    before its next strategy."""
+    from cadedge.mesh.worker import BATCH_MARK, trace_culprit
+
+    said: list[str] = []
+    result = mesh_shape(cylinder, hooks={"before_face": ["mesh_faults:spin_in_gmsh"]}, timeout=60,
+                        face_timeout=2, progress=said.append)
+    _watertight_with_every_face(result)
+    face = next(o for o in result.faces if o.face == FAULT_FACE)
+    assert face.ok and face.attempts[0][0] == STRATEGIES[0].name and "hung" in face.attempts[0][1]
+    batch = next(n for n in result.notes if "meshing them together in one gmsh call: hung" in n)
+    assert f"on face {FAULT_FACE} ({STRATEGIES[0].name}: gmsh's progress names it)" in batch
+    assert not any(n.startswith(f"face {FAULT_FACE}: hung") for n in result.notes)  # not hung a second time
+
+    trace = f"{BATCH_MARK} 2:5 3:7\nInfo    : Meshing 2D...\nInfo    : [  0%] Meshing surface 5 (Plane, Delaunay)\n"
+    assert trace_culprit(trace, [2, 3]) == 2
+    assert trace_culprit(trace + "Info    : [ 50%] Meshing surface 7 (Plane, Delaunay)\n", [2, 3]) == 3
+    assert trace_culprit(trace + "Info    : Done meshing 2D (Wall 0.1s, CPU 0.1s)\n", [2, 3]) is None
+    assert trace_culprit(trace, [3]) is None and trace_culprit("", [2, 3]) is None
+
+
+def test_a_face_that_hung_once_gets_a_shorter_bound_on_its_later_attempts():
+    """A face that hangs one strategy tends to hang the others (an ABC-dataset part's B-spline face hung
+    three attempts, 60 s each, and faces were left out of time); one that meshes does so in seconds."""
+    from cadedge.mesh.isolate import RETRY_SHARE, retry_share
+
+    skip = {2: {0: "hung: no result within 60 s", 1: "not tried: Frontal-Delaunay hung on the same sizes"},
+            3: {0: "gmsh crashed (SIGSEGV)"}}
+    assert 0 < RETRY_SHARE < 1
+    assert retry_share("face 2 3", skip) == RETRY_SHARE
+    assert retry_share("face 3 1", skip) == retry_share("face 4 0", skip) == 1.0  # crashed, or never hung
+    assert retry_share("batch 2 3", skip) == retry_share("refine 2", skip) == 1.0
+
+
 def test_a_crash_outside_the_faces_fails_the_run_not_the_caller(cylinder, tmp_path):
     out = tmp_path / "c.msh"
     result = mesh_shape(cylinder, output=out, hooks={"before_generate": ["mesh_faults:crash_before_meshing"]})

@@ -5,7 +5,8 @@ that gmsh cannot mesh, or that hangs or crashes it, is known by name. The first 
 batches of 1, 2, 4, ... up to :data:`BATCH_FACES` faces, fewer where faces take long (one ``generate``
 call each: every call re-walks the whole model's mesh, so one call per face grows quadratically with the
 model, 15-25% of the time on a 192-face model); a batch that hangs or crashes gmsh is done again face by
-face. A face passes when it carries
+face (in the mesh child, :data:`TRACE`, gmsh prints its progress through a batch, so the watchdog knows
+the face it was on). A face passes when it carries
 triangles whose edges on its boundary curves are exactly the curve segments, each used as often as the
 curve bounds the face (seams twice), and whose other edges are shared by two triangles. A face that
 fails is cleared and retried through :data:`~cadedge.mesh.strategies.STRATEGIES`: other 2-D algorithms, finer and coarser local
@@ -155,11 +156,16 @@ def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
     gmsh.model.setVisibility(visible, 1)
     _clear_log()
     exc = None
+    trace = TRACE and len(surfaces) > 1
     try:
+        if trace:
+            gmsh.option.setNumber("General.Terminal", 1)
         gmsh.model.mesh.generate(2)
     except Exception as err:  # gmsh raises a bare Exception with its last error message
         exc = str(err)
     finally:
+        if trace:
+            gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.setVisibility(visible, 0)
         gmsh.option.setNumber("Mesh.MeshSizeFactor", 1.0)
         gmsh.option.setNumber("Mesh.OldInitialDelaunay2D", 0)
@@ -177,6 +183,12 @@ def _attempt_many(surfaces: list[int], strategy: Strategy) -> dict[int, str | No
     if switch:
         out.update(keep_or_adapt([s for s in surfaces if out[s] is None], strategy))
     return out
+
+
+#: In the mesh child (set by :func:`cadedge.mesh.worker.main`, whose standard output is the job's trace
+#: file): gmsh prints its messages there while it meshes a batch of faces ("Meshing surface N ..."), so a
+#: batch that hangs or crashes is pinned on the face gmsh was meshing (:mod:`cadedge.mesh.isolate`).
+TRACE = False
 
 
 #: gmsh's Delaunay-based 2-D algorithms (Delaunay, Frontal-Delaunay): with ``Mesh.AlgorithmSwitchOnFailure``

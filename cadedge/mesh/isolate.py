@@ -8,9 +8,11 @@ caller) writes a progress line before each step and each face attempt. The watch
   :data:`WALL_SLACK` times it on the clock, for a child that hangs without computing): that (face,
   strategy) is marked as hung and a new child runs the job again without it (the face goes on to the
   next strategy with other sizes: the other algorithms on the same sizes tend to hang as well, and finer
-  sizes take longer still). CPU time,
+  sizes take longer still; and within :data:`RETRY_SHARE` of the bound). CPU time,
   because on a loaded machine a face that takes 20 s alone takes several times that on the clock. A batch
-  of first attempts that hangs or crashes is done again face by face; faces meshed again finer for the
+  of first attempts that hangs or crashes is done again face by face, except the first attempt of the
+  face gmsh was meshing when it stopped (the child's standard output, ``trace``, holds gmsh's progress
+  through each batch: :func:`cadedge.mesh.worker.trace_culprit`); faces meshed again finer for the
   surface target (``refine F1 F2 ...``) that hang or crash are kept as they were first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
@@ -57,7 +59,7 @@ from ..atomic import atomic_path
 from ..childproc import child_env
 from .delivered import Delivered, delivered, read_deliveries, with_earlier_faces, write_meshio
 from .strategies import STRATEGIES
-from .worker import JobResult, MeshJob, empty_result
+from .worker import JobResult, MeshJob, empty_result, trace_culprit
 
 #: Default bound on one mesh job (all faces, all retries, restarts included), in seconds.
 DEFAULT_TIMEOUT = 300.0
@@ -77,6 +79,9 @@ WALL_SLACK = 3.0
 #: Restarts after hung or crashed face attempts, at most.
 MAX_RESTARTS = 12
 _POLL = 0.05
+#: The child's standard output in its job folder: gmsh's progress through each batch of faces (see
+#: :func:`cadedge.mesh.worker.trace_culprit`).
+TRACE = "trace"
 #: A job's private folder: this prefix, the caller's pid, a dash (see :func:`_remove_orphaned_folders`).
 FOLDER_PREFIX = "cadedge-mesh-"
 #: Progress lines that mark work the watchdog bounds: one face attempt, a batch of them, a finer re-mesh.
@@ -107,6 +112,25 @@ def attempt_bound(line: str, face_timeout: float, segments: dict[int, int]) -> f
     faces = words[1:2] if words[:1] == ["face"] else words[1:]
     n = sum(segments.get(int(w), 0) for w in faces if w.isdigit())
     return face_timeout * min(max(1.0, n / SEGMENTS_PER_BOUND), MAX_BOUND_WEIGHT)
+
+
+#: A face that has hung gmsh once gets this share of the bound on its later attempts: a face that hangs
+#: one strategy tends to hang the others, and one that meshes does so in seconds. An ABC-dataset part
+#: (OCCT's bug32596_abc_0_13.step) has a B-spline face that hung every strategy tried, 60 s each: at ALD
+#: 1e-2 it hung three (its batch, then two alone) and 4 of the 99 faces failed, two of them out of time;
+#: with the batch's hang pinned on it and 15 s for each later one, it hung three in 105 s, was meshed by
+#: the fourth, and every face was meshed.
+RETRY_SHARE = 0.25
+
+
+def retry_share(line: str, skip: dict[int, dict[int, str]]) -> float:
+    """:data:`RETRY_SHARE` for the attempt progress ``line`` (``face F K``) announces if face ``F`` hung
+    an earlier attempt (its ``skip`` reasons), else 1."""
+    words = line.split()
+    if words[:1] != ["face"] or len(words) < 2 or not words[1].isdigit():
+        return 1.0
+    hung = any(r.startswith("hung") for r in skip.get(int(words[1]), {}).values())
+    return RETRY_SHARE if hung else 1.0
 
 
 @dataclass
@@ -165,12 +189,16 @@ class _Tail:
         return lines
 
 
-def _progress(path: str) -> list[str]:
+def _read(path: str) -> str:
     try:
         with open(path, encoding="utf-8", errors="replace") as f:
-            return f.read().splitlines()
+            return f.read()
     except OSError:
-        return []
+        return ""
+
+
+def _progress(path: str) -> list[str]:
+    return _read(path).splitlines()
 
 
 def _learn(lines: list[str], skip: dict[int, dict[int, str]], known_ok: dict[int, int]) -> None:
@@ -207,10 +235,10 @@ def _run_child(job: MeshJob, tmp: str, limits: _Limits, progress: Callable[[str]
     with open(job_path, "wb") as f:
         pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
     env = child_env()
-    with open(os.path.join(tmp, "stderr"), "w+") as err:
+    with open(os.path.join(tmp, "stderr"), "w+") as err, open(os.path.join(tmp, TRACE), "w") as out:
         proc = subprocess.Popen([sys.executable, "-m", "cadedge.mesh.worker", job_path, result_path, progress_path,
                                  os.path.join(tmp, "faces")],
-                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
+                                stdin=subprocess.DEVNULL, stdout=out, stderr=err, env=env,
                                 start_new_session=True)
         last, since, cpu_since, bound = "", time.monotonic(), 0.0, limits.face_timeout
         tail = _Tail(progress_path)
@@ -232,7 +260,7 @@ def _run_child(job: MeshJob, tmp: str, limits: _Limits, progress: Callable[[str]
                 cpu = _cpu_seconds(proc.pid)
                 if line != last:
                     last, since, cpu_since = line, now, cpu or 0.0
-                    bound = attempt_bound(line, limits.face_timeout, limits.segments)
+                    bound = attempt_bound(line, limits.face_timeout, limits.segments) * retry_share(line, job.skip)
                 if now > limits.deadline:
                     return _Run(None, "timeout", last, "")
                 busy = now - since if cpu is None else cpu - cpu_since
@@ -332,8 +360,13 @@ def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
             _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
             faces = [int(w) for w in words[1:]]
             job.no_batch |= set(faces)
+            culprit = trace_culprit(_read(os.path.join(tmp, TRACE)), faces)
+            on = ""
+            if culprit is not None:  # its first attempt is done: the next child starts it at the next strategy
+                _bar(skip, culprit, 0, run)
+                on = f" on face {culprit} ({STRATEGIES[0].name}: gmsh's progress names it)"
             events.append(f"faces {', '.join(words[1:])}: meshing them together in one gmsh call: "
-                          f"{run.detail}; they were meshed one by one in a new process")
+                          f"{run.detail}{on}; they were meshed one by one in a new process")
             continue
         if words[:1] == ["refine"] and len(words) >= 2:  # one face, or several meshed again in one call
             _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
@@ -348,19 +381,26 @@ def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
             return _failed(f"{run.detail}{where}", events)
         _learn(_progress(os.path.join(tmp, "progress")), skip, known_ok)
         face, k = int(words[1]), int(words[2])
-        barred = skip.setdefault(face, {})
-        barred[k] = run.detail
-        if run.status == "hung":  # other algorithms on the same sizes tend to hang too: go to other sizes
-            kind = STRATEGIES[k].sizes
-            same = [j for j, s in enumerate(STRATEGIES) if j > k and s.sizes == kind]
-            barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
-            finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
-                     if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
-            barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
+        _bar(skip, face, k, run)
         events.append(f"face {face}: {run.detail} ({STRATEGIES[k].name}); the other faces went on in a new "
                       "process")
     return _deliver_or_fail(os.path.join(tmp, "faces"), job, known_ok,
                             f"gave up after {MAX_RESTARTS} restarts of the mesh process", events, output)
+
+
+def _bar(skip: dict[int, dict[int, str]], face: int, k: int, run: _Run) -> None:
+    """Record in ``skip`` that strategy ``k`` of ``face`` hung or crashed (``run``); after a hang, also the
+    later strategies on the same sizes (the other algorithms tend to hang on them too) and on finer ones
+    (they take longer still)."""
+    barred = skip.setdefault(face, {})
+    barred[k] = run.detail
+    if run.status == "hung":
+        kind = STRATEGIES[k].sizes
+        same = [j for j, s in enumerate(STRATEGIES) if j > k and s.sizes == kind]
+        barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
+        finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
+                 if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
+        barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
 
 
 def _deliver_or_fail(path: str, job: MeshJob, known_ok: dict[int, int], reason: str, events: list[str],

@@ -34,6 +34,7 @@ import contextlib
 import importlib
 import os
 import pickle
+import re
 import sys
 import tempfile
 import time
@@ -347,10 +348,17 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             if reason is None and deliver is not None and face in emap.faces:
                 deliver(2, face, element_corners(2, emap.faces[face]))
 
+        def batch_started(faces: list[int]) -> None:
+            say("batch " + " ".join(map(str, faces)))
+            if TRACE_BATCHES:  # which gmsh surface is which face, for the watchdog (see trace_culprit)
+                sys.stdout.write(f"{BATCH_MARK} " + " ".join(f"{f}:{emap.faces[f]}" for f in faces if f in emap.faces)
+                                 + "\n")
+                sys.stdout.flush()
+
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
-                                  batch_started=lambda faces: say("batch " + " ".join(map(str, faces))),
+                                  batch_started=batch_started,
                                   prepare=prepare, no_batch=job.no_batch | ctx.alone, batch_bound=job.attempt_bound,
                                   cleared=lambda faces: [deliver(2, f, None) for f in faces] if deliver else None)
         deliver_edges()
@@ -449,12 +457,41 @@ def _limit_memory() -> None:
         pass
 
 
+#: Whether this process is a mesh child whose standard output is its job's trace file (:func:`main`).
+TRACE_BATCHES = False
+#: The trace line that starts each batch of faces: ``BATCH_MARK F:S ...``, face id and gmsh surface.
+BATCH_MARK = "cadedge-batch"
+_SURFACE_LINE = re.compile(r"Meshing surface (\d+)")
+
+
+def trace_culprit(trace: str, faces: list[int]) -> int | None:
+    """The face of ``faces`` that gmsh was meshing when the batch the ``trace`` text (a mesh child's
+    standard output) ends in was stopped: the surface of its last "Meshing surface N" line after the last
+    :data:`BATCH_MARK`, unless gmsh finished the batch ("Done meshing 2D") or named no surface of it."""
+    _, mark, tail = trace.rpartition(BATCH_MARK + " ")
+    if not mark:
+        return None
+    pairs, _, log = tail.partition("\n")
+    face_of = {int(s): int(f) for f, s in (p.split(":") for p in pairs.split() if p.count(":") == 1)}
+    lines = log.splitlines()
+    at = [i for i, line in enumerate(lines) if _SURFACE_LINE.search(line)]
+    if not at or any("Done meshing 2D" in line for line in lines[at[-1]:]):
+        return None
+    face = face_of.get(int(_SURFACE_LINE.search(lines[at[-1]]).group(1)))
+    return face if face in faces else None
+
+
 def main(argv: list[str]) -> int:
     """``python -m cadedge.mesh.worker JOB RESULT PROGRESS [FACES]``: unpickle the job, run it, pickle the
     result; each meshed face's triangles and each edge's segments are appended to FACES as they come (see
-    :func:`run_job`)."""
+    :func:`run_job`). Its standard output is the job's trace: gmsh's progress through each batch of
+    faces (:data:`cadedge.mesh.generate.TRACE`)."""
+    global TRACE_BATCHES
+    from . import generate
+
     job_path, result_path, progress_path = argv[:3]
     faces_path = argv[3] if len(argv) > 3 else os.devnull
+    TRACE_BATCHES = generate.TRACE = True
     die_with_parent()
     _limit_memory()
     with open(job_path, "rb") as f:
