@@ -286,6 +286,49 @@ def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neigh
     assert check.lines()[-1] == "check: ok"
 
 
+def test_faces_gmshs_curve_meshing_wiped_stay_delivered_where_their_curves_did_not_change(cylinder, tmp_path,
+                                                                                         monkeypatch):
+    """A face meshed on gmsh's own curve mesh (a late fallback) has gmsh mesh its curves again, which wipes
+    every face's 2-D mesh; faces on other curves are meshed again on the same boundary, and until then
+    their delivered meshes stand. OCCT's Alias test file at 1e-3 reached that strategy on one face late in
+    its job: its 46 meshed faces were cleared from what the process had delivered, the process was
+    stopped before meshing them again, and 1 face was delivered."""
+    import pickle
+
+    from cadedge.mesh import generate
+    from cadedge.mesh.delivered import delivered
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    class Stopped(Exception):
+        pass
+
+    attempt, done = generate._attempt, []
+
+    def stopped_after_own_curves(surface, strategy):
+        if done:  # the first face meshed again after the fallback: the process is stopped
+            raise Stopped
+        reason = attempt(surface, strategy)
+        if strategy.own_curves:
+            done.append(reason)
+        return reason
+
+    monkeypatch.setattr(generate, "_attempt", stopped_after_own_curves)
+    first = next(k for k, s in enumerate(STRATEGIES) if s.own_curves)
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
+                  field=SizeField(cylinder), mode="nodes",
+                  skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}})
+    path = tmp_path / "faces"
+    with open(path, "wb") as f, pytest.raises(Stopped):
+        run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
+    assert done == [None]  # the fallback meshed the face
+    meshed = {o.face for o in delivered(str(path), job, {}, "stopped by the test", []).result.faces if o.ok}
+    users = {f for e in cylinder.edges if FAULT_FACE in e.faces for f in e.faces}
+    others = set(range(1, cylinder.faces + 1)) - users
+    assert others and others | {FAULT_FACE} <= meshed  # the neighbours on its curves are cleared, the rest stand
+
+
 def test_check_names_faces_with_small_angles():
     nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [1.05, 0.5, 0]], dtype=float)
     tris = np.array([[0, 1, 2], [1, 3, 2], [1, 4, 3]])

@@ -460,6 +460,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     break
                 started(rec.face, k)
                 touched: list[int] = []
+                users: set[int] = set()  # the faces on the curves this attempt changes
                 meshed: set[int] = set()  # faces outside ``surfaces`` meshed so far
                 if strategy.split or strategy.own_curves:
                     meshed = {t for _, t in gmsh.model.getEntities(2) if t not in out
@@ -468,13 +469,17 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     curves = [c for c in surface_curve_uses(s) if c not in split_done]  # split once
                     split_done.update(curves)
                     touched = split_curves(curves)
+                    users = set(touched)
                 elif strategy.own_curves:
                     curves = [c for c in surface_curve_uses(s) if c not in own_curves]
                     own_curves.update(curves)
+                    users = {int(t) for c in curves for t in gmsh.model.getAdjacencies(1, c)[0]}
                     touched = remesh_curves(curves)
                 # the neighbours' last meshes stand for them until this attempt meshes the face: a process
-                # stopped during it (a hang, the timeout) delivers them as they were, on the curves as they were
-                lost = [out[n].face for n in touched if n in out and out[n].ok]
+                # stopped during it (a hang, the timeout) delivers them as they were, on the curves as they
+                # were; faces gmsh's 1-D step wiped whose curves did not change keep theirs until meshed
+                # again (the same boundary): a file's 46 meshed faces were otherwise cleared, and 1 delivered
+                lost = [out[n].face for n in touched if n in out and out[n].ok and n in users]
                 for n in touched:  # their boundary changed: mesh them again
                     tried_first.discard(n)  # a face whose batch attempt failed starts again on the new boundary
                     if n == s or (n in out and not out[n].ok) or (n not in out and n not in meshed):
