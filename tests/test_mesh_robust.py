@@ -239,6 +239,29 @@ def test_a_face_meshed_again_alone_by_a_splitting_strategy_has_its_neighbours_me
     assert face.strategy == next(s.name for s in STRATEGIES if s.split)
 
 
+class _Stopped(Exception):
+    """A mesh process stopped during an attempt (as a hang or the timeout ends it)."""
+
+
+def _delivered_when_stopped(cylinder, tmp_path, first: int):
+    """Run the mesh job of ``cylinder`` in this process, face ``FAULT_FACE``'s strategies before ``first``
+    barred, until an attempt raises :class:`_Stopped`; what the parent then has (``delivered``)."""
+    import pickle
+
+    from cadedge.mesh.delivered import delivered
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
+                  field=SizeField(cylinder), mode="nodes",
+                  skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}})
+    path = tmp_path / "faces"
+    with open(path, "wb") as f, pytest.raises(_Stopped):
+        run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
+    return delivered(str(path), job, {}, "stopped by the test", [])
+
+
 def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neighbours(cylinder, tmp_path,
                                                                                       monkeypatch):
     """A face whose earlier strategies are barred splits its curves, which clears its meshed neighbours in
@@ -247,33 +270,17 @@ def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neigh
     meshes on the curves as they were, and join watertight where they meet: a horn torus at 1e-2, whose
     pinched face hung in its splitting strategies, ended with no face at all, its 4 meshed neighbours
     cleared from what the process had delivered."""
-    import pickle
-
     from cadedge.mesh import generate
-    from cadedge.mesh.delivered import delivered
-    from cadedge.mesh.gmsh_model import shape_to_brep
-    from cadedge.mesh.sizes import SizeField
-    from cadedge.mesh.worker import MeshJob, run_job
-
-    class Stopped(Exception):
-        pass
 
     attempt = generate._attempt
 
     def stopped_when_split(surface, strategy):
         if strategy.split:
-            raise Stopped
+            raise _Stopped
         return attempt(surface, strategy)
 
     monkeypatch.setattr(generate, "_attempt", stopped_when_split)
-    first = next(k for k, s in enumerate(STRATEGIES) if s.split)
-    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
-                  field=SizeField(cylinder), mode="nodes",
-                  skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}})
-    path = tmp_path / "faces"
-    with open(path, "wb") as f, pytest.raises(Stopped):
-        run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
-    got = delivered(str(path), job, {}, "stopped by the test", [])
+    got = _delivered_when_stopped(cylinder, tmp_path, next(k for k, s in enumerate(STRATEGIES) if s.split))
     meshed = {o.face for o in got.result.faces if o.ok}
     neighbours = {f for e in cylinder.edges if FAULT_FACE in e.faces for f in e.faces} - {FAULT_FACE}
     assert neighbours and meshed == set(range(1, cylinder.faces + 1)) - {FAULT_FACE}
@@ -293,37 +300,22 @@ def test_faces_gmshs_curve_meshing_wiped_stay_delivered_where_their_curves_did_n
     their delivered meshes stand. OCCT's Alias test file at 1e-3 reached that strategy on one face late in
     its job: its 46 meshed faces were cleared from what the process had delivered, the process was
     stopped before meshing them again, and 1 face was delivered."""
-    import pickle
-
     from cadedge.mesh import generate
-    from cadedge.mesh.delivered import delivered
-    from cadedge.mesh.gmsh_model import shape_to_brep
-    from cadedge.mesh.sizes import SizeField
-    from cadedge.mesh.worker import MeshJob, run_job
-
-    class Stopped(Exception):
-        pass
 
     attempt, done = generate._attempt, []
 
     def stopped_after_own_curves(surface, strategy):
         if done:  # the first face meshed again after the fallback: the process is stopped
-            raise Stopped
+            raise _Stopped
         reason = attempt(surface, strategy)
         if strategy.own_curves:
             done.append(reason)
         return reason
 
     monkeypatch.setattr(generate, "_attempt", stopped_after_own_curves)
-    first = next(k for k, s in enumerate(STRATEGIES) if s.own_curves)
-    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(cylinder, shape=None),
-                  field=SizeField(cylinder), mode="nodes",
-                  skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}})
-    path = tmp_path / "faces"
-    with open(path, "wb") as f, pytest.raises(Stopped):
-        run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
+    got = _delivered_when_stopped(cylinder, tmp_path, next(k for k, s in enumerate(STRATEGIES) if s.own_curves))
     assert done == [None]  # the fallback meshed the face
-    meshed = {o.face for o in delivered(str(path), job, {}, "stopped by the test", []).result.faces if o.ok}
+    meshed = {o.face for o in got.result.faces if o.ok}
     users = {f for e in cylinder.edges if FAULT_FACE in e.faces for f in e.faces}
     others = set(range(1, cylinder.faces + 1)) - users
     assert others and others | {FAULT_FACE} <= meshed  # the neighbours on its curves are cleared, the rest stand
