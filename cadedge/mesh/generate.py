@@ -306,15 +306,18 @@ def split_curves(curves: list[int]) -> list[int]:
     return sorted(touched)
 
 
+def curve_surfaces(curves: list[int]) -> set[int]:
+    """The gmsh surfaces that use any of ``curves``."""
+    return {int(s) for c in curves for s in gmsh.model.getAdjacencies(1, c)[0]}
+
+
 def remesh_curves(curves: list[int]) -> list[int]:
     """Replace the 1-D mesh of ``curves`` by gmsh's own (sized by the current size field); the faces using
     them are cleared first and returned, to be meshed again, with every other face whose mesh gmsh's 1-D
     step wiped (``generate(1)`` clears all 2-D meshes, visible or not)."""
     if not curves:  # all of them replaced already (generate(1) would still wipe every face's mesh)
         return []
-    touched: set[int] = set()
-    for c in curves:
-        touched.update(int(s) for s in gmsh.model.getAdjacencies(1, c)[0])
+    touched = curve_surfaces(curves)
     meshed = {t for _, t in gmsh.model.getEntities(2) if len(gmsh.model.mesh.getElementsByType(2, t)[0])}
     clear([(2, s) for s in sorted(touched)])
     clear([(1, c) for c in curves])
@@ -473,7 +476,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 elif strategy.own_curves:
                     curves = [c for c in surface_curve_uses(s) if c not in own_curves]
                     own_curves.update(curves)
-                    users = {int(t) for c in curves for t in gmsh.model.getAdjacencies(1, c)[0]}
+                    users = curve_surfaces(curves)
                     touched = remesh_curves(curves)
                 # the neighbours' last meshes stand for them until this attempt meshes the face: a process
                 # stopped during it (a hang, the timeout) delivers them as they were, on the curves as they

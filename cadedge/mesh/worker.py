@@ -274,6 +274,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     or replace its mesh). Later records of the same entity replace earlier ones."""
     import gmsh
 
+    from . import generate
     from .budget import held, job_budget
     from .generate import mesh_faces
     from .gmsh_model import gmsh_session, map_entities
@@ -350,7 +351,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
 
         def batch_started(faces: list[int]) -> None:
             say("batch " + " ".join(map(str, faces)))
-            if TRACE_BATCHES:  # which gmsh surface is which face, for the watchdog (see trace_culprit)
+            if generate.TRACE:  # which gmsh surface is which face, for the watchdog (see trace_culprit)
                 sys.stdout.write(f"{BATCH_MARK} " + " ".join(f"{f}:{emap.faces[f]}" for f in faces if f in emap.faces)
                                  + "\n")
                 sys.stdout.flush()
@@ -457,8 +458,6 @@ def _limit_memory() -> None:
         pass
 
 
-#: Whether this process is a mesh child whose standard output is its job's trace file (:func:`main`).
-TRACE_BATCHES = False
 #: The trace line that starts each batch of faces: ``BATCH_MARK F:S ...``, face id and gmsh surface.
 BATCH_MARK = "cadedge-batch"
 _SURFACE_LINE = re.compile(r"Meshing surface (\d+)")
@@ -486,12 +485,11 @@ def main(argv: list[str]) -> int:
     result; each meshed face's triangles and each edge's segments are appended to FACES as they come (see
     :func:`run_job`). Its standard output is the job's trace: gmsh's progress through each batch of
     faces (:data:`cadedge.mesh.generate.TRACE`)."""
-    global TRACE_BATCHES
     from . import generate
 
     job_path, result_path, progress_path = argv[:3]
     faces_path = argv[3] if len(argv) > 3 else os.devnull
-    TRACE_BATCHES = generate.TRACE = True
+    generate.TRACE = True
     die_with_parent()
     _limit_memory()
     with open(job_path, "rb") as f:
