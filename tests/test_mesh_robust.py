@@ -203,7 +203,8 @@ def test_an_edge_gmsh_cannot_match_leaves_its_faces_meshed(cylinder):
 def test_fallback_strategies_keep_neighbours_conforming(cylinder, fallback):
     """Every earlier strategy barred on a face: it is meshed after its boundary segments are split, or on
     gmsh's own curve mesh; its neighbours are meshed again on the changed curves and stay conforming, and
-    every grid node of the edges still imposed is a mesh node."""
+    every grid node of the edges still imposed is a mesh node. gmsh's own curve mesh is no coarser than the
+    grids it replaces."""
     from cadedge.mesh.gmsh_model import shape_to_brep
     from cadedge.mesh.sizes import SizeField
     from cadedge.mesh.worker import MeshJob, run_job
@@ -224,8 +225,9 @@ def test_fallback_strategies_keep_neighbours_conforming(cylinder, fallback):
     assert check.ok and check.missing_grid_nodes == 0 and all(s.watertight for s in check.shells)
     if fallback == "split":
         assert sum(e.segments for e in cylinder.edges) < len(res.edge_pairs)  # more curve segments
-    else:
+    else:  # gmsh meshes the edges at their grids' spacings: no coarser (by the boundary field alone, 8 of 13)
         assert res.own_mesh_edges and not imposed.intersection(res.own_mesh_edges)
+        assert len(res.edge_pairs) >= sum(e.segments for e in cylinder.edges)
 
 
 def test_a_face_meshed_again_alone_by_a_splitting_strategy_has_its_neighbours_meshed_again():

@@ -109,11 +109,11 @@ def configure_curvature_sizes(per_circle: float, min_size: float) -> None:
 def _samples(edge: ShapeEdgeGrid, max_size: float) -> tuple[np.ndarray, np.ndarray]:
     """Grid parameters and points, plus extra ones splitting segments longer than a quarter of ``max_size``."""
     parts = np.maximum(np.ceil(edge.segment_lengths / (0.25 * max_size)), 1).astype(int)
-    ts = [np.arange(k) / k for k in parts]
-    params = np.concatenate([p0 + (p1 - p0) * t for p0, p1, t in zip(edge.params[:-1], edge.params[1:], ts)]
-                            + [edge.params[-1:]])
-    points = np.concatenate([a + (b - a) * t[:, None] for a, b, t in zip(edge.points[:-1], edge.points[1:], ts)]
-                            + [edge.points[-1:]])
+    seg = np.repeat(np.arange(len(parts)), parts)  # each sample's segment, and its place along it
+    t = (np.arange(len(seg)) - np.repeat(np.cumsum(parts) - parts, parts)) / parts[seg]
+    u, x = np.asarray(edge.params, dtype=float), np.asarray(edge.points, dtype=float)
+    params = np.append(u[seg] + (u[seg + 1] - u[seg]) * t, u[-1])
+    points = np.vstack([x[seg] + (x[seg + 1] - x[seg]) * t[:, None], x[-1:]])
     return params, points
 
 
@@ -240,8 +240,7 @@ def retry_failed_faces(ctx) -> None:
 
     def remesh(s: int, curves: set[int], factor: float, only: set[int]) -> dict:
         apply_spacing_sizes(job.grid, ctx.emap, job.field, factor=factor, curves=curves)
-        with curves_from_spacings():
-            touched = set(remesh_curves(sorted(curves))) | {s}
+        touched = set(remesh_curves(sorted(curves))) | {s}
         skip = {face_of.get(s, s): {k: "not tried again" for k in range(2, len(STRATEGIES))}}
         return mesh_faces(sorted(n for n in touched if n in only), face_of, skip=skip, started=started)
 

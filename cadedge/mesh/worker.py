@@ -312,6 +312,8 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             imposed = impose_edge_grids(job.grid, emap, job.adopt)
             imposed_edges = sorted(imposed.edge_nodes)
             unmatched = sorted(set(unmatched) | set(imposed.skipped))
+            # sizes for gmsh's own mesh of these curves, should a failing face have it replace their grids
+            apply_spacing_sizes(job.grid, emap, job.field, curves={emap.edges[e].tag for e in imposed_edges})
             gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
         else:
             apply_spacing_sizes(job.grid, emap, job.field)
