@@ -14,6 +14,7 @@ import cadedge  # noqa: E402
 from cadedge.errors import InputError  # noqa: E402
 from cadedge.mesh import check_mesh, mesh_shape  # noqa: E402
 from cadedge.mesh.check import check_triangles  # noqa: E402
+from cadedge.mesh.report import faces_beside  # noqa: E402
 
 from conftest import CORPUS, FIXTURES  # noqa: E402
 
@@ -163,6 +164,9 @@ def test_a_folded_grid_fails_its_faces_until_gmsh_meshes_that_edge_itself(grids)
     assert any("own curve mesh" in o.strategy for o in result.faces if o.face in retried)
     assert all(o.ok and all(why for _, why in o.attempts) for o in result.faces if o.face in retried)
     assert edge.id in result.own_mesh_edges and any("gmsh's own curve mesh replaced" in n for n in result.notes)
+    beside = faces_beside(g, result.own_mesh_edges)  # the faces a report names for it when over target
+    assert all(edge.id in beside[f] for f in edge.faces)
+    assert set(beside) == {f for e in g.edges if e.id in result.own_mesh_edges for f in e.faces}
     assert set(np.unique(result.triangle_faces)) == set(range(1, g.faces + 1))
 
 

@@ -177,6 +177,12 @@ def test_faces_over_target_are_named_with_their_deficit():
     assert {f.face for f in rep.over_target} == {1, 2, 3}
     assert all(f.note for f in rep.over_target)
     assert sum("over the target" in line for line in rep.lines()) == 3
+    # a face beside an edge whose grid gmsh's own curve mesh replaced is named for that edge
+    rep = build_report(result.nodes, result.triangles, result.triangle_faces,
+                       brep_areas=brep_face_areas(result.grid.shape), surface_types=surface_types(result.grid.shape),
+                       surface_ald=1e-6, gmsh_curves={2: [1]})
+    assert [f.reason == "gmsh's curves" for f in rep.faces] == [False, True, False]
+    assert "beside edge(s) 1, whose grids gmsh's own curve mesh replaced" in rep.faces[1].note
     # a face that failed while held at a size floor is named with its sharp ridge, the likely cause
     keep = result.triangle_faces != 1
     rep = build_report(result.nodes, result.triangles[keep], result.triangle_faces[keep],

@@ -32,7 +32,8 @@ AFTER_MESH_HOOK = "cadedge.mesh.fidelity:after_mesh"
 #: allow; its sizes were held above a floor on a sharp ridge of its surface; its mesh holds the face's
 #: triangle budget (not meshed finer); finer meshes did not reduce it (its meshed and B-rep areas
 #: disagree); a planar face (its boundary polygon sets its area); still over after it was meshed again finer.
-OVER_REASONS = ("tolerances", "size floor", "triangle budget", "not converging", "planar", "still over")
+OVER_REASONS = ("tolerances", "size floor", "triangle budget", "gmsh's curves", "not converging", "planar",
+                "still over")
 
 
 @dataclass
@@ -154,7 +155,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  budget: set[int] | frozenset[int] = frozenset(), budget_triangles: int | None = None,
                  face_edges: dict[int, list[np.ndarray]] | None = None,
                  folded: dict[int, int] | None = None,
-                 offsets: dict[int, list[tuple[np.ndarray, float]]] | None = None) -> MeshReport:
+                 offsets: dict[int, list[tuple[np.ndarray, float]]] | None = None,
+                 gmsh_curves: dict[int, list[int]] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
 
     ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
@@ -169,7 +171,9 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     polylines of each face's edges (:func:`face_edge_grids`: to tell small angles forced by a face
     narrower than its boundary segments); ``folded`` the faces with triangles that face against their
     surface (face -> how many); ``offsets`` the edges that lie off a face's boundary (face -> (grid
-    polyline, distance), :func:`edge_polylines_off`: to tell small angles forced by such an edge).
+    polyline, distance), :func:`edge_polylines_off`: to tell small angles forced by such an edge);
+    ``gmsh_curves`` the faces beside edges whose grid a fallback replaced by gmsh's own curve mesh (face ->
+    those edges): a face over target there is named for them.
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -202,7 +206,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             rec.status = "over target"
             rec.reason, rec.note = _over_note(rec, fid in stuck, (tolerances or {}).get(fid), fid in planar,
                                               (floored or {}).get(fid),
-                                              (budget_triangles or MAX_FACE_TRIANGLES) if fid in budget else 0)
+                                              (budget_triangles or MAX_FACE_TRIANGLES) if fid in budget else 0,
+                                              (gmsh_curves or {}).get(fid, []))
         elif rec.area_deficit is None:
             rec.note = "the B-rep face has no area (degenerate)"
         faces.append(rec)
@@ -216,9 +221,10 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
 
 
 def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None, planar: bool,
-               floor: float | None, budget: int = 0) -> tuple[str, str]:
+               floor: float | None, budget: int = 0, gmsh_edges: list[int] | None = None) -> tuple[str, str]:
     """Why a meshed face is over the target: its reason (one of :data:`OVER_REASONS`) and note; ``budget``
-    the job's per-face triangle budget where the face holds it (0: it does not)."""
+    the job's per-face triangle budget where the face holds it (0: it does not); ``gmsh_edges`` its edges
+    whose grid gmsh's own curve mesh replaced."""
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
         return "tolerances", (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} "
                               "from its boundary (their pcurves on its surface), and a boundary moved that far "
@@ -232,6 +238,10 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
         return "triangle budget", (f"its {rec.triangles} triangles hold the face's budget (about {budget:,} "
                                    "triangles from curvature sizes): finer, gmsh would take longer than one "
                                    "attempt's time; a longer --timeout raises it")
+    if gmsh_edges:
+        return "gmsh's curves", (f"beside edge(s) {', '.join(map(str, gmsh_edges))}, whose grids gmsh's own curve "
+                                 "mesh replaced (a fallback after a face failed on them): its boundary there is "
+                                 "gmsh's polygon, which may be coarser than the grids")
     if stuck:
         return "not converging", ("not meshed finer, or finer meshes did not reduce it: the meshed face and its "
                                   "B-rep area disagree by more than meshing explains (loose tolerances, or a "
@@ -291,7 +301,18 @@ def report_of(result, opts: dict) -> MeshReport | None:
                         floored=extras.get("floored"), budget=set(extras.get("budget", ())),
                         budget_triangles=extras.get("budget_triangles"),
                         face_edges=face_edge_grids(result.grid),
-                        folded=extras.get("folded"), offsets=edge_polylines_off(result.grid, measured))
+                        folded=extras.get("folded"), offsets=edge_polylines_off(result.grid, measured),
+                        gmsh_curves=faces_beside(result.grid, result.own_mesh_edges))
+
+
+def faces_beside(grid, edges: list[int]) -> dict[int, list[int]]:
+    """Face id -> the ``edges`` (ids) on its boundary."""
+    wanted, out = set(edges), {}
+    for e in grid.edges:
+        if e.id in wanted:
+            for f in e.faces:
+                out.setdefault(f, []).append(e.id)
+    return out
 
 
 def _slivered_near_loose(result, bands: dict[int, tuple[float, float]]) -> list[int]:
