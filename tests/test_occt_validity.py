@@ -63,13 +63,13 @@ def test_a_face_of_no_area_is_tried_only_as_gmsh_alone_would_mesh_it():
 
 
 def test_an_invalid_face_is_tried_only_as_gmsh_alone_would_mesh_it():
-    """Every strategy but the first and gmsh's own coarse curve mesh is barred, with the check's words; the
+    """Every strategy but the first and gmsh's own curve mesh is barred, with the check's words; the
     failed face's reason counts the two tried apart from those not tried."""
     skips = invalid_face_skips({3: "OCCT's BRepCheck: a wire not closed"})
     barred = skips[3]
     assert set(range(len(STRATEGIES))) - set(barred) == set(INVALID_FACE_STRATEGIES)
     assert [STRATEGIES[k].name for k in INVALID_FACE_STRATEGIES] == [
-        "Frontal-Delaunay", "gmsh's own coarse curve mesh, Frontal-Delaunay"]
+        "Frontal-Delaunay", "gmsh's own curve mesh, Frontal-Delaunay"]
     assert barred[1] == "not tried: the B-rep face is invalid (OCCT's BRepCheck: a wire not closed)"
     outcome = FaceOutcome(face=3, surface=3, attempts=[
         (STRATEGIES[k].name, barred.get(k, "gmsh's reason")) for k in EXTRUSION_ORDER])

@@ -427,7 +427,6 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     skip = skip or {}
     known_ok = known_ok or {}
     own_curves = set() if own_curves is None else own_curves
-    coarse: set[int] = set()  # curves meshed by gmsh from its boundary size field alone
     gmsh.option.setNumber("Mesh.MeshOnlyEmpty", 1)
     gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
@@ -480,13 +479,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     touched = split_curves(curves)
                     users = set(touched)
                 elif strategy.own_curves:
-                    curves = [c for c in surface_curve_uses(s)
-                              if c not in own_curves or (strategy.coarse_curves and c not in coarse)]
+                    curves = [c for c in surface_curve_uses(s) if c not in own_curves]
                     own_curves.update(curves)
-                    if strategy.coarse_curves:
-                        coarse.update(curves)
-                        for c in curves:  # no sizes of their own: the boundary field's, coarser
-                            gmsh.model.mesh.setSizeAtParametricPoints(1, c, [], [])
                     users = curve_surfaces(curves)
                     touched = remesh_curves(curves)
                 # the neighbours' last meshes stand for them until this attempt meshes the face: a process

@@ -20,8 +20,6 @@ class Strategy:
     unrolled: str = ""  # meshed flat: "cone", a cone with its apex on its boundary (:mod:`cadedge.mesh.developed`);
     # "extrusion", a face of linear extrusion (:mod:`cadedge.mesh.extruded`); "grid", a cylinder between two
     # circles as a grid of right triangles (:mod:`cadedge.mesh.gridded`)
-    coarse_curves: bool = False  # with own_curves: gmsh's curve mesh from its boundary size field alone, not
-    # the edge grids' spacings (much coarser: a last resort for a face gmsh cannot mesh on finer curves)
 
     @property
     def sizes(self) -> tuple:
@@ -30,7 +28,7 @@ class Strategy:
         cone's plane sector the algorithm counts too: MeshAdapt's time grows faster with the sector's
         triangles than Frontal-Delaunay's (57 s against 24 s on a 1 x 60 cone at 1e-3, where it makes
         15% fewer triangles), and it hung on a 1 x 200 cone that Frontal-Delaunay meshes in 49 s."""
-        return (self.size_factor, self.split, self.own_curves, self.coarse_curves, self.uniform, self.unrolled,
+        return (self.size_factor, self.split, self.own_curves, self.uniform, self.unrolled,
                 self.algorithm if self.unrolled == "cone" else 0)
 
 
@@ -49,8 +47,6 @@ STRATEGIES = (
     Strategy("split boundary segments, MeshAdapt", 1, 1.0, True),
     Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
     Strategy("gmsh's own curve mesh, MeshAdapt", 1, 1.0, False, True),
-    Strategy("gmsh's own coarse curve mesh, Frontal-Delaunay", 6, 1.0, False, True, coarse_curves=True),
-    Strategy("gmsh's own coarse curve mesh, MeshAdapt", 1, 1.0, False, True, coarse_curves=True),
     Strategy("unrolled cone, MeshAdapt", 1, unrolled="cone"),
     Strategy("unrolled cone, Frontal-Delaunay", 6, unrolled="cone"),
     Strategy("unrolled extrusion, Frontal-Delaunay", 6, unrolled="extrusion"),
@@ -73,12 +69,11 @@ NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
 #: a spline with sharp valleys it hung in its own, every strategy), and the triangles keep their shapes.
 EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "extrusion") + GMSH_ORDER
 #: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
-#: would mesh it, on the imposed curves and on its own (coarse: gmsh alone does not know the grids' spacings;
-#: a broken wire meshes more often on fewer nodes): other sizes and algorithms do not mend its wires.
+#: would mesh it, on the imposed curves and on its own: other sizes and algorithms do not mend its wires.
 #: On a seam-tangent hole read back from STEP they hung 60 s each, 199 s before the face was named; on a
 #: sweep mitred at a corner each of its four broken faces went through all 12 strategies. A face of no area
 #: is tried the same way: no sizes or algorithm give it one.
-INVALID_FACE_STRATEGIES = (0, next(k for k, s in enumerate(STRATEGIES) if s.coarse_curves))
+INVALID_FACE_STRATEGIES = (0, next(k for k, s in enumerate(STRATEGIES) if s.own_curves))
 
 
 def invalid_face_skips(problems: dict[int, str]) -> dict[int, dict[int, str]]:
