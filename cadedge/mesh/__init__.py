@@ -251,7 +251,8 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     invalid = _invalid_faces(grid, (job_options or {}).get("fidelity", {}).get("brep_areas"))
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
                   hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident,
-                  skip=invalid_face_skips(invalid), seams=Topology(grid.shape).shared_seams())
+                  skip=invalid_face_skips(invalid), as_gmsh_alone=frozenset(invalid),
+                  seams=Topology(grid.shape).shared_seams())
     res = run_isolated(job, output=out, timeout=clock.timeout, face_timeout=face_timeout,
                        progress=MeshStatus(say, faces=grid.faces), workers=workers or default_workers(),
                        started=clock.started)

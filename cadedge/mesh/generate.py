@@ -405,6 +405,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                prepare: Callable[[int, int], None] = lambda face, strategy: None,
                no_batch: set[int] | frozenset[int] = frozenset(),
                cleared: Callable[[list[int]], None] = lambda faces: None,
+               as_gmsh_alone: frozenset[int] | set[int] = frozenset(),
                batch_bound: float | None = None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`~cadedge.mesh.strategies.STRATEGIES`; returns each surface's outcome.
 
@@ -423,6 +424,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     that strategy has meshed the neighbour: until then their last meshes, on the curves as they were, are
     the ones a process stopped during the attempt can hand over.
     ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches.
+    Faces (ids) in ``as_gmsh_alone`` have gmsh mesh their curves as alone, from its boundary size field,
+    when a strategy drops their imposed meshes; the others' follow the sizes set on the curves (their
+    grids' spacings: :func:`remesh_curves`).
     """
     skip = skip or {}
     known_ok = known_ok or {}
@@ -481,6 +485,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 elif strategy.own_curves:
                     curves = [c for c in surface_curve_uses(s) if c not in own_curves]
                     own_curves.update(curves)
+                    if rec.face in as_gmsh_alone:  # an invalid face: fewer nodes on its broken wires
+                        for c in curves:
+                            gmsh.model.mesh.setSizeAtParametricPoints(1, c, [], [])
                     users = curve_surfaces(curves)
                     touched = remesh_curves(curves)
                 # the neighbours' last meshes stand for them until this attempt meshes the face: a process

@@ -31,7 +31,8 @@ AFTER_MESH_HOOK = "cadedge.mesh.fidelity:after_mesh"
 #: Why a face is over the target (``FaceReport.reason``): its deficit is within what its edges' tolerances
 #: allow; its sizes were held above a floor on a sharp ridge of its surface; its mesh holds the face's
 #: triangle budget (not meshed finer); finer meshes did not reduce it (its meshed and B-rep areas
-#: disagree); a planar face (its boundary polygon sets its area); still over after it was meshed again finer.
+#: disagree); beside edges whose grids gmsh's own curve mesh replaced; a planar face (its boundary polygon
+#: sets its area); still over after it was meshed again finer.
 OVER_REASONS = ("tolerances", "size floor", "triangle budget", "gmsh's curves", "not converging", "planar",
                 "still over")
 
@@ -241,7 +242,7 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
     if gmsh_edges:
         return "gmsh's curves", (f"beside edge(s) {', '.join(map(str, gmsh_edges))}, whose grids gmsh's own curve "
                                  "mesh replaced (a fallback after a face failed on them): its boundary there is "
-                                 "gmsh's polygon, which may be coarser than the grids")
+                                 "gmsh's polygon, not the grids'")
     if stuck:
         return "not converging", ("not meshed finer, or finer meshes did not reduce it: the meshed face and its "
                                   "B-rep area disagree by more than meshing explains (loose tolerances, or a "

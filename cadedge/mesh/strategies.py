@@ -69,7 +69,9 @@ NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
 #: a spline with sharp valleys it hung in its own, every strategy), and the triangles keep their shapes.
 EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "extrusion") + GMSH_ORDER
 #: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
-#: would mesh it, on the imposed curves and on its own: other sizes and algorithms do not mend its wires.
+#: would mesh it, on the imposed curves and on its own, sized as gmsh alone sizes them (from its boundary
+#: field: ``MeshJob.as_gmsh_alone``; on the grids' spacings two tees' run faces, whose wires cross at the
+#: branch's tangent point, failed): other sizes and algorithms do not mend its wires.
 #: On a seam-tangent hole read back from STEP they hung 60 s each, 199 s before the face was named; on a
 #: sweep mitred at a corner each of its four broken faces went through all 12 strategies. A face of no area
 #: is tried the same way: no sizes or algorithm give it one.

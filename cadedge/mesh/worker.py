@@ -65,6 +65,9 @@ class MeshJob:
     mode: str
     output: str | None = None  # where the child writes the mesh (gmsh picks the format from the suffix)
     skip: dict[int, dict[int, str]] = field(default_factory=dict)  # face -> {strategy index: reason}
+    # faces whose curves gmsh meshes as alone, from its boundary field, when it meshes them itself (OCCT
+    # finds them invalid, or of no area: see cadedge.mesh.strategies.INVALID_FACE_STRATEGIES)
+    as_gmsh_alone: frozenset[int] = frozenset()
     known_ok: dict[int, int] = field(default_factory=dict)  # face -> strategy that meshed it in an earlier run
     deadline: float | None = None  # time.time() after which only known_ok attempts start
     finish_by: float | None = None  # time.time() after which no optional step (the optimiser) goes on
@@ -361,7 +364,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         own_curves: set[int] = set()
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
-                                  batch_started=batch_started,
+                                  batch_started=batch_started, as_gmsh_alone=job.as_gmsh_alone,
                                   prepare=prepare, no_batch=job.no_batch | ctx.alone, batch_bound=job.attempt_bound,
                                   cleared=lambda faces: [deliver(2, f, None) for f in faces] if deliver else None)
         deliver_edges()
