@@ -307,13 +307,11 @@ def report_of(result, opts: dict) -> MeshReport | None:
 
 
 def faces_beside(grid, edges: list[int]) -> dict[int, list[int]]:
-    """Face id -> the ``edges`` (ids) on its boundary."""
-    wanted, out = set(edges), {}
-    for e in grid.edges:
-        if e.id in wanted:
-            for f in e.faces:
-                out.setdefault(f, []).append(e.id)
-    return out
+    """Face id -> the ``edges`` (ids) on its boundary, for the faces with any."""
+    from .shards import face_edges
+
+    wanted = set(edges)
+    return {f: sorted(mine & wanted) for f, mine in face_edges(grid).items() if mine & wanted}
 
 
 def _slivered_near_loose(result, bands: dict[int, tuple[float, float]]) -> list[int]:
