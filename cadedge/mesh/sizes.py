@@ -134,16 +134,16 @@ def apply_spacing_sizes(grid: ShapeGrid, emap: EntityMap, field: SizeField, *, f
         for vid, h in vertex_sizes(grid).items():
             if h > 0 and vid in emap.vertices:
                 gmsh.model.mesh.setSize([(0, emap.vertices[vid])], float(h))
+    chosen = [(e, emap.edges[e.id]) for e in grid.edges
+              if not e.degenerate and e.id in emap.edges and len(e.points) >= 2
+              and (curves is None or emap.edges[e.id].tag in curves)]
+    samples = [_samples(e, field.max_size) for e, _ in chosen]
+    points = np.vstack([pts for _, pts in samples]) if samples else np.zeros((0, 3))
+    sized_all = factor * field(points) if len(points) else np.zeros(0)  # the field in one query
+    per_curve = np.split(sized_all, np.cumsum([len(own) for own, _ in samples])[:-1])
     sized = set()
-    for e in grid.edges:
-        if e.degenerate or e.id not in emap.edges or len(e.points) < 2:
-            continue
-        m = emap.edges[e.id]
-        if curves is not None and m.tag not in curves:
-            continue
-        own, pts = _samples(e, field.max_size)
+    for (e, m), (own, _), sizes in zip(chosen, samples, per_curve):
         gparams = np.interp(own, e.params, m.params)  # our parameters -> gmsh's (same or reversed)
-        sizes = factor * field(pts)
         if gparams[-1] < gparams[0]:
             gparams, sizes = gparams[::-1], sizes[::-1]
         gmsh.model.mesh.setSizeAtParametricPoints(1, m.tag, gparams.tolist(), sizes.tolist())
