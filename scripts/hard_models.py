@@ -21,7 +21,8 @@ bottle, a cut torus, an ellipsoid, a filleted cone on a cylinder, a mug, a fille
 the point where the branch touches it (a tangential inlet, an equal pipe tee): two vertices of the run's
 face at one point; and a sphere and a revolved spline cut to 270 degrees (a face spanning more than half a
 turn between two poles). A seventh: a flat coil (a rectangle swept along a helix), whose helicoidal bands'
-boundary slivers cancel.
+boundary slivers cancel. An eighth: a key blade as an Alias export (every face a B-spline
+surface, its top wall's section through square notches).
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -433,6 +434,33 @@ def revolved_sector() -> object:
     return profile.revolve(270, (0, 0, 0), (0, 1, 0)).val().wrapped
 
 
+def key_blade() -> object:
+    """A key blade 40 x 10 x 2.5 mm as an Alias export: its top one B-spline curve through square notches
+    and a rounded bump (C0 at their corners, 90 degrees at the notches), the block converted so that every
+    face is a B-spline surface. gmsh meshed the top's wall in its own parameters, its triangles across the
+    corners: 3.2e-2 short at ALD 1e-3."""
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepAdaptor import BRepAdaptor_Curve
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_NurbsConvert
+    from OCP.Geom import Geom_TrimmedCurve
+    from OCP.GeomConvert import GeomConvert_CompCurveToBSplineCurve
+
+    top = [(-20, 5), (-14, 5), (-14, 3), (-11, 3), (-11, 5), (-6, 5), (-6, 2), (-3, 2), (-3, 5), (4, 5), (4, 3.5),
+           (8, 3.5), (8, 5), (20, 5)]
+    pieces = [cq.Edge.makeLine(cq.Vector(*a, 0), cq.Vector(*b, 0)) for a, b in zip(top[:-1], top[1:])]
+    pieces[8] = cq.Edge.makeSpline([cq.Vector(-3, 5, 0), cq.Vector(0, 6.2, 0), cq.Vector(4, 5, 0)])
+    joined = GeomConvert_CompCurveToBSplineCurve()
+    for piece in pieces:
+        ends = BRepAdaptor_Curve(piece.wrapped)
+        curve = BRep_Tool.Curve_s(piece.wrapped, 0.0, 1.0)  # the floats: OCCT's by-reference bounds, unused
+        joined.Add(Geom_TrimmedCurve(curve, ends.FirstParameter(), ends.LastParameter()), 1e-7)
+    corners = [cq.Vector(20, 5, 0), cq.Vector(20, -5, 0), cq.Vector(-20, -5, 0), cq.Vector(-20, 5, 0)]
+    wire = cq.Wire.assembleEdges([cq.Edge.makeLine(a, b) for a, b in zip(corners[:-1], corners[1:])]
+                                 + [cq.Edge(BRepBuilderAPI_MakeEdge(joined.BSplineCurve()).Edge())])
+    solid = cq.Solid.extrudeLinear(cq.Face.makeFromWires(wire), cq.Vector(0, 0, 2.5))
+    return BRepBuilderAPI_NurbsConvert(solid.wrapped, True).Shape()
+
+
 def faceted() -> object:
     """A sphere fused with a cylinder, triangulated and sewn back as 228 planar triangle faces (a STEP
     made from an STL mesh): many small faces, thin triangles forced by the facets."""
@@ -608,7 +636,7 @@ MODELS: dict[str, Callable[[], object]] = {
     "sphere_pinhole": sphere_pinhole, "bracket_micro": bracket_micro, "bracket_huge": bracket_huge,
     "bracket_far": bracket_far, "star_prism": star_prism, "notched_block": notched_block,
     "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal,
-    "sphere_sector": sphere_sector, "revolved_sector": revolved_sector,
+    "sphere_sector": sphere_sector, "revolved_sector": revolved_sector, "key_blade": key_blade,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}

@@ -1,7 +1,8 @@
 """Folds of a face of linear extrusion, and the lines of nodes laid along them when it is meshed flat.
 
 A section whose heading turns by :data:`FOLD_TURN` degrees within a small share of the triangles' size
-(a V of spline points, a cusp) folds the face: a triangle across the fold has its corners on both
+(a V of spline points, a cusp), or by :data:`CORNER_TURN` at a corner (a B-spline's C0 knot), folds the
+face: a triangle across the fold has its corners on both
 flanks and loses most of its width (cyclo_gear's side at 1e-3: 1.4e-2 short). :mod:`cadedge.mesh.extruded`
 finds the folds (:func:`folds`), lays a line of nodes along each in the plane it meshes
 (:func:`fold_lines`, :func:`graded_points`), takes the fold's curvature out of the sizes
@@ -11,7 +12,7 @@ finds the folds (:func:`folds`), lays a line of nodes along each in the plane it
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -27,12 +28,31 @@ if TYPE_CHECKING:
 #: flanks would lose too much beside the line (:data:`FOLD_LOSS`).
 FOLD_TURN = 120.0
 FOLD_SPAN = 0.25
+#: A corner of the section (a B-spline's C0 knot) is a fold too when its heading turns by
+#: :data:`CORNER_TURN` degrees or more there: between two samples of the section, which
+#: :func:`cadedge.mesh.extruded.extrusion_of` samples until no gap of a smooth section turns more than
+#: 5 degrees. A triangle across a corner turning by ``a`` cuts ``1 - cos(a / 2)`` off its width there
+#: (29% at 90 degrees: a key blade's side, its notches' corners, 3.2e-2 short at 1e-3); a line along
+#: it loses nothing beside it.
+CORNER_TURN = 20.0
 #: The share of the surface target (of the face's area) the flanks of its folds may lose beside their
 #: lines (see :func:`cadedge.mesh.extruded._fold_sizes`).
 FOLD_LOSS = 0.25
-#: gmsh surface -> (the column of its parameters that runs along its section, the section's parameters
-#: at the folds its mesh has nodes along): the nodes stay there (:func:`cadedge.mesh.facemesh.crease_nodes`).
-CREASES: dict[int, tuple[int, np.ndarray]] = {}
+
+
+class Creases(NamedTuple):
+    """The folds a face's mesh has lines of nodes along: ``column``, that of its parameters that runs
+    along its section; ``at``, the section's parameters at the folds; ``ends``, the boundary nodes the
+    lines end at (gmsh node tag -> index into ``at``). The lines' nodes and edges stay
+    (:func:`cadedge.mesh.facemesh.crease_nodes`)."""
+
+    column: int
+    at: np.ndarray
+    ends: dict[int, int]
+
+
+#: gmsh surface -> its :class:`Creases`.
+CREASES: dict[int, Creases] = {}
 #: Growth of the sizes along a fold's line from the boundary segments at its ends, where the job has no
 #: ``Extend`` field to take it from (:func:`cadedge.mesh.extruded._job_grading`).
 GROWTH = 0.25
@@ -45,13 +65,15 @@ def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np
     where the heading turns fastest. Spans crossing the section's ends are not measured. The sharpest
     folds are kept while what their flanks lose next to the lines (:func:`fold_loss`) stays within
     ``budget`` (an area per unit of the extrusion's length)."""
-    x, heading = ext.x, ext.heading
+    x = ext.x
     w = float(np.median(table))
     if not (w > 0 and len(x) > 2):
         return np.zeros(0), w
     span = 0.5 * FOLD_SPAN * w
-    sharp = (x - span >= x[0]) & (x + span <= x[-1]) & _turned(ext, x, span)
-    step = np.arccos(np.clip(np.einsum("ij,ij->i", heading[:-1], heading[1:]), -1.0, 1.0))
+    step = _steps(ext)
+    jump = step >= np.radians(CORNER_TURN)
+    corner = np.concatenate([jump, [False]]) | np.concatenate([[False], jump])
+    sharp = (x - span >= x[0]) & (x + span <= x[-1]) & (_turned(ext, x, span) | corner)
     rate = step / np.maximum(np.diff(x), 1e-300)
     edges = np.diff(np.concatenate([[0], sharp.astype(np.int8), [0]]))
     found, losses = [], []
@@ -65,24 +87,44 @@ def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np
     return np.asarray(found)[np.sort(kept)], w
 
 
-def _turned(ext: Extrusion, centre, half) -> np.ndarray:
-    """Whether the section's heading turns by :data:`FOLD_TURN` or more from ``centre - half`` to
+def _steps(ext: Extrusion) -> np.ndarray:
+    """The angles (radians) the section's heading turns by between consecutive samples."""
+    return np.arccos(np.clip(np.einsum("ij,ij->i", ext.heading[:-1], ext.heading[1:]), -1.0, 1.0))
+
+
+def has_corner(ext: Extrusion) -> bool:
+    """Whether the section has a corner turning by :data:`CORNER_TURN` degrees or more."""
+    return bool(np.any(_steps(ext) >= np.radians(CORNER_TURN)))
+
+
+def _turned(ext: Extrusion, centre, half, turn: float = FOLD_TURN) -> np.ndarray:
+    """Whether the section's heading turns by ``turn`` degrees or more from ``centre - half`` to
     ``centre + half`` (arc lengths, broadcast together; samples without a heading never do)."""
     lo = np.searchsorted(ext.x, centre - half)
     hi = np.searchsorted(ext.x, centre + half, side="right") - 1
-    return np.einsum("ij,ij->i", ext.heading[lo], ext.heading[hi]) <= np.cos(np.radians(FOLD_TURN))
+    return np.einsum("ij,ij->i", ext.heading[lo], ext.heading[hi]) <= np.cos(np.radians(turn))
+
+
+def _turn(ext: Extrusion, centre: float, half: float) -> float:
+    """The angle (degrees) the section's heading turns by from ``centre - half`` to ``centre + half``."""
+    lo = np.searchsorted(ext.x, centre - half)
+    hi = np.searchsorted(ext.x, centre + half, side="right") - 1
+    return float(np.degrees(np.arccos(np.clip(ext.heading[lo] @ ext.heading[hi], -1.0, 1.0))))
 
 
 def fold_loss(ext: Extrusion, xf: float, span: float) -> float:
     """What the flanks of the fold at ``xf`` lose next to its line, per unit of the extrusion's length:
-    the section turns :data:`FOLD_TURN` within a width ``W`` there (the narrowest centred window that
-    turns that much, at most ``2 span``), as a circle of radius ``R = W / FOLD_TURN`` (radians) would; a
-    triangle on each side spans the rest of that turn, a quarter circle at most, losing
-    ``(pi/2 - sqrt 2) R`` across it."""
+    the section turns by ``a`` (:data:`FOLD_TURN`, or less at a corner: most of what it turns by within
+    ``span``) within a width ``W`` there (the narrowest centred window that turns that much, at most
+    ``2 span``), as a circle of radius ``R = W / a`` (radians) would; a triangle on each side spans the
+    rest of that turn, a quarter circle at most, losing ``(pi/2 - sqrt 2) R`` across it. A corner turns
+    within one gap of the section's samples: next to nothing."""
+    turn = _turn(ext, xf, span)
+    aim = FOLD_TURN if turn >= FOLD_TURN else 0.9 * turn
     half = np.geomspace(max(float(np.min(np.diff(ext.x))), 1e-12 * span), span, 48)
-    turned = _turned(ext, xf, half)
+    turned = _turned(ext, xf, half, aim)
     width = 2.0 * float(half[np.argmax(turned)] if turned.any() else span)
-    return 2.0 * (0.5 * np.pi - np.sqrt(2.0)) * width / np.radians(FOLD_TURN)
+    return 2.0 * (0.5 * np.pi - np.sqrt(2.0)) * width / np.radians(max(aim, 1e-9))
 
 
 def across_folds(x: np.ndarray, values: np.ndarray, at: np.ndarray, window: float, pick) -> np.ndarray:

@@ -61,28 +61,40 @@ def read_face(surface: int) -> FaceMesh | None:
     if len(inner) and len(inner_uv) == 2 * len(inner):
         uv[lookup[inner]] = np.asarray(inner_uv, dtype=float).reshape(-1, 2)
     tri = lookup[tri_tags].reshape(-1, 3)
-    pinned, creases = crease_nodes(surface, uv, tri)
+    pinned, creases = crease_nodes(surface, uv, tri, tags)
     movable &= ~pinned
     fixed.update(creases)
     return FaceMesh(tags, np.asarray(coords, dtype=float).reshape(-1, 3), tri,
                     movable, uv, np.asarray(el_tags, dtype=np.int64), fixed, pinned)
 
 
-def crease_nodes(surface: int, uv: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, set[tuple[int, int]]]:
-    """The nodes (a mask over the rows of ``uv``, the nodes' parameters) on the folds of gmsh surface
-    ``surface`` that :mod:`cadedge.mesh.extruded` meshed along (:data:`~cadedge.mesh.creases.CREASES`),
-    and the edges of triangles ``tri`` between two of them on one fold (sorted pairs of rows). They stay
-    as meshed: a node moved off a fold, or an edge swapped across one, puts a triangle across it again."""
+def crease_nodes(surface: int, uv: np.ndarray, tri: np.ndarray, tags: np.ndarray
+                 ) -> tuple[np.ndarray, set[tuple[int, int]]]:
+    """The interior nodes (a mask over the rows of ``uv``, the nodes' parameters, NaN rows for the
+    boundary's; ``tags``, their gmsh tags) on the folds of gmsh surface ``surface`` that
+    :mod:`cadedge.mesh.extruded` meshed along (:data:`~cadedge.mesh.creases.CREASES`), and the edges of
+    triangles ``tri`` between two nodes on one fold, the lines' boundary ends included (sorted pairs of
+    rows). They stay as meshed: a node moved off a fold, or an edge swapped across one, puts a triangle
+    across it again (a line from one boundary node to the other, or its end edges, swapped by the
+    optimiser: a key blade's 90-degree corners spanned, 10.6 degrees)."""
     from .creases import CREASES
 
     pinned = np.zeros(len(uv), dtype=bool)
     if surface not in CREASES:
         return pinned, set()
-    column, at = CREASES[surface]
+    creases = CREASES[surface]
     fold = np.full(len(uv), -1, dtype=np.int64)
-    for k, t in enumerate(at):
-        on = np.abs(uv[:, column] - t) <= 1e-9 * max(1.0, abs(t))
+    for k, t in enumerate(creases.at):
+        on = np.abs(uv[:, creases.column] - t) <= 1e-9 * max(1.0, abs(t))
         fold[on], pinned[on] = k, True
+    if creases.ends:
+        end_tags = np.fromiter(creases.ends, dtype=np.int64)
+        end_folds = np.fromiter(creases.ends.values(), dtype=np.int64)
+        order = np.argsort(end_tags)
+        end_tags, end_folds = end_tags[order], end_folds[order]
+        at = np.minimum(np.searchsorted(end_tags, tags), len(end_tags) - 1)
+        hit = end_tags[at] == tags
+        fold[hit] = end_folds[at[hit]]
     edges = np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     along = (fold[edges[:, 0]] >= 0) & (fold[edges[:, 0]] == fold[edges[:, 1]])
     return pinned, {(int(p), int(q)) for p, q in edges[along]}
