@@ -150,12 +150,18 @@ def is_extrusion(surface: int) -> bool:
     of a type in :data:`TYPES`, or in :data:`CORNERED_TYPES` with a corner in its section."""
     import gmsh
 
-    if _straight(surface) is None:
-        return False
     if gmsh.model.getType(2, surface) in TYPES:
-        return True
-    ext = extrusion_of(surface, table=CORNER_TABLE)
+        return _straight(surface) is not None
+    ext = extrusion_of(surface, table=CORNER_TABLE)  # None unless straight and of a cornered type
     return ext is not None and has_corner(ext)
+
+
+def _section_uv(t: np.ndarray, swap: bool, v0: float) -> np.ndarray:
+    """The surface parameters (k, 2) of its section's parameters ``t`` (the first column if not ``swap``),
+    the other parameter at ``v0``."""
+    uv = np.empty((len(t), 2))
+    uv[:, 1 if swap else 0], uv[:, 0 if swap else 1] = t, v0
+    return uv
 
 
 def _section(surface: int, t: np.ndarray, swap: bool, v0: float, along: np.ndarray
@@ -165,8 +171,7 @@ def _section(surface: int, t: np.ndarray, swap: bool, v0: float, along: np.ndarr
     derivative across ``along`` (k, 3)."""
     import gmsh
 
-    uv = np.empty((len(t), 2))
-    uv[:, 1 if swap else 0], uv[:, 0 if swap else 1] = t, v0
+    uv = _section_uv(t, swap, v0)
     points = _values(surface, uv)
     d = np.asarray(gmsh.model.getDerivative(2, surface, uv.ravel().tolist()), dtype=float).reshape(-1, 2, 3)
     d = d[:, 1 if swap else 0]
@@ -328,8 +333,7 @@ def _curvatures(surface: int, ext: Extrusion) -> np.ndarray:
     """The surface's largest principal curvature (absolute) at the section's samples (0 where unknown)."""
     import gmsh
 
-    uv = np.empty((len(ext.t), 2))
-    uv[:, 1 if ext.swap else 0], uv[:, 0 if ext.swap else 1] = ext.t, ext.v0
+    uv = _section_uv(ext.t, ext.swap, ext.v0)
     kmax, kmin, _, _ = gmsh.model.getPrincipalCurvatures(surface, uv.ravel().tolist())
     k = np.maximum(np.abs(np.asarray(kmax, dtype=float)), np.abs(np.asarray(kmin, dtype=float)))
     return np.where(np.isfinite(k), k, 0.0)
