@@ -245,3 +245,49 @@ def test_tips_that_a_later_area_fit_cut_are_matched_again_before_meshing():
     for c in corners:
         tips = [tip_length(grid.edges[i], s) for i, s in c.sides]
         assert max(tips) <= TIP_RATIO * min(tips), (c, tips)
+
+
+def _rim_hole():
+    """A disk of radius 10, 5 thick, with a hole of radius 4 touching its rim from inside: its top and bottom
+    faces narrow to two cusps at the touching point (two circles of radii 10 and 4, tangent)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2
+
+    disk = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), 10.0, 5.0).Shape()
+    hole = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(6, 0, 0), gp_Dir(0, 0, 1)), 4.0, 5.0).Shape()
+    return BRepAlgoAPI_Cut(disk, hole).Shape()
+
+
+def test_a_cusps_tips_reach_the_points_the_edges_were_refined_with_where_the_areas_allow():
+    """A cusp's forced triangle is as wide as its tips are long (its sides part as the square of the
+    distance). The planar faces' area fit cut the rim_hole's circles into 0.96 pieces where the edges as
+    refined had 1.9, and the tips were lengthened only to a jump of 20 over the graded pieces beside them:
+    4.2-degree triangles at 1e-2, where gmsh alone has 11.6. Given the area the faces' fits leave them,
+    the tips reach the first refined points (the fits' points dropped, the refined ones kept): 8.3
+    degrees, every face within the target, the triangles under 5 degrees only the cusps' own."""
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.boundary_fit import fit_boundaries
+    from cadedge.mesh.fidelity import brep_face_areas, meshed_kinds
+
+    refined = refine_shape(_rim_hole(), ald=1e-2)
+    areas = brep_face_areas(refined.shape)
+    fitted = fit_boundaries(refined, 1e-2, brep_areas=areas, kinds=meshed_kinds(refined.shape))[0]
+    corners = narrow_corners(list(fitted.edges))
+    assert len(corners) == 4
+    plain = grade_wedges(fitted, keep=refined, areas=areas, target=1e-2)
+    wide = grade_wedges(fitted, keep=refined, areas=areas, target=1e-2, spare=lambda: np.full(len(areas), np.inf))
+    for c in corners:
+        first = [float(np.linalg.norm(_from_vertex(refined.edges[k], s)[1] - _from_vertex(refined.edges[k], s)[0]))
+                 for k, s in c.sides]
+        before = [tip_length(plain.edges[k], s) for k, s in c.sides]
+        after = [tip_length(wide.edges[k], s) for k, s in c.sides]
+        assert max(after) <= TIP_RATIO * min(after)
+        assert min(after) > 1.5 * max(before) and min(after) <= min(first) * (1 + 1e-9)
+    for kept, now in zip(refined.edges, wide.edges):
+        assert {tuple(p) for p in kept.points.round(12)} <= {tuple(p) for p in now.points.round(12)}
+
+    result = mesh_shape(_rim_hole(), ald=1e-2, workers=1)
+    assert result.ok, result.problems()
+    assert result.report.worst_deficit <= 1e-2 and result.report.unforced_slivers == 0
+    assert result.report.min_angle > 8.0

@@ -318,6 +318,17 @@ def _plane_deficits(grid, planes: list[int], areas: np.ndarray) -> dict[int, flo
     return {f: abs(1.0 - a / areas[f - 1]) for f, a in planar_polygon_areas(grid.shape, grid, planes).items()}
 
 
+def plane_room(grid, surface_ald: float, *, brep_areas: np.ndarray, kinds: list[str]) -> np.ndarray:
+    """The area each face (by face id - 1) may still lose or gain before :func:`fit_planes` fits it again:
+    for a checkable planar face, what its boundary polygon has left below :data:`AIM` times
+    ``surface_ald`` of its area; for any other face, no bound (inf)."""
+    areas = np.asarray(brep_areas, dtype=float)
+    room = np.full(len(areas), np.inf)
+    for f, d in _plane_deficits(grid, _planes(areas, kinds), areas).items():
+        room[f - 1] = max(AIM * surface_ald - d, 0.0) * areas[f - 1]
+    return room
+
+
 #: Rounds of :func:`fit_planes`.
 REFIT_ROUNDS = 4
 

@@ -22,7 +22,7 @@ from collections.abc import Callable
 from ..occt.cones import apex_cones
 from ..shapegrid import ShapeGrid
 from .apex import grade_to_apexes
-from .boundary_fit import fit_curved, fit_grids, fit_planes
+from .boundary_fit import fit_curved, fit_grids, fit_planes, plane_room
 from .grading import grade_faces
 from .jobclock import JobClock
 from .proximity import fit_to_sizes
@@ -54,7 +54,8 @@ def fit_node_grids(grid: ShapeGrid, refined: ShapeGrid, fidelity: dict, surface_
     if clock.allows("the face-wise grading"):
         grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
     if clock.allows("the grading into narrow corners"):  # segments shrink into a face's narrow corners
-        grid = grade_wedges(grid, keep=refined, areas=areas, target=surface_ald)
+        grid = grade_wedges(grid, keep=refined, areas=areas, target=surface_ald,
+                            spare=lambda: plane_room(grid, surface_ald, brep_areas=areas, kinds=kinds))
     cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
     if cones and clock.allows("the grading into cone tips"):
         grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip

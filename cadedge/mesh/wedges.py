@@ -24,7 +24,9 @@ times those pieces (the nut at 1e-3: its cone faces' area target cut the cusps' 
 corner are dropped and the tips cut where that jump is :data:`JUMP_AIM`:
 in a cusp the width grows as the square of the distance, so longer tips stand beside relatively longer
 pieces. What their chords cut off grows as the cube of their length, and each face's area may move by
-at most :data:`TIP_AREA_SHARE` of its target in all. The points of the edges as refined are kept and
+at most :data:`TIP_AREA_SHARE` of its target in all. A cusp's tips are then made longer still, up to
+the first points the edges were refined with, as far as its faces' area allows (:func:`_cusp_length`:
+its forced triangle is as wide as its tips are long). The points of the edges as refined are kept and
 edge ends never move, so shared edges stay conforming and every edge keeps its arc-length deficit.
 A face whose boundary doubles back on itself at a vertex (a slit: nearly 360 degrees inside) looks the
 same from its edge grids and is graded too, which costs segments, not triangle quality.
@@ -33,6 +35,7 @@ same from its edge grids and is graded too, which costs segments, not triangle q
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -61,6 +64,9 @@ MAX_JUMP = 24.0
 JUMP_AIM = 20.0
 #: ... or at up to this jump where the faces' area allows no longer tips (see :data:`TIP_AREA_SHARE`).
 LAST_AIM = 0.95 * MAX_JUMP
+#: A cusp's tips are lengthened past that jump, up to the first points the edges were refined with, where
+#: its opening over them grows by this factor or more (see :func:`_cusp_length`).
+CUSP_GAIN = 1.2
 #: Lengthened tips may move each face's area by at most this share of its target (the surface ALD times
 #: its B-rep area), all its corners' together: the chords of the longer tips cut off what the points
 #: dropped had followed.
@@ -129,14 +135,16 @@ def narrow_corners(edges: list, *, below: float = WEDGE_DEG) -> list[Corner]:
 
 def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WIDTH_RATIO,
                  keep: ShapeGrid | None = None, areas: np.ndarray | None = None,
-                 target: float | None = None) -> ShapeGrid:
+                 target: float | None = None, spare: Callable[[], np.ndarray] | None = None) -> ShapeGrid:
     """A copy of ``grid`` whose narrow corners (:func:`narrow_corners`) have tips of equal length and the
     rest of their two sides cut to at most ``ratio`` times the wedge's width (see the module doc). Given
     ``keep`` (the same edges as refined), the faces' B-rep ``areas`` (by face id - 1) and their area
     ``target`` (the surface ALD), points of ``grid`` that ``keep`` does not hold (added since by the
     boundary fits) may be dropped to lengthen tips over :data:`JUMP_AIM` times the first graded piece
     beside them, each face's area moving by at most :data:`TIP_AREA_SHARE` of its target in all (see
-    :func:`_lengthen_tips`)."""
+    :func:`_lengthen_tips`); a cusp's tips longer still within each face's ``spare()`` area too (by face
+    id - 1: what its area fit leaves it, :func:`cadedge.mesh.boundary_fit.plane_room`; asked only where
+    there are narrow corners; without it, none)."""
     edges = list(grid.edges)
     corners = narrow_corners(edges, below=below)
     if not corners:
@@ -149,6 +157,19 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
         room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
         for c in corners:
             changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, ends, room)
+        if spare is not None:  # then cusps' tips longer still, each face's room shared among its corners
+            free = np.minimum(room, np.asarray(spare(), dtype=float))
+            count = np.zeros(len(room))
+            for c in corners:
+                count[_touched(edges, c)] += 1
+            for c in corners:
+                touched = _touched(edges, c)
+                share = np.full(len(room), np.inf)
+                share[touched] = free[touched] / count[touched]
+                before = room.copy()
+                if _widen_cusp(edges, c, keep.edges, ratio, curves, ends, room, share):
+                    changed, free = True, free - (before - room)
+                count[touched] -= 1
     tip_segments = {(k, tip_segment(edges[k], s)) for c in corners for k, s in c.sides}
     cuts: dict[int, dict[int, np.ndarray]] = {}  # edge index -> segment -> shares of it to cut at
     for c in corners:
@@ -229,34 +250,59 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, end
     :func:`~cadedge.mesh.grading.cut_on_curve`). In a cusp the wedge's width grows as the square of the
     distance from the vertex, so a longer tip stands beside pieces that are relatively longer, and its
     forced triangle is wider; what the chords cut off grows as the cube of the tips' length."""
+    reach = _reach(edges, c, kept, ratio)
+    if reach is None:
+        return False
+    sides, now = [_from_vertex(edges[k], s) for k, s in c.sides], min(dist[1] for dist, _, _ in reach)
+    aim = JUMP_AIM
+    while aim <= LAST_AIM:
+        need = max(_length_at(dist, jumps, aim) for dist, _, jumps in reach)
+        if need <= now * (1.0 + 1e-9):
+            return False  # the tips, made equal, are long enough already
+        tried = _tips_at(edges, c, sides, reach, need, need / aim, room)
+        if tried is None:
+            return False  # a kept point inside the tips' new length, or too loose an edge
+        if tried[2] <= 1.0:
+            return _apply(edges, c, tried, reach, curves, ends, room)
+        aim *= 1.05 * tried[2] ** (1.0 / 3.0)  # the area cut off goes about as the cube of the tips' length
+    return False
+
+
+def _widen_cusp(edges: list, c: Corner, kept: list, ratio: float, curves, ends: dict[int, float],
+                room: np.ndarray, share: np.ndarray) -> bool:
+    """In a cusp (see :func:`_cusp_length`), drop the points near corner ``c`` that ``kept`` does not hold
+    and make its tips as long as the first kept points and ``share`` (the area each face may move for
+    this corner, by face id - 1) allow; what is used is taken from ``room``. True if ``edges`` changed."""
+    reach = _reach(edges, c, kept, ratio)
+    if reach is None:
+        return False
+    sides, now = [_from_vertex(edges[k], s) for k, s in c.sides], min(dist[1] for dist, _, _ in reach)
+    tried = _cusp_length(edges, c, sides, reach, now, share)
+    return tried is not None and _apply(edges, c, tried, reach, curves, ends, room)
+
+
+def _reach(edges: list, c: Corner, kept: list, ratio: float) -> list | None:
+    """Per side of corner ``c``: its points' distances from the vertex, which of them ``kept`` (the edges
+    as refined) does not hold (they may be dropped), and the jumps of a tip ending at each inner point
+    (:func:`_jumps`); None if an edge is not the refined one or a side has under 3 points."""
     sides = [_from_vertex(edges[k], s) for k, s in c.sides]
-    reach = []  # per side: distances of its points from the vertex, which may be dropped, the jumps
+    reach = []
     for (k, s), mine, other in zip(c.sides, sides, sides[::-1]):
         e, ref = edges[k], kept[k]
         if e.id != ref.id or len(mine) < 3:
-            return False
+            return None
         free = ~np.isin(e.params, ref.params)
         free = free if s else free[::-1]
         free[[0, -1]] = False
         reach.append((np.linalg.norm(mine - mine[0], axis=1), free, _jumps(mine, other, ratio)))
-    aim = JUMP_AIM
-    while aim <= LAST_AIM:
-        need = max(_length_at(dist, jumps, aim) for dist, _, jumps in reach)
-        if need <= min(dist[1] for dist, _, _ in reach) * (1.0 + 1e-9):
-            return False  # the tips, made equal, are long enough already
-        piece = need / aim  # the first graded piece beside the tips
-        if max(edges[k].tolerance for k, _ in c.sides) > LOOSE_SHARE * piece:
-            return False  # pieces this short are not cut on so loose an edge: no longer tips either
-        plans = [_tip_plan(dist, free, need, piece) for dist, free, _ in reach]
-        if any(p is None for p in plans):
-            return False  # a kept point inside the tips' new length
-        moved = _moved(edges, c, sides, [r[0] for r in reach], plans, len(room))
-        over = float(np.max(moved / np.maximum(room, 1e-300)))
-        if over <= 1.0:
-            break
-        aim *= 1.05 * over ** (1.0 / 3.0)  # the area cut off goes about as the cube of the tips' length
-    else:
-        return False
+    return reach
+
+
+def _apply(edges: list, c: Corner, tried: tuple, reach: list, curves, ends: dict[int, float],
+           room: np.ndarray) -> bool:
+    """Drop the points and cut the tips of corner ``c`` as ``tried`` plans (:func:`_tips_at`), in place,
+    taking the area moved from ``room``; False (nothing changed) if a tip cannot be cut on its curve."""
+    plans, moved, _, _ = tried
     new = []
     for (k, s), (drop, end), (dist, _, _) in zip(c.sides, plans, reach):
         e = edges[k]
@@ -275,6 +321,61 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, end
     return True
 
 
+def _touched(edges: list, c: Corner) -> np.ndarray:
+    """The faces (by face id - 1) whose area corner ``c``'s tips move: its own and those across its sides."""
+    return np.unique([c.face - 1] + [f - 1 for k, _ in c.sides for f in edges[k].faces])
+
+
+def _tips_at(edges: list, c: Corner, sides: list, reach: list, need: float, piece: float, room: np.ndarray
+             ) -> tuple[list, np.ndarray, float, float] | None:
+    """Corner ``c``'s tips ``need`` long, the first graded piece beside them ``piece`` long (``sides``,
+    ``reach``: see :func:`_lengthen_tips`): which points each side drops and where its tip ends
+    (:func:`_tip_plan`), how much each face's area moves (:func:`_moved`), the largest share of a face's
+    ``room`` that is, and ``need``; None if a kept point lies inside ``need`` or the corner's edges are
+    too loose for pieces that short."""
+    if max(edges[k].tolerance for k, _ in c.sides) > LOOSE_SHARE * piece:
+        return None  # pieces this short are not cut on so loose an edge: no longer tips either
+    plans = [_tip_plan(dist, free, need, piece) for dist, free, _ in reach]
+    if any(p is None for p in plans):
+        return None
+    moved = _moved(edges, c, sides, [r[0] for r in reach], plans, len(room))
+    return plans, moved, float(np.max(moved / np.maximum(room, 1e-300))), need
+
+
+def _cusp_length(edges: list, c: Corner, sides: list, reach: list, now: float, room: np.ndarray
+                 ) -> tuple[list, np.ndarray, float, float] | None:
+    """In a cusp, tips as long as the first kept points and the faces' ``room`` allow (see
+    :func:`_tips_at`; ``now``, the tips' length as they are): a corner whose opening over its tips grows
+    by :data:`CUSP_GAIN` or more when they are that long, whose forced triangle is that much wider. The
+    area fits cut a cusp's sides as finely as its face's target asks, though their chords there cut off
+    next to nothing: a hole touching a disk's rim at 1e-2 had tips of 0.96 where the edges as refined had
+    1.9, its forced triangles 4.2 degrees, gmsh's 11.6. None if no such tips fit."""
+    kept = [1 + int(np.flatnonzero(~free[1:])[0]) for _, free, _ in reach]  # each side's first kept point
+    near = [side[:m + 1] for side, m in zip(sides, kept)]  # the sides up to it, moving away from the vertex
+    dists = [dist[:m + 1] for (dist, _, _), m in zip(reach, kept)]
+    need = min(float(d[-1]) for d in dists)
+    least = CUSP_GAIN * _opening(near, dists, now)
+    while need > now * (1.0 + 1e-9) and _opening(near, dists, need) >= least:
+        piece = need / max(max(float(np.interp(need, dist[1:m], jumps[:m - 1]))
+                               for (dist, _, jumps), m in zip(reach, kept)), 1.0)
+        tried = _tips_at(edges, c, sides, reach, need, piece, room)
+        if tried is None:
+            return None
+        if tried[2] <= 1.0:
+            return tried
+        need /= 1.05 * tried[2] ** (1.0 / 3.0)
+    return None
+
+
+def _opening(sides: list, dists: list, length: float) -> float:
+    """The angle (radians) at a corner's vertex between its two sides' points ``length`` from it (along
+    each side's points, ``dists`` from the vertex)."""
+    ends = [np.array([np.interp(length, dist, side[:, k]) for k in range(3)]) - side[0]
+            for side, dist in zip(sides, dists)]
+    u, v = (e / max(float(np.linalg.norm(e)), 1e-300) for e in ends)
+    return float(np.arccos(np.clip(u @ v, -1.0, 1.0)))
+
+
 def _length_at(dist: np.ndarray, jumps: np.ndarray, aim: float) -> float:
     """The tip's length at which its jump (``jumps`` with the tip ending at each inner point of a side whose
     points lie ``dist`` from the vertex; falling along it) comes down to ``aim``: 0 if it is there at the
@@ -290,11 +391,16 @@ def _tip_plan(dist: np.ndarray, free: np.ndarray, need: float, piece: float) -> 
     """Which points of a side (``dist`` from the vertex; ``free`` may be dropped) to drop for a tip ``need``
     long, and where the tip then ends: at ``need``, or at the first point kept if that lies within
     ``piece`` beyond it (no piece shorter than the first graded one beside the tip). None if a kept point
-    lies inside ``need``."""
-    stop = float(dist[1:][~free[1:]][0])  # the first point kept (the edge's far end at the latest)
+    lies inside ``need``. Only points before the first one kept go: a closed edge's last points lie near
+    the vertex too, at its other end (a hole touching a disk's rim: one corner's plan took both ends'
+    points and left the other corner's tips 2.4 and 1.9)."""
+    first = 1 + int(np.flatnonzero(~free[1:])[0])  # the first point kept (the edge's far end at the latest)
+    stop = float(dist[first])
     if stop < need * (1.0 - 1e-9):
         return None
-    return (dist > 0) & (dist < min(stop, need + piece)), (stop if stop < need + piece else need)
+    drop = np.zeros(len(dist), dtype=bool)
+    drop[1:first] = dist[1:first] < min(stop, need + piece)
+    return drop, (stop if stop < need + piece else need)
 
 
 def _moved(edges: list, c: Corner, sides: list, dists: list, plans: list, faces: int) -> np.ndarray:
@@ -304,8 +410,12 @@ def _moved(edges: list, c: Corner, sides: list, dists: list, plans: list, faces:
     moved = np.zeros(faces)
     slivers = []
     for (k, _), mine, dist, (drop, end) in zip(c.sides, sides, dists, plans):
-        tip = np.array([np.interp(end, dist, mine[:, d]) for d in range(3)])
-        slivers.append(_vector_area(np.vstack([mine[(drop & (dist < end)) | (dist == 0)], tip])))
+        # the tip ends before the first point not dropped; past it a closed edge's distances fall back to 0
+        m = 1 + int(np.flatnonzero(~drop & (dist > 0))[0])
+        tip = np.array([np.interp(end, dist[:m], mine[:m, d]) for d in range(3)])
+        on = drop & (dist < end)
+        on[0] = True  # the vertex (a closed edge's last point is there too, and not part of this sliver)
+        slivers.append(_vector_area(np.vstack([mine[on], tip])))
         for f in edges[k].faces:
             moved[f - 1] += 0.0 if f == c.face else float(np.linalg.norm(slivers[-1]))
     moved[c.face - 1] += float(np.linalg.norm(slivers[0] - slivers[1]))
