@@ -4,8 +4,9 @@ They are the parts of docs/mesh.md's *Boundary segments graded into a face's nar
 of its planar-fit figures: a square nut and an internal hex socket whose chamfer or countersink cone
 touches the flats (cusps: 0-degree corners), a 5-degree wedge, a 12-degree wedge with a round back, an
 airfoil with a sharp trailing edge, a plate with a thin V notch (its top face nearly 360 degrees round
-the notch's tip), and extrusions of a 20 mm stadium outline (one periodic spline through 120 points)
-with round ends of 0.3 and 1 mm. The M10 hex nut is ``scripts/large_models.py``'s ``hex_nut``.
+the notch's tip), extrusions of a 20 mm stadium outline (one periodic spline through 120 points) with
+round ends of 0.3 and 1 mm, and a disk with a hole touching its rim (two cusps a face). The M10 hex nut
+is ``scripts/large_models.py``'s ``hex_nut``.
 
     python scripts/corner_models.py corners      # writes corners/<name>.step for every model
     python scripts/bench_mesh_fidelity.py corners/*.step --cadedge-only --eps 1e-2 1e-3
@@ -107,9 +108,16 @@ def stadium_10() -> cq.Workplane:
     return _stadium(1.0)
 
 
+def rim_hole() -> cq.Workplane:
+    """A disk of radius 10, 5 thick, with a hole of radius 4 touching its rim from inside: two cusps on each
+    flat face (two tangent circles), whose tips the area fits cut finer than the refined edges."""
+    return cq.Workplane().circle(10).extrude(5).cut(cq.Workplane().center(6, 0).circle(4).extrude(5))
+
+
 MODELS: dict[str, Callable[[], cq.Workplane]] = {
     "square_nut": square_nut, "hex_socket_cs": hex_socket_cs, "wedge5": wedge5, "wedge12_round": wedge12_round,
     "airfoil_sharp": airfoil_sharp, "vnotch": vnotch, "stadium_03": stadium_03, "stadium_10": stadium_10,
+    "rim_hole": rim_hole,
 }
 
 
