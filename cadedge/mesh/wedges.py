@@ -160,10 +160,10 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
         if spare is not None:  # then cusps' tips longer still, each face's room shared among its corners
             free = np.minimum(room, np.asarray(spare(), dtype=float))
             count = np.zeros(len(room))
-            for c in corners:
-                count[_touched(edges, c)] += 1
-            for c in corners:
-                touched = _touched(edges, c)
+            touches = [_touched(edges, c) for c in corners]
+            for touched in touches:
+                count[touched] += 1
+            for c, touched in zip(corners, touches):
                 share = np.full(len(room), np.inf)
                 share[touched] = free[touched] / count[touched]
                 before = room.copy()
@@ -250,10 +250,10 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, end
     :func:`~cadedge.mesh.grading.cut_on_curve`). In a cusp the wedge's width grows as the square of the
     distance from the vertex, so a longer tip stands beside pieces that are relatively longer, and its
     forced triangle is wider; what the chords cut off grows as the cube of the tips' length."""
-    reach = _reach(edges, c, kept, ratio)
-    if reach is None:
+    found = _reach(edges, c, kept, ratio)
+    if found is None:
         return False
-    sides, now = [_from_vertex(edges[k], s) for k, s in c.sides], min(dist[1] for dist, _, _ in reach)
+    sides, reach, now = found
     aim = JUMP_AIM
     while aim <= LAST_AIM:
         need = max(_length_at(dist, jumps, aim) for dist, _, jumps in reach)
@@ -273,18 +273,19 @@ def _widen_cusp(edges: list, c: Corner, kept: list, ratio: float, curves, ends: 
     """In a cusp (see :func:`_cusp_length`), drop the points near corner ``c`` that ``kept`` does not hold
     and make its tips as long as the first kept points and ``share`` (the area each face may move for
     this corner, by face id - 1) allow; what is used is taken from ``room``. True if ``edges`` changed."""
-    reach = _reach(edges, c, kept, ratio)
-    if reach is None:
+    found = _reach(edges, c, kept, ratio)
+    if found is None:
         return False
-    sides, now = [_from_vertex(edges[k], s) for k, s in c.sides], min(dist[1] for dist, _, _ in reach)
+    sides, reach, now = found
     tried = _cusp_length(edges, c, sides, reach, now, share)
     return tried is not None and _apply(edges, c, tried, reach, curves, ends, room)
 
 
-def _reach(edges: list, c: Corner, kept: list, ratio: float) -> list | None:
-    """Per side of corner ``c``: its points' distances from the vertex, which of them ``kept`` (the edges
-    as refined) does not hold (they may be dropped), and the jumps of a tip ending at each inner point
-    (:func:`_jumps`); None if an edge is not the refined one or a side has under 3 points."""
+def _reach(edges: list, c: Corner, kept: list, ratio: float) -> tuple[list, list, float] | None:
+    """Corner ``c``'s sides (ordered from the vertex); per side, its points' distances from the vertex,
+    which of them ``kept`` (the edges as refined) does not hold (they may be dropped) and the jumps of a
+    tip ending at each inner point (:func:`_jumps`); and the tips' length, the shorter one's. None if an
+    edge is not the refined one or a side has under 3 points."""
     sides = [_from_vertex(edges[k], s) for k, s in c.sides]
     reach = []
     for (k, s), mine, other in zip(c.sides, sides, sides[::-1]):
@@ -295,7 +296,7 @@ def _reach(edges: list, c: Corner, kept: list, ratio: float) -> list | None:
         free = free if s else free[::-1]
         free[[0, -1]] = False
         reach.append((np.linalg.norm(mine - mine[0], axis=1), free, _jumps(mine, other, ratio)))
-    return reach
+    return sides, reach, min(dist[1] for dist, _, _ in reach)
 
 
 def _apply(edges: list, c: Corner, tried: tuple, reach: list, curves, ends: dict[int, float],
