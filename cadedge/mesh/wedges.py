@@ -143,8 +143,8 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     boundary fits) may be dropped to lengthen tips over :data:`JUMP_AIM` times the first graded piece
     beside them, each face's area moving by at most :data:`TIP_AREA_SHARE` of its target in all (see
     :func:`_lengthen_tips`); a cusp's tips longer still within each face's ``spare()`` area too (by face
-    id - 1: what its area fit leaves it, :func:`cadedge.mesh.boundary_fit.plane_room`; asked only where
-    there are narrow corners; without it, none)."""
+    id - 1: what its area fit leaves it in ``grid``, :func:`cadedge.mesh.boundary_fit.plane_room`; asked
+    only where there are narrow corners; without it, none)."""
     edges = list(grid.edges)
     corners = narrow_corners(edges, below=below)
     if not corners:
@@ -155,10 +155,12 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     changed = _match_tips(edges, corners, curves, ends)
     if keep is not None and areas is not None and target is not None:  # then lengthened where too short
         room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
+        full = room.copy()
         for c in corners:
             changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, ends, room)
         if spare is not None:  # then cusps' tips longer still, each face's room shared among its corners
-            free = np.minimum(room, np.asarray(spare(), dtype=float))
+            # spare() measures the grid as given: less what the tips above moved
+            free = np.minimum(room, np.asarray(spare(), dtype=float) - (full - room))
             count = np.zeros(len(room))
             touches = [_touched(edges, c) for c in corners]
             for touched in touches:
