@@ -70,7 +70,7 @@ def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np
     if not (w > 0 and len(x) > 2):
         return np.zeros(0), w
     span = 0.5 * FOLD_SPAN * w
-    step = _steps(ext)
+    step = steps(ext.heading)
     jump = step >= np.radians(CORNER_TURN)
     corner = np.concatenate([jump, [False]]) | np.concatenate([[False], jump])
     sharp = (x - span >= x[0]) & (x + span <= x[-1]) & (_turned(ext, x, span) | corner)
@@ -87,29 +87,29 @@ def folds(ext: Extrusion, table: np.ndarray, budget: float = np.inf) -> tuple[np
     return np.asarray(found)[np.sort(kept)], w
 
 
-def _steps(ext: Extrusion) -> np.ndarray:
-    """The angles (radians) the section's heading turns by between consecutive samples."""
-    return np.arccos(np.clip(np.einsum("ij,ij->i", ext.heading[:-1], ext.heading[1:]), -1.0, 1.0))
+def steps(heading: np.ndarray) -> np.ndarray:
+    """The angles (radians) unit headings (n, 3) turn by between consecutive rows (90 degrees beside a
+    zero row)."""
+    return np.arccos(np.clip(np.einsum("ij,ij->i", heading[:-1], heading[1:]), -1.0, 1.0))
 
 
 def has_corner(ext: Extrusion) -> bool:
     """Whether the section has a corner turning by :data:`CORNER_TURN` degrees or more."""
-    return bool(np.any(_steps(ext) >= np.radians(CORNER_TURN)))
+    return bool(np.any(steps(ext.heading) >= np.radians(CORNER_TURN)))
+
+
+def _turn(ext: Extrusion, centre, half) -> np.ndarray:
+    """The angles (degrees) the section's heading turns by from ``centre - half`` to ``centre + half``
+    (arc lengths, broadcast together; 90 degrees where a sample has no heading)."""
+    lo = np.searchsorted(ext.x, centre - half)
+    hi = np.searchsorted(ext.x, centre + half, side="right") - 1
+    return np.degrees(np.arccos(np.clip(np.einsum("...j,...j->...", ext.heading[lo], ext.heading[hi]), -1.0, 1.0)))
 
 
 def _turned(ext: Extrusion, centre, half, turn: float = FOLD_TURN) -> np.ndarray:
     """Whether the section's heading turns by ``turn`` degrees or more from ``centre - half`` to
-    ``centre + half`` (arc lengths, broadcast together; samples without a heading never do)."""
-    lo = np.searchsorted(ext.x, centre - half)
-    hi = np.searchsorted(ext.x, centre + half, side="right") - 1
-    return np.einsum("ij,ij->i", ext.heading[lo], ext.heading[hi]) <= np.cos(np.radians(turn))
-
-
-def _turn(ext: Extrusion, centre: float, half: float) -> float:
-    """The angle (degrees) the section's heading turns by from ``centre - half`` to ``centre + half``."""
-    lo = np.searchsorted(ext.x, centre - half)
-    hi = np.searchsorted(ext.x, centre + half, side="right") - 1
-    return float(np.degrees(np.arccos(np.clip(ext.heading[lo] @ ext.heading[hi], -1.0, 1.0))))
+    ``centre + half`` (see :func:`_turn`)."""
+    return _turn(ext, centre, half) >= turn
 
 
 def fold_loss(ext: Extrusion, xf: float, span: float) -> float:
@@ -119,7 +119,7 @@ def fold_loss(ext: Extrusion, xf: float, span: float) -> float:
     ``2 span``), as a circle of radius ``R = W / a`` (radians) would; a triangle on each side spans the
     rest of that turn, a quarter circle at most, losing ``(pi/2 - sqrt 2) R`` across it. A corner turns
     within one gap of the section's samples: next to nothing."""
-    turn = _turn(ext, xf, span)
+    turn = float(_turn(ext, xf, span))
     aim = FOLD_TURN if turn >= FOLD_TURN else 0.9 * turn
     half = np.geomspace(max(float(np.min(np.diff(ext.x))), 1e-12 * span), span, 48)
     turned = _turned(ext, xf, half, aim)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .creases import (CREASES, FOLD_LOSS, GROWTH, Creases, across_folds, fold_lines, folds, graded_points,
-                      has_corner)
+                      has_corner, steps)
 from .flat import add_triangles, boundary_sizes, mesh_plane
 
 #: gmsh's surface types laid flat when straight along one parameter: OCCT's surfaces of linear extrusion
@@ -193,8 +193,7 @@ def extrusion_of(surface: int, nodes: int = 0, table: int = TABLE) -> Extrusion 
         points, dt = _section(surface, t, swap, float(lo[a]), along)
         for _ in range(REFINE_LEVELS):  # halve the gaps the heading turns sharply across
             unit = dt / np.maximum(np.linalg.norm(dt, axis=1), 1e-300)[:, None]
-            turn = np.einsum("ij,ij->i", unit[:-1], unit[1:])
-            gap = np.flatnonzero((turn < np.cos(np.radians(TURN_STEP))) & (np.abs(unit[:-1]).sum(axis=1) > 0)
+            gap = np.flatnonzero((steps(unit) > np.radians(TURN_STEP)) & (np.abs(unit[:-1]).sum(axis=1) > 0)
                                  & (np.abs(unit[1:]).sum(axis=1) > 0) & (np.diff(t) > 1e-12 * (hi[b] - lo[b])))
             if not len(gap):
                 break
