@@ -10,6 +10,7 @@ skipped corpus test fails.
 from __future__ import annotations
 
 import importlib.util
+import signal
 import sys
 from pathlib import Path
 
@@ -58,6 +59,19 @@ def corpus_params(values=None) -> list:
 def pytest_configure(config):
     if CORPUS_DIR is None and corpus_path.corpus_required():
         raise pytest.UsageError(f"{corpus_path.REQUIRE_ENV} is set, but the {NO_CORPUS}")
+    _ctrl_c_as_in_a_terminal()
+
+
+def _ctrl_c_as_in_a_terminal() -> None:
+    """Let SIGINT raise KeyboardInterrupt here, and so in the children the tests start, as in a terminal.
+
+    A shell without job control starts a background command (``cmd &`` in a script, ``nohup``) with SIGINT
+    ignored; the children inherit that and a new Python keeps it, so the tests that send a child Ctrl-C
+    (and expect exit 130) failed when the suite was started so, or passed only if an earlier test in the
+    same process had happened to set a handler. Run under pytest-xdist, this runs in each worker too.
+    """
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_report_header(config):

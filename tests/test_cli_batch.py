@@ -76,7 +76,9 @@ def test_embedded_cluster_failed_input_then_rerun(tmp_path, capsys):
 
 
 def _kill_busy_workers(address: str, stop: threading.Event, killed: list) -> None:
-    """Once both workers are running a task, SIGKILL both worker processes."""
+    """Once both workers are running a task, SIGKILL both worker processes: only processes this one started
+    (a pid that is not, this test's own or a stranger's, is put in ``killed`` as an error instead)."""
+    import psutil
     from distributed import Client
 
     with Client(address) as client:
@@ -84,7 +86,11 @@ def _kill_busy_workers(address: str, stop: threading.Event, killed: list) -> Non
         while not stop.is_set():
             busy = [w for w, keys in client.processing().items() if keys]
             if len(busy) == 2:
+                ours = {p.pid for p in psutil.Process().children(recursive=True)}
                 for w in busy:
+                    if pids[w] not in ours:
+                        killed.append(f"{w}: pid {pids[w]} is not a child of the test's process")
+                        continue
                     os.kill(pids[w], signal.SIGKILL)
                     killed.append(w)
                 return
@@ -106,7 +112,7 @@ def test_existing_scheduler_workers_killed_mid_run_then_retry(tmp_path, capsys):
             stop.set()
             killer.join()
         cap = capsys.readouterr()
-        assert len(killed) == 2
+        assert len(killed) == 2 and all(" " not in w for w in killed), killed  # both killed, both ours
         assert code == 1
         assert "4 inputs: 2 ok, 2 failed" in cap.out
         assert {line for line in cap.err.splitlines()} == {f"failed: {p}: {WORKER_DIED}" for p in SLOW}
