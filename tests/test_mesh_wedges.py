@@ -17,6 +17,7 @@ from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism, BRepPrimAPI_MakeRevol  # noqa
 from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Vec  # noqa: E402
 
 from cadedge import refine_shape  # noqa: E402
+from cadedge.mesh.grading import cut_on_curve  # noqa: E402
 from cadedge.mesh.wedges import (MAX_JUMP, TIP_RATIO, _from_vertex, _jump, _segment_distances,  # noqa: E402
                                  grade_wedges, narrow_corners, tip_length)
 from cadedge.mesh.widths import TIP_SLACK, WIDTH_RATIO, match_corners  # noqa: E402
@@ -291,3 +292,46 @@ def test_a_cusps_tips_reach_the_points_the_edges_were_refined_with_where_the_are
     assert result.ok, result.problems()
     assert result.report.worst_deficit <= 1e-2 and result.report.unforced_slivers == 0
     assert result.report.min_angle > 8.0
+
+
+def test_a_cusps_tips_drop_the_points_the_growth_limit_put_there_within_the_edges_slack():
+    """The refiner's growth limit grades an edge's segments from the shortest edge at each vertex: a fan's
+    shroud, a cylinder band whose seam is cut 0.2 above the cusps where its circle touches the square's
+    sides, had the circle and the sides cut from 0.4 up, doubling, and the cusps' tips stopped there: 0.19
+    degrees, gmsh's 7.5. Such points may go where the edge keeps half its slack below its target (and the
+    tips stay within 20 times the vertex's shortest other edge and twice the faces' widths across): here
+    the rim_hole's circles are cut at one cusp as the growth limit would (the points then in the grid the
+    tips keep), and its tips still reach those of the other cusp, every edge within its target. With no
+    slack left, the points stay."""
+    from cadedge.mesh.boundary_fit import fit_boundaries
+    from cadedge.mesh.fidelity import brep_face_areas, meshed_kinds
+    from cadedge.mesh.wedges import _growth_points, _Near, _reach
+    from cadedge.shapegrid import end_tolerances, with_edges
+
+    refined = refine_shape(_rim_hole(), ald=1e-2)
+    areas = brep_face_areas(refined.shape)
+    kinds = meshed_kinds(refined.shape)
+    top = [c for c in narrow_corners(list(refined.edges)) if c.face == narrow_corners(list(refined.edges))[0].face]
+    assert len(top) == 2
+    growth, other = [c for c in top if all(s for _, s in c.sides)], [c for c in top if not any(s for _, s in c.sides)]
+    assert len(growth) == len(other) == 1
+    edges, ends = list(refined.edges), end_tolerances(refined)
+    for k, _ in growth[0].sides:  # each circle's first segment cut at 0.2 and 0.5 of it, as from a short edge
+        edges[k] = cut_on_curve(edges[k], refined.curves, {0: np.array([0.2, 0.5])}, ends=ends[edges[k].id])
+    grown = with_edges(refined, edges)
+    fitted = fit_boundaries(grown, 1e-2, brep_areas=areas, kinds=kinds)[0]
+    graded = grade_wedges(fitted, keep=grown, areas=areas, target=1e-2, spare=lambda: np.full(len(areas), np.inf))
+    tips = [min(tip_length(graded.edges[k], s) for k, s in c.sides) for c in (growth[0], other[0])]
+    first = min(tip_length(grown.edges[k], s) for k, s in growth[0].sides)
+    assert tips[0] > 2.0 * first and tips[0] >= tips[1] / TIP_RATIO
+    for now, kept in zip(graded.edges, refined.edges):
+        if not now.degenerate:
+            assert 1.0 - now.length / (kept.length / (1.0 - kept.ald_estimate)) <= 1e-2
+
+    c = growth[0]
+    sides, reach, _ = _reach(list(fitted.edges), c, list(grown.edges), WIDTH_RATIO)
+    for target, freed in ((0.0, False), (1e-2, True)):  # a target no polyline meets: no slack
+        targets = {e.id: target for e in grown.edges}
+        out, _ = _growth_points(list(fitted.edges), c, sides, reach, list(grown.edges), targets, WIDTH_RATIO,
+                                _Near.of(list(fitted.edges)))
+        assert any((after[1] & ~before[1]).any() for after, before in zip(out, reach)) == freed

@@ -26,8 +26,10 @@ in a cusp the width grows as the square of the distance, so longer tips stand be
 pieces. What their chords cut off grows as the cube of their length, and each face's area may move by
 at most :data:`TIP_AREA_SHARE` of its target in all. A cusp's tips are then made longer still, up to
 the first points the edges were refined with, as far as its faces' area allows (:func:`_cusp_length`:
-its forced triangle is as wide as its tips are long). The points of the edges as refined are kept and
-edge ends never move, so shared edges stay conforming and every edge keeps its arc-length deficit.
+its forced triangle is as wide as its tips are long), and past them where an edge keeps half its slack
+below its target without them (:func:`_growth_points`: mostly points the refiner's growth limit put
+there). The other points of the edges as refined are kept and edge ends never move, so shared edges stay
+conforming and every edge stays within its arc-length deficit target.
 A face whose boundary doubles back on itself at a vertex (a slit: nearly 360 degrees inside) looks the
 same from its edge grids and is graded too, which costs segments, not triangle quality.
 """
@@ -39,7 +41,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..shapegrid import ShapeGrid, end_tolerances, with_edges
+from ..shapegrid import ShapeGrid, edge_targets, end_tolerances, with_edges
 from .grading import cut_on_curve
 from .proximity import _LazyCurves
 from .widths import BUDGET_FACTOR, MIN_BUDGET, WIDTH_RATIO, _segment_distances
@@ -67,6 +69,10 @@ LAST_AIM = 0.95 * MAX_JUMP
 #: A cusp's tips are lengthened past that jump, up to the first points the edges were refined with, where
 #: its opening over them grows by this factor or more (see :func:`_cusp_length`).
 CUSP_GAIN = 1.2
+#: A cusp's tips may also drop points the edges were refined with (mostly ones the refiner's growth limit
+#: put there, grading the segments from a short edge at the vertex): an edge may give up this share of
+#: what its grid has left below its arc-length deficit target (see :func:`_growth_points`).
+SLACK_SHARE = 0.5
 #: Lengthened tips may move each face's area by at most this share of its target (the surface ALD times
 #: its B-rep area), all its corners' together: the chords of the longer tips cut off what the points
 #: dropped had followed.
@@ -162,6 +168,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
             # spare() measures the grid as given: less what the tips above moved
             free = np.minimum(room, np.asarray(spare(), dtype=float) - (full - room))
             count = np.zeros(len(room))
+            targets, near = edge_targets(grid), _Near.of(edges)
             touches = [_touched(edges, c) for c in corners]
             for touched in touches:
                 count[touched] += 1
@@ -169,7 +176,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
                 share = np.full(len(room), np.inf)
                 share[touched] = free[touched] / count[touched]
                 before = room.copy()
-                if _widen_cusp(edges, c, keep.edges, ratio, curves, ends, room, share):
+                if _widen_cusp(edges, c, keep.edges, ratio, curves, ends, room, share, targets, near):
                     changed, free = True, free - (before - room)
                 count[touched] -= 1
     tip_segments = {(k, tip_segment(edges[k], s)) for c in corners for k, s in c.sides}
@@ -270,17 +277,107 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, end
     return False
 
 
+@dataclasses.dataclass(frozen=True)
+class _Near:
+    """Which edges (indices into the grid's edge list) end at each B-rep vertex, as (index, whether it
+    starts there), and which bound each face: looked up per corner instead of scanning every edge."""
+
+    ends: dict[int, list[tuple[int, bool]]]
+    faces: dict[int, list[int]]
+
+    @classmethod
+    def of(cls, edges: list) -> "_Near":
+        ends: dict[int, list[tuple[int, bool]]] = {}
+        faces: dict[int, list[int]] = {}
+        for i, e in enumerate(edges):
+            if e.degenerate or len(e.points) < 2:
+                continue
+            ends.setdefault(e.vertices[0], []).append((i, True))
+            ends.setdefault(e.vertices[-1], []).append((i, False))
+            for f in e.faces:
+                faces.setdefault(f, []).append(i)
+        return cls(ends, faces)
+
+
 def _widen_cusp(edges: list, c: Corner, kept: list, ratio: float, curves, ends: dict[int, float],
-                room: np.ndarray, share: np.ndarray) -> bool:
-    """In a cusp (see :func:`_cusp_length`), drop the points near corner ``c`` that ``kept`` does not hold
-    and make its tips as long as the first kept points and ``share`` (the area each face may move for
-    this corner, by face id - 1) allow; what is used is taken from ``room``. True if ``edges`` changed."""
+                room: np.ndarray, share: np.ndarray, targets: dict[int, float], near: _Near) -> bool:
+    """In a cusp (see :func:`_cusp_length`), drop the points near corner ``c`` that ``kept`` does not hold,
+    or that the refiner's growth limit put there (:func:`_growth_points`; ``targets``: edge id -> its
+    arc-length deficit target; ``near``: the edges at each vertex and on each face), and make its tips as
+    long as the first points kept and ``share`` (the area each face may move for this corner, by face id
+    - 1) allow; what is used is taken from ``room``. True if ``edges`` changed."""
     found = _reach(edges, c, kept, ratio)
     if found is None:
         return False
     sides, reach, now = found
-    tried = _cusp_length(edges, c, sides, reach, now, share)
+    reach, longest = _growth_points(edges, c, sides, reach, kept, targets, ratio, near)
+    tried = _cusp_length(edges, c, sides, reach, now, share, longest)
     return tried is not None and _apply(edges, c, tried, reach, curves, ends, room)
+
+
+def _growth_points(edges: list, c: Corner, sides: list, reach: list, kept: list, targets: dict[int, float],
+                   ratio: float, near: _Near) -> tuple[list, float]:
+    """``reach`` (see :func:`_reach`) with the points of corner ``c``'s sides that the edges were refined
+    with marked free too, from the vertex on, up to the first one that is not: one as far from it as the
+    tips may be long, or one whose drop with all before it would use more than :data:`SLACK_SHARE` of
+    what the edge's grid has left below its target (``targets``, by edge id; its true length from
+    ``kept``, the edges as refined, and their deficit estimates); and how long the tips may be: up to the first points
+    kept before, and past them no more than :data:`JUMP_AIM` times the shortest first segment of the
+    vertex's other edges (the faces across the tips see the jump between those and the tips), nor
+    ``ratio`` times the width of a face across (:func:`_across_room`); nothing is freed where that is
+    under :data:`CUSP_GAIN` times as far as the points kept before reach.
+
+    The refiner's growth limit grades an edge's segments from the shortest one at each of its vertices: a
+    fan's shroud, a cylinder whose seam is cut 0.2 above the cusps where its circle touches the square's
+    sides, had the circle and the lines cut from 0.4 up, doubling, where the lines need no point and the
+    circle one every 29: those tips stayed 0.4, their triangles 0.19 degrees (gmsh's, on its own coarse
+    edges, 7.5). The edge's far end always stays, and an edge with no target in the options keeps all."""
+    others = [tip_length(edges[i], at_start) for i, at_start in near.ends.get(c.vertex, ())
+              if (i, at_start) not in c.sides]
+    cap = JUMP_AIM * min(others, default=np.inf)
+    cap = min([cap] + [_across_room(edges, c, k, side, dist, cap, ratio, near)
+                       for (k, _), side, (dist, _, _) in zip(c.sides, sides, reach)])
+    before = min(float(dist[1 + np.flatnonzero(~free[1:])[0]]) for dist, free, _ in reach)
+    if cap < CUSP_GAIN * before:
+        return reach, before  # not much longer than the points kept already reach
+    out = []
+    for (k, _), side, (dist, free, jumps) in zip(c.sides, sides, reach):
+        e, ref = edges[k], kept[k]
+        target = targets.get(e.id, np.inf)
+        if not np.isfinite(target):
+            out.append((dist, free, jumps))
+            continue
+        true = ref.length / max(1.0 - ref.ald_estimate, 1e-300)
+        spare = SLACK_SHARE * (target * true - (true - e.length))
+        walked = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(side, axis=0), axis=1))])
+        loss = walked - dist  # what the polyline loses when every point before each one is dropped
+        stays = np.flatnonzero(~free)  # the vertex, the points kept so far, the far end
+        free = free.copy()
+        for m, after in zip(stays[1:-1], stays[2:]):
+            if dist[m] >= cap * (1.0 - 1e-9) or dist[after] <= dist[m] or loss[after] > spare:
+                break  # a tip may then reach the next point kept: the chord to it must fit the edge's slack
+            free[m] = True
+        out.append((dist, free, jumps))
+    return out, cap
+
+
+def _across_room(edges: list, c: Corner, k: int, side: np.ndarray, dist: np.ndarray, cap: float,
+                 ratio: float, near: _Near) -> float:
+    """How long corner ``c``'s tip on side ``k`` (its points ``side``, ``dist`` from the vertex) may be, up
+    to ``cap``, for the faces across it: the farthest of its points (or ``cap``) whose chord from the
+    vertex is at most ``ratio`` times the distance from its midpoint to such a face's boundary, on edges
+    away from the vertex (as :mod:`cadedge.mesh.widths` splits thin faces). The fan's shroud has a strip
+    0.2 tall at its top: a circle's tip grown to 4 there left it 5.6-degree triangles."""
+    across = {i for f in set(edges[k].faces) - {c.face} for i in near.faces.get(f, ())}
+    others = [edges[i] for i in sorted(across) if c.vertex not in edges[i].vertices]
+    upto = int(np.searchsorted(dist, cap, side="right"))
+    if not others or upto < 2:
+        return cap
+    a = np.vstack([e.points[:-1] for e in others])
+    b = np.vstack([e.points[1:] for e in others])
+    width = _segment_distances(0.5 * (side[0] + side[1:upto]), a, b)
+    bad = np.flatnonzero(dist[1:upto] > ratio * width)
+    return cap if not len(bad) else float(dist[bad[0]])  # the last point whose chord fits (0: none)
 
 
 def _reach(edges: list, c: Corner, kept: list, ratio: float) -> tuple[list, list, float] | None:
@@ -345,9 +442,9 @@ def _tips_at(edges: list, c: Corner, sides: list, reach: list, need: float, piec
     return plans, moved, float(np.max(moved / np.maximum(room, 1e-300))), need
 
 
-def _cusp_length(edges: list, c: Corner, sides: list, reach: list, now: float, room: np.ndarray
-                 ) -> tuple[list, np.ndarray, float, float] | None:
-    """In a cusp, tips as long as the first kept points and the faces' ``room`` allow (see
+def _cusp_length(edges: list, c: Corner, sides: list, reach: list, now: float, room: np.ndarray,
+                 longest: float = np.inf) -> tuple[list, np.ndarray, float, float] | None:
+    """In a cusp, tips as long as the first kept points, ``longest`` and the faces' ``room`` allow (see
     :func:`_tips_at`; ``now``, the tips' length as they are): a corner whose opening over its tips grows
     by :data:`CUSP_GAIN` or more when they are that long, whose forced triangle is that much wider. The
     area fits cut a cusp's sides as finely as its face's target asks, though their chords there cut off
@@ -356,7 +453,7 @@ def _cusp_length(edges: list, c: Corner, sides: list, reach: list, now: float, r
     kept = [1 + int(np.flatnonzero(~free[1:])[0]) for _, free, _ in reach]  # each side's first kept point
     near = [side[:m + 1] for side, m in zip(sides, kept)]  # the sides up to it, moving away from the vertex
     dists = [dist[:m + 1] for (dist, _, _), m in zip(reach, kept)]
-    need = min(float(d[-1]) for d in dists)
+    need = min([float(d[-1]) for d in dists] + [longest])
     least = CUSP_GAIN * _opening(near, dists, now)
     while need > now * (1.0 + 1e-9) and _opening(near, dists, need) >= least:
         piece = need / max(max(float(np.interp(need, dist[1:m], jumps[:m - 1]))
