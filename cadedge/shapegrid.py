@@ -85,9 +85,10 @@ def end_tolerances(grid: "ShapeGrid") -> dict[int, float]:
     return {e.id: max([e.tolerance] + [vertex.get(v, 0.0) for v in e.vertices]) for e in grid.edges}
 
 
-def edge_targets(grid: "ShapeGrid") -> dict[int, float]:
-    """Edge id -> the arc-length deficit its grid was refined to: ``options["ald"]``, or the finest local
-    target (``options["ald_for"]``, by edge or by face) that reaches it; inf where the options name none."""
+def recorded_targets(grid: "ShapeGrid") -> dict[int, float]:
+    """Edge id -> the arc-length deficit its grid was refined to, as the options record it: ``ald``, or
+    the finest local target (``ald_for``, by edge or by face) that reaches it; inf where they name none.
+    (:func:`cadedge.occt.localald.edge_targets` makes them from the settings before refining.)"""
     ald = float(grid.options.get("ald") or np.inf)
     named = {(r["kind"], int(r["id"])): float(r["ald"]) for r in grid.options.get("ald_for") or ()}
     return {e.id: min([ald, named.get(("edge", e.id), np.inf)]

@@ -29,7 +29,7 @@ from cadedge.cli import main  # noqa: E402
 from cadedge.errors import InputError  # noqa: E402
 from cadedge.exporters.json import to_document, validate  # noqa: E402
 from cadedge.occt.topology import Topology  # noqa: E402
-from cadedge.shapegrid import edge_targets  # noqa: E402
+from cadedge.shapegrid import recorded_targets  # noqa: E402
 from conftest import FIXTURES  # noqa: E402
 
 BRACKET = FIXTURES / "bracket.step"
@@ -163,7 +163,7 @@ def test_step_ids_finest_wins_where_settings_meet():
     check_targets(grid, targets)
     assert grid.options["ald_for"] == [{"kind": "edge", "id": 5, "ald": 1e-5}, {"kind": "edge", "id": 9, "ald": 1e-4},
                                        {"kind": "face", "id": 1, "ald": 1e-4}, {"kind": "face", "id": 3, "ald": 1e-6}]
-    read = edge_targets(grid)  # read back from the grid's options, as the mesher does
+    read = recorded_targets(grid)  # read back from the grid's options, as the mesher does
     assert [read[e.id] for e in grid.edges] == list(targets)
 
 

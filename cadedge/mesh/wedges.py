@@ -41,7 +41,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..shapegrid import ShapeGrid, edge_targets, end_tolerances, with_edges
+from ..shapegrid import ShapeGrid, end_tolerances, recorded_targets, with_edges
 from .grading import cut_on_curve
 from .proximity import _LazyCurves
 from .widths import BUDGET_FACTOR, MIN_BUDGET, WIDTH_RATIO, _segment_distances
@@ -168,7 +168,7 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
             # spare() measures the grid as given: less what the tips above moved
             free = np.minimum(room, np.asarray(spare(), dtype=float) - (full - room))
             count = np.zeros(len(room))
-            targets, near = edge_targets(grid), _Near.of(edges)
+            targets, near = recorded_targets(grid), _Near.of(edges)
             touches = [_touched(edges, c) for c in corners]
             for touched in touches:
                 count[touched] += 1
@@ -321,8 +321,8 @@ def _growth_points(edges: list, c: Corner, sides: list, reach: list, kept: list,
     with marked free too, from the vertex on, up to the first one that is not: one as far from it as the
     tips may be long, or one whose drop with all before it would use more than :data:`SLACK_SHARE` of
     what the edge's grid has left below its target (``targets``, by edge id; its true length from
-    ``kept``, the edges as refined, and their deficit estimates); and how long the tips may be: up to the first points
-    kept before, and past them no more than :data:`JUMP_AIM` times the shortest first segment of the
+    ``kept``, the edges as refined, and their deficit estimates); and how long the tips may be: up to
+    the first points kept before, and past them no more than :data:`JUMP_AIM` times the shortest first segment of the
     vertex's other edges (the faces across the tips see the jump between those and the tips), nor
     ``ratio`` times the width of a face across (:func:`_across_room`); nothing is freed where that is
     under :data:`CUSP_GAIN` times as far as the points kept before reach.
