@@ -322,10 +322,11 @@ def _growth_points(edges: list, c: Corner, sides: list, reach: list, kept: list,
     tips may be long, or one whose drop with all before it would use more than :data:`SLACK_SHARE` of
     what the edge's grid has left below its target (``targets``, by edge id; its true length from
     ``kept``, the edges as refined, and their deficit estimates); and how long the tips may be: up to
-    the first points kept before, and past them no more than :data:`JUMP_AIM` times the shortest first segment of the
-    vertex's other edges (the faces across the tips see the jump between those and the tips), nor
-    ``ratio`` times the width of a face across (:func:`_across_room`); nothing is freed where that is
-    under :data:`CUSP_GAIN` times as far as the points kept before reach.
+    the first points kept before, and past them no more than :data:`JUMP_AIM` times the shortest first
+    segment of the vertex's other edges (the faces across the tips see the jump between those and the
+    tips), nor ``ratio`` times the width of a face across (:func:`_across_room`, measured only where the
+    jump allows that much); nothing is freed where that is under :data:`CUSP_GAIN` times as far as the
+    points kept before reach.
 
     The refiner's growth limit grades an edge's segments from the shortest one at each of its vertices: a
     fan's shroud, a cylinder whose seam is cut 0.2 above the cusps where its circle touches the square's
@@ -335,9 +336,10 @@ def _growth_points(edges: list, c: Corner, sides: list, reach: list, kept: list,
     others = [tip_length(edges[i], at_start) for i, at_start in near.ends.get(c.vertex, ())
               if (i, at_start) not in c.sides]
     cap = JUMP_AIM * min(others, default=np.inf)
-    cap = min([cap] + [_across_room(edges, c, k, side, dist, cap, ratio, near)
-                       for (k, _), side, (dist, _, _) in zip(c.sides, sides, reach)])
     before = min(float(dist[1 + np.flatnonzero(~free[1:])[0]]) for dist, free, _ in reach)
+    if cap >= CUSP_GAIN * before:  # the faces across measured only where the jump leaves something to gain
+        cap = min([cap] + [_across_room(edges, c, k, side, dist, cap, ratio, near)
+                           for (k, _), side, (dist, _, _) in zip(c.sides, sides, reach)])
     if cap < CUSP_GAIN * before:
         return reach, before  # not much longer than the points kept already reach
     out = []
