@@ -561,16 +561,64 @@ def test_projector_projects_onto_a_cylinder_in_closed_form(gmsh_cylinder):
 def test_a_face_out_of_time_keeps_gmshs_triangles(gmsh_cylinder):
     gmsh, side = gmsh_cylinder
     from cadedge.mesh.optimize import smooth_face
+    from cadedge.mesh.work import Meter
 
     def mesh() -> tuple[np.ndarray, np.ndarray]:
         _, xyz, _ = gmsh.model.mesh.getNodes(2, side, includeBoundary=True)
         return np.asarray(xyz), np.asarray(gmsh.model.mesh.getElementsByType(2, side)[1])
 
     before = mesh()
-    assert not smooth_face(side, deadline=0.0)  # a budget of zero
+    assert not smooth_face(side, meter=Meter(0))  # a budget of zero
+    assert not smooth_face(side, meter=Meter(deadline=0.0))  # past its deadline
     after = mesh()
     assert np.array_equal(before[0], after[0]) and np.array_equal(before[1], after[1])
     assert smooth_face(side)  # with time, the same face does change
+
+
+def _optimised_spheres(limit: float | None) -> tuple[list[int], list[np.ndarray]]:
+    """Four spheres meshed by gmsh at graded sizes, then :func:`cadedge.mesh.optimize.after_generate` with
+    the optimiser's budget set to ``limit`` units of work (None: unbounded): the faces it changed and every
+    face's node coordinates."""
+    import gmsh
+    from types import SimpleNamespace
+
+    from cadedge.mesh import optimize
+    from cadedge.mesh.outcomes import FaceOutcome
+
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        for k in range(4):
+            gmsh.model.occ.addSphere(3.0 * k, 0, 0, 1.0)
+        gmsh.model.occ.synchronize()
+        gmsh.model.mesh.setSize(gmsh.model.getEntities(0), 0.1)  # graded from the poles
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(2)
+        surfaces = [t for _, t in gmsh.model.getEntities(2)]
+        job = SimpleNamespace(options={}, share=1.0, finish_by=None)
+        ctx = SimpleNamespace(job=job, emap=SimpleNamespace(face_of_surface={}), progress=None, deliver=None,
+                              outcomes={s: FaceOutcome(face=s, surface=s, strategy="Frontal-Delaunay") for s in surfaces})
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(optimize, "MIN_WORK", np.inf if limit is None else limit)
+            mp.setattr(optimize, "WORK_PER_TRIANGLE", 0)
+            optimize.after_generate(ctx)
+        return ctx.smoothed, [np.asarray(gmsh.model.mesh.getNodes(2, s, includeBoundary=True)[1]) for s in surfaces]
+    finally:
+        gmsh.finalize()
+
+
+def test_the_optimisers_budget_is_work_done_so_a_model_meshes_the_same_on_every_run():
+    """The optimiser's budget counts work (``cadedge.mesh.work.Meter``), not time: bound partway through
+    four faces, two runs stop at the same place and give the same nodes, where a budget of CPU time made
+    the same model's meshes differ from run to run."""
+    pytest.importorskip("gmsh")
+    free, unbounded = _optimised_spheres(None)
+    assert len(free) == 4
+    first, once = _optimised_spheres(2e4)
+    again, twice = _optimised_spheres(2e4)
+    assert 1 <= len(first) < 4 and first == again  # the budget stops it partway, at the same face
+    assert all(np.array_equal(a, b) for a, b in zip(once, twice))
+    assert not all(np.array_equal(a, b) for a, b in zip(once, unbounded))
 
 
 def test_focused_rounds_alone_lift_a_faces_worst_triangles():
@@ -728,7 +776,6 @@ def _spoil(gmsh, side: int) -> None:
 
 def _adapt_context(side: int, brep_area: float, target: float):
     """What :func:`cadedge.mesh.adapt.after_generate` reads of a job: one face, meshed by Frontal-Delaunay."""
-    import time
     from types import SimpleNamespace
 
     from cadedge.mesh.outcomes import FaceOutcome
@@ -740,7 +787,7 @@ def _adapt_context(side: int, brep_area: float, target: float):
     ctx = SimpleNamespace(job=SimpleNamespace(options=options, no_refine=set(), deadline=None, share=1.0),
                           emap=SimpleNamespace(face_of_surface={side: 1}), progress=lines.append,
                           outcomes={side: FaceOutcome(face=1, surface=side, strategy="Frontal-Delaunay")},
-                          cpu_started=time.process_time(), fidelity={})
+                          fidelity={})
     return ctx, lines
 
 
@@ -770,6 +817,22 @@ def test_a_poor_face_is_meshed_again_by_meshadapt_and_keeps_its_boundary(gmsh_cy
     now = face_quality(side)
     assert now[1] <= POOR_SHARE and now[0] > spoiled[0] and ctx.outcomes[side].triangles == now[2]
     assert _boundary(gmsh, side) == boundary
+
+
+def test_meshadapt_retries_start_only_within_their_triangle_budget(gmsh_cylinder, monkeypatch):
+    """The retries' budget counts the triangles of the faces retried against the job's (not CPU time):
+    with none to spend, the poor face keeps its first mesh and no retry is announced."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh import adapt
+
+    _spoil(gmsh, side)
+    spoiled = adapt.face_quality(side)
+    monkeypatch.setattr(adapt, "MIN_TRIANGLES", 0)
+    monkeypatch.setattr(adapt, "BUDGET_SHARE", 0.0)
+    ctx, lines = _adapt_context(side, 4.0 * np.pi, 1e-2)
+    adapt.after_generate(ctx)
+    assert lines == [] and ctx.outcomes[side].strategy == "Frontal-Delaunay"
+    assert adapt.face_quality(side) == spoiled
 
 
 def test_meshadapt_is_not_kept_past_the_faces_area_target(gmsh_cylinder):

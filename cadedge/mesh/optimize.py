@@ -51,6 +51,7 @@ from .moves import (CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, fli
                     untangle_nodes)
 from .project import Projector
 from .quality import min_angles
+from .work import Meter
 
 #: Passes (edge swaps, then smoothing) per face.
 PASSES = 3
@@ -85,17 +86,23 @@ STUCK_OWN = 0.01
 #: angle move (the same gains on the cylinder's caps in 60% of the time); so do they, and only those
 #: triangles' edges collapse, when a pass over the whole face is not kept (``smooth_face``'s retry).
 FOCUS = 3.0
-#: The optimiser's time budget: this share of the CPU time the job took before it (reading the shape,
-#: sizes, gmsh's meshing), at least :data:`MIN_BUDGET` seconds (times ``MeshJob.share`` in a split job's
-#: shard, so that the shards together get what one job would; CPU time: a loaded machine slows the
-#: optimiser as much as what came before it), and never past the job's ``finish_by`` on the clock
-#: (:data:`~cadedge.mesh.isolate.FINISH_SHARE` of the timeout; past the soft deadline too, which only
-#: stops meshing: under load mesh_T106_V3's meshing used the soft deadline and every face kept gmsh's
-#: 0.1-degree triangles). Each face (worst first) may use :data:`FACE_SHARE` of what is left, or more if
-#: its triangles are a larger share of those still to improve; a face out of time keeps its last stage's
-#: result (or gmsh's).
-BUDGET_SHARE = 1.0
-MIN_BUDGET = 30.0
+#: The optimiser's budget, counted in work (:class:`~cadedge.mesh.work.Meter`, so that a model meshes the
+#: same way on every run): each swap, collapse or smoothing step is charged the triangles it visits, and
+#: each face :data:`FACE_WORK` for reading and judging it. It gets :data:`WORK_PER_TRIANGLE` times the
+#: triangles of the faces it may improve, at least :data:`MIN_WORK` (times ``MeshJob.share`` in a split
+#: job's shard, so that the shards together get what one job would). Measured with no bound (13 models,
+#: 2 cores): a face's full optimisation took 22-46 units a triangle, done at 37 000-162 000 units per
+#: CPU second (about 90 000; B-spline faces and many small faces the slowest), so the budget is about
+#: the CPU time the job took before it (1.3e-4 to 1.9e-4 s a triangle: reading, sizes, gmsh's meshing)
+#: and at least about 30 s, as the CPU-time budget it replaces. It never runs past the job's
+#: ``finish_by`` on the clock (:data:`~cadedge.mesh.isolate.FINISH_SHARE` of the timeout; past the soft
+#: deadline too, which only stops meshing: under load mesh_T106_V3's meshing used the soft deadline and
+#: every face kept gmsh's 0.1-degree triangles). Each face (worst first) may use :data:`FACE_SHARE` of
+#: what is left, or more if its triangles are a larger share of those still to improve; a face out of
+#: budget keeps its last stage's result (or gmsh's).
+WORK_PER_TRIANGLE = 15
+MIN_WORK = 2_500_000
+FACE_WORK = 3_000
 FACE_SHARE = 0.5
 #: Where the faces of one gmsh process (grids aside) hold more triangles than this, a first sweep gives
 #: every face rounds on the nodes near its worst triangles only (:data:`FOCUS`; ``smooth_face``'s
@@ -156,13 +163,14 @@ class _Face:
         return bool(len(differ) and a[differ[0]] > b[differ[0]])
 
 
-def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, late, *,
+def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, meter: Meter, *,
              collapse: bool = False, below: float = CLIMB_BELOW, collapse_below: float = COLLAPSE_BELOW) -> _Face:
     """``passes`` times: edge swaps, edge collapses and edge splits (with ``collapse``; see
     :mod:`cadedge.mesh.collapse` and :mod:`cadedge.mesh.corners`) and swaps again, then smoothing and the
     local search of the nodes near bad triangles. Returns a new
     :class:`_Face` (``face`` is left as it is); only nodes near triangles under ``below`` degrees move,
-    and only edges of triangles under ``collapse_below`` collapse; stops when ``late()``."""
+    and only edges of triangles under ``collapse_below`` collapse. Each step is charged to ``meter`` (the
+    triangles it visits) and none starts once the meter is late."""
     x, tri, movable = face.x, face.tri, face.movable.copy()
     uv, moved = face.uv.copy(), face.moved.copy()
     up = None if face.up is None else face.up.copy()
@@ -192,10 +200,12 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
         return NodeNormals(sign * (up if rows is None else up[rows]), lambda params: sign * normals_for(params))
 
     for k in range(passes):
-        if late():
+        if meter.late():
             break
+        meter.charge(len(tri))
         tri = flip_edges(x, tri, fixed, up=oriented())
         if collapse and (k < passes - 1 or passes == 1):  # the last pass settles the last changes
+            meter.charge(2 * len(tri))
             x, tri, gone, params = collapse_edges(x, tri, movable, project, below=collapse_below,
                                                   normals=node_normals())
             took(params, np.arange(len(x)))
@@ -220,8 +230,9 @@ def _improve(face: _Face, fixed: set[tuple[int, int]], project, passes: int, lat
             return project(points, nodes[at])
 
         for mover in (smooth_nodes, climb_nodes):
-            if late():
+            if meter.late():
                 break
+            meter.charge(len(part))
             moved_x, params = mover(x[nodes], part, active[nodes], project_part, normals=node_normals(nodes))
             x = x.copy()
             x[nodes] = moved_x
@@ -246,7 +257,7 @@ def improve_plane(points: np.ndarray, tri: np.ndarray, movable: np.ndarray, fixe
     best = start = _Face(x, np.asarray(tri, dtype=np.int64), np.asarray(movable, dtype=bool).copy(),
                          x[:, :2].copy(), np.zeros(len(x), dtype=bool), None)
     for round_ in range(STAGE_ROUNDS):
-        more = _improve(best, fixed, project, passes if not round_ else LATER_STAGES[-1][0], lambda: False,
+        more = _improve(best, fixed, project, passes if not round_ else LATER_STAGES[-1][0], Meter(),
                         below=below if not round_ else min(below, best.min_angle() + FOCUS))
         if not more.better_than(best):
             break
@@ -303,7 +314,7 @@ def _untangle(face: _Face, project: Projector, sign: float) -> _Face:
 
 def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = None, slack: float = 0.0,
                 own_slack: float = 0.0, passes: int = PASSES, rounds: int = STAGE_ROUNDS,
-                focus_first: bool = False, deadline: float | None = None, cpu_deadline: float | None = None) -> bool:
+                focus_first: bool = False, meter: Meter | None = None) -> bool:
     """Improve one meshed gmsh surface: ``passes`` times edge swaps (:func:`flip_edges`, never a curve
     segment) then smoothing of its interior nodes (:func:`smooth_nodes`, :func:`climb_nodes`); then the
     :data:`LATER_STAGES` (with edge collapses while its smallest angle is under
@@ -316,10 +327,8 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     (against ``brep_area``) stays within ``target`` or does not grow (by more than ``slack`` or
     ``own_slack`` times its deficit as gmsh meshed it); a face
     that lost nodes is written again (its interior nodes and triangles; its curves'
-    nodes stay). No pass or move starts after ``deadline`` (``time.time()``) or ``cpu_deadline``
-    (``time.process_time()``). Returns whether the face's mesh changed."""
-    import time
-
+    nodes stay). Its work is charged to ``meter`` (:class:`~cadedge.mesh.work.Meter`, none: unbounded): no
+    pass or move starts once it is late. Returns whether the face's mesh changed."""
     from .facemesh import read_face
 
     mesh = read_face(surface)
@@ -328,10 +337,9 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
     x0, tri0, fixed = mesh.x, mesh.tri, mesh.fixed
     start = _start(surface, mesh)
     project = Projector(surface)
-
-    def late() -> bool:
-        return ((deadline is not None and time.time() > deadline)
-                or (cpu_deadline is not None and time.process_time() > cpu_deadline))
+    meter = meter or Meter()
+    meter.charge(FACE_WORK)
+    late = meter.late
 
     def fits(face: _Face) -> bool:
         """Its smallest angle is not below gmsh's (once unfolded) and its area deficit within the target
@@ -348,10 +356,10 @@ def smooth_face(surface: int, *, brep_area: float = 0.0, target: float | None = 
         triangles (:data:`FOCUS`): the propeller's blade face at 1e-2 sat at 9.6e-3 as meshed, every
         pass over the whole face took it past the target (1.2e-2), and its 3.9-degree triangle stayed,
         where one collapse beside it gives 15.5 degrees."""
-        more = _improve(face, fixed, project, n, late, collapse=collapse, below=below)
+        more = _improve(face, fixed, project, n, meter, collapse=collapse, below=below)
         focus = face.min_angle() + FOCUS
         if not fits(more) and below > focus and not late():
-            more = _improve(face, fixed, project, n, late, collapse=collapse, below=focus, collapse_below=focus)
+            more = _improve(face, fixed, project, n, meter, collapse=collapse, below=focus, collapse_below=focus)
         return more
 
     base = best = _unfold(start, project, fixed)
@@ -446,16 +454,14 @@ def _face_min_angle(surface: int) -> float:
 
 def after_generate(ctx) -> None:
     """Hook (after the area-target pass): improve every meshed face (:func:`smooth_face`), worst smallest
-    angle first, within the optimiser's budget (:data:`BUDGET_SHARE`, :data:`MIN_BUDGET`, in CPU time,
-    and ``ctx.job.finish_by`` on the clock; on a slow machine a large model gets part of the faces: the
-    worst go first). Each face it changed is delivered at once (``ctx.deliver``). A first sweep gives each
+    angle first, within the optimiser's budget (:data:`WORK_PER_TRIANGLE`, :data:`MIN_WORK`, in work
+    done, and ``ctx.job.finish_by`` on the clock; a large model may get part of the faces: the worst go
+    first). Each face it changed is delivered at once (``ctx.deliver``). A first sweep gives each
     face one round of the later stages, a second the rest of :data:`STAGE_ROUNDS` to the faces it
     changed that set the mesh's smallest angle (within :data:`SWEEP_MARGIN`, under
     :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW`), so one large face does not take the time of the
     others; where the faces hold over :data:`FOCUS_FIRST` triangles, a sweep of focused rounds on every
     face's worst triangles comes before them. The faces whose mesh changed land in ``ctx.smoothed``."""
-    import time
-
     import gmsh
 
     from .facemesh import element_corners
@@ -466,10 +472,6 @@ def after_generate(ctx) -> None:
     face_of = ctx.emap.face_of_surface
     stuck = set((getattr(ctx, "fidelity", None) or {}).get("stuck", []))
     kept: list[int] = []
-    cpu = time.process_time()
-    cpu_end = cpu + max(MIN_BUDGET * ctx.job.share,  # a shard's share of it (cadedge.mesh.shards)
-                        BUDGET_SHARE * (cpu - ctx.cpu_started))  # the job's CPU time so far
-    end = ctx.job.finish_by  # on the clock; the soft deadline (ctx.job.deadline) bounds meshing, not this
     deliver = ctx.deliver or (lambda dim, tag, corners: None)
     say = ctx.progress or (lambda line: None)
     # a grid's right triangles are as its boundary nodes set them (cadedge.mesh.gridded): nothing to move
@@ -478,15 +480,17 @@ def after_generate(ctx) -> None:
     size = {s: len(gmsh.model.mesh.getElementsByType(2, s)[0]) for s in todo}
     worst = {s: _face_min_angle(s) for s in todo}
     many = sum(size.values()) > FOCUS_FIRST
+    # on the clock, finish_by; the soft deadline (ctx.job.deadline) bounds meshing, not this
+    meter = Meter(max(MIN_WORK * ctx.job.share,  # a shard's share of it (cadedge.mesh.shards)
+                      WORK_PER_TRIANGLE * sum(size.values())), ctx.job.finish_by)
     # (passes, rounds, focused rounds first): with many triangles, a sweep of every face's worst ones first
     for passes, rounds, focus_first in [(0, 0, True)] * many + [(PASSES, 1, False), (0, STAGE_ROUNDS - 1, False)]:
         todo = [s for s in sorted(todo, key=lambda s: worst[s]) if worst[s] < CLIMB_BELOW]
         left = sum(size[s] for s in todo)
         tried = []
         for s in todo:  # worst smallest angle first; faces without a triangle worth moving are left alone
-            cpu = time.process_time()
-            if cpu > cpu_end or (end is not None and time.time() > end):
-                break  # out of the optimiser's time: the faces left keep their triangles
+            if meter.late():
+                break  # out of the optimiser's budget: the faces left keep their triangles
             tried.append(s)
             share = max(FACE_SHARE, size[s] / left if left > 0 else 1.0)
             left -= size[s]
@@ -497,11 +501,12 @@ def after_generate(ctx) -> None:
             say(f"optimise {f}")
             if smooth_face(s, brep_area=area, target=target, slack=slack, own_slack=STUCK_OWN if slack else 0.0,
                            passes=passes, rounds=rounds, focus_first=focus_first,
-                           deadline=end, cpu_deadline=cpu + share * (cpu_end - cpu)):
+                           meter=(part := meter.part(share))):
                 kept.append(f)
                 size[s] = ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
                 worst[s] = _face_min_angle(s)
                 deliver(2, f, element_corners(2, s))  # a child killed at the hard timeout hands this face over
+            meter.settle(part)
         if passes:  # the later rounds go to the faces that set the mesh's smallest angle
             floor = min((_face_min_angle(s) for s, o in ctx.outcomes.items() if o.ok), default=180.0)
             todo = [s for s in tried if worst[s] < min(floor + SWEEP_MARGIN, COLLAPSE_BELOW)]

@@ -110,7 +110,6 @@ class JobContext:
     # costs only that face, not the batch it would have joined
     alone: set[int] = field(default_factory=set)
     started: float = field(default_factory=time.time)  # time.time() when the child took the job
-    cpu_started: float = field(default_factory=time.process_time)  # the child's CPU time then
 
 
 @dataclass
