@@ -31,7 +31,7 @@ from .worker import JobResult, empty_result
 #: A job is split only when its faces have at least this many boundary segments in all: below it one
 #: process takes a few seconds. On 2 cores a second process saved time on every job measured, down to
 #: the cylinder fixture's 270 segments (3.3 -> 2.9 s); at 20 000 the countersunk screw at 1e-3 (12 400)
-#: took 44 s in one process, 28 in two, its face optimiser's time budget shared between them.
+#: took 44 s in one process, 28 in two, its face optimiser's budget shared between them.
 MIN_SEGMENTS = 5_000
 #: Rounds of meshing neighbours again on an edge another shard changed, at most.
 ADOPT_ROUNDS = 2

@@ -83,7 +83,7 @@ class MeshJob:
     # the edge's grid (see changed_edges)
     adopt: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     # this job's share of the whole job's faces (by boundary segments; a shard's is under 1): the steps'
-    # minimum time budgets, meant for the whole job, are scaled by it
+    # minimum budgets (the optimiser's work, MeshAdapt's triangles), meant for the whole job, are scaled by it
     share: float = 1.0
     # vertex -> the vertex it is meshed as: vertices of one face at one point, merged in ``brep`` (see
     # cadedge.mesh.coincident)
