@@ -69,6 +69,87 @@ def test_entity_pointing_at_nothing_loses_a_solid(tmp_path):
     assert any(w.startswith("partial transfer: ") and "1 of 2 solids" in w for w in grid.warnings)
 
 
+def unshared_tetra(path: Path) -> Path:
+    """A tetrahedron written as one MANIFOLD_SOLID_BREP whose four faces have edges and vertices of their
+    own, none shared: how some ECAD libraries' faceted models are written (OCCT hands back four shells)."""
+    import numpy as np
+
+    corners = np.array([[0, 0, 0], [10, 0, 0], [0, 10, 0], [0, 0, 10]], dtype=float)
+    lines: list[str] = []
+
+    def entity(text: str) -> str:
+        ref = f"#{100 + len(lines)}"
+        lines.append(f"{ref}={text};")
+        return ref
+
+    def point(x) -> str:
+        return entity("CARTESIAN_POINT('',(%r,%r,%r))" % tuple(map(float, x)))
+
+    def direction(x) -> str:
+        x = np.asarray(x, dtype=float)
+        return entity("DIRECTION('',(%r,%r,%r))" % tuple(map(float, x / np.linalg.norm(x))))
+
+    faces = []
+    for corner in [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)]:  # each face's corners, outward
+        q = corners[list(corner)]
+        vertices = [entity(f"VERTEX_POINT('',{point(x)})") for x in q]
+        edges = []
+        for k in range(3):
+            vector = entity(f"VECTOR('',{direction(q[(k + 1) % 3] - q[k])},1.0)")
+            line = entity(f"LINE('',{point(q[k])},{vector})")
+            curve = entity(f"EDGE_CURVE('',{vertices[k]},{vertices[(k + 1) % 3]},{line},.T.)")
+            edges.append(entity(f"ORIENTED_EDGE('',*,*,{curve},.T.)"))
+        loop = entity(f"EDGE_LOOP('',({','.join(edges)}))")
+        bound = entity(f"FACE_OUTER_BOUND('',{loop},.T.)")
+        frame = entity(f"AXIS2_PLACEMENT_3D('',{point(q[0])},{direction(np.cross(q[1] - q[0], q[2] - q[0]))},"
+                       f"{direction(q[1] - q[0])})")
+        plane = entity(f"PLANE('',{frame})")
+        faces.append(entity(f"ADVANCED_FACE('',({bound}),{plane},.T.)"))
+    head = """ISO-10303-21;
+HEADER;
+FILE_DESCRIPTION(('a tetrahedron whose faces share no edge'),'2;1');
+FILE_NAME('unshared','2026-12-06T00:00:00',(''),(''),'','','');
+FILE_SCHEMA(('AUTOMOTIVE_DESIGN'));
+ENDSEC;
+DATA;
+#1=SHAPE_DEFINITION_REPRESENTATION(#2,#3);
+#2=PRODUCT_DEFINITION_SHAPE('',$,#4);
+#3=ADVANCED_BREP_SHAPE_REPRESENTATION('',(#19,#23),#11);
+#4=PRODUCT_DEFINITION('design','',#6,#5);
+#5=PRODUCT_DEFINITION_CONTEXT('part definition',#10,'design');
+#6=PRODUCT_DEFINITION_FORMATION('','',#8);
+#7=APPLICATION_PROTOCOL_DEFINITION('international standard','automotive_design',2003,#10);
+#8=PRODUCT('unshared','unshared','',(#9));
+#9=PRODUCT_CONTEXT('',#10,'mechanical');
+#10=APPLICATION_CONTEXT('core data for automotive mechanical design processes');
+#11=(GEOMETRIC_REPRESENTATION_CONTEXT(3) GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#12)) GLOBAL_UNIT_ASSIGNED_CONTEXT((#13,#14,#18)) REPRESENTATION_CONTEXT('',''));
+#12=UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-06),#13,'distance_accuracy_value','');
+#13=(LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.));
+#14=(NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.));
+#18=(NAMED_UNIT(*) SI_UNIT($,.STERADIAN.) SOLID_ANGLE_UNIT());
+#19=AXIS2_PLACEMENT_3D('',#20,#21,#22);
+#20=CARTESIAN_POINT('',(0.0,0.0,0.0));
+#21=DIRECTION('',(0.0,0.0,1.0));
+#22=DIRECTION('',(1.0,0.0,0.0));
+"""
+    body = f"#23=MANIFOLD_SOLID_BREP('',#24);\n#24=CLOSED_SHELL('',({','.join(faces)}));\n"
+    path.write_text(head + body + "\n".join(lines) + "\nENDSEC;\nEND-ISO-10303-21;\n")
+    return path
+
+
+def test_a_solid_whose_faces_share_no_edge_is_refused_saying_every_face_loaded(tmp_path):
+    """The solid is lost but none of its faces: the refusal says so, and allowing the partial transfer
+    refines all of them."""
+    path = unshared_tetra(tmp_path / "unshared.step")
+    msg = error_of(path)
+    assert msg == (f"{path}: partial transfer refused: 1 of 1 solids failed to load (all 4 faces loaded, as "
+                   "shells or faces outside any solid); allow_partial=True (--allow-partial) refines what did "
+                   "load")
+    grid = cadedge.refine_shape(path, ald=1e-2, allow_partial=True)
+    assert grid.faces == 4 and len(grid.edges) == 12
+    assert any(w.startswith("partial transfer: 1 of 1 solids failed to load (all 4 faces") for w in grid.warnings)
+
+
 def test_every_entity_of_the_only_solid_lost_is_corrupt_even_when_allowed(tmp_path):
     text = (FIXTURES / "bracket.step").read_text()
     first = text.index("MANIFOLD_SOLID_BREP(")

@@ -206,7 +206,10 @@ class Completeness:
             got < expected for got, expected in pairs)
 
     def lost(self) -> str:
-        """What was lost, e.g. "3 of 82 faces (2 of 12 solids) failed to load"."""
+        """What was lost, e.g. "3 of 82 faces (2 of 12 solids) failed to load". Solids lost while every
+        face loaded are said to be so, since allowing the partial transfer then loses no face: a solid
+        whose faces share no edge (some ECAD libraries' faceted models: OCCT's shell fix splits it into
+        a shell per face), or a body OCCT reads as a shell."""
         faces = self.faces if self.faces is not None and self.faces[0] < self.faces[1] else None
         solids = self.solids if self.solids is not None and self.solids[0] < self.solids[1] else None
         roots = self.roots if self.roots[0] < self.roots[1] else None
@@ -220,6 +223,8 @@ class Completeness:
             text = ""
         if text:
             text += " failed to load"
+            if solids and not faces and self.faces is not None and self.faces[1]:
+                text += f" (all {self.faces[1]} faces loaded, as shells or faces outside any solid)"
         if (faces or solids) and roots:
             text += f", {_of('shape roots', *roots)} failed to transfer"
         notes = []
