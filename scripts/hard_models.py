@@ -22,7 +22,8 @@ the point where the branch touches it (a tangential inlet, an equal pipe tee): t
 face at one point; and a sphere and a revolved spline cut to 270 degrees (a face spanning more than half a
 turn between two poles). A seventh: a flat coil (a rectangle swept along a helix), whose helicoidal bands'
 boundary slivers cancel. An eighth: a key blade as an Alias export (every face a B-spline
-surface, its top wall's section through square notches).
+surface, its top wall's section through square notches). A ninth: a fillet dying out along an edge, one
+B-spline strip whose parameters stretch about 200 times more along it than across.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -434,6 +435,38 @@ def revolved_sector() -> object:
     return profile.revolve(270, (0, 0, 0), (0, 1, 0)).val().wrapped
 
 
+def vanishing_fillet() -> object:
+    """A fillet dying out along a 162 mm edge, as a DesignModeler race car nose has one: a rational B-spline
+    strip whose section goes from a quarter circle of radius 5 to a straight line of length 0 (width as
+    ``(1 - s)**1.5``, bulge as ``(1 - s)**3``), its length over 0.16 of ``u`` and its width over all of
+    ``v``, so its parameters stretch about 200 times more one way than the other; its narrow end is a
+    degenerate edge. Frontal-Delaunay left it a Schwarz lantern, 25% over its area at 1e-2."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.Geom import Geom_BSplineSurface
+    from OCP.gp import gp_Pnt
+    from OCP.TColgp import TColgp_Array2OfPnt
+    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
+
+    rows = 8
+    poles, weights = TColgp_Array2OfPnt(1, rows, 1, 3), TColStd_Array2OfReal(1, rows, 1, 3)
+    for i in range(rows):
+        s = i / (rows - 1)
+        r, bulge = 5.0 * (1 - s) ** 1.5, 0.5 + 0.5 * (1 - s) ** 3
+        for j, (x, y, w) in enumerate([(r, 0.0, 1.0), (r * bulge, r * bulge, math.sqrt(0.5)), (0.0, r, 1.0)]):
+            poles.SetValue(i + 1, j + 1, gp_Pnt(x, y, 162.0 * s))
+            weights.SetValue(i + 1, j + 1, w)
+    u_knots, u_mults = TColStd_Array1OfReal(1, rows - 2), TColStd_Array1OfInteger(1, rows - 2)
+    for k in range(rows - 2):
+        u_knots.SetValue(k + 1, 0.16 * k / (rows - 3))
+        u_mults.SetValue(k + 1, 4 if k in (0, rows - 3) else 1)
+    v_knots, v_mults = TColStd_Array1OfReal(1, 2), TColStd_Array1OfInteger(1, 2)
+    for k in (1, 2):
+        v_knots.SetValue(k, float(k - 1))
+        v_mults.SetValue(k, 3)
+    surface = Geom_BSplineSurface(poles, weights, u_knots, v_knots, u_mults, v_mults, 3, 2)
+    return BRepBuilderAPI_MakeFace(surface, 1e-7).Face()
+
+
 def key_blade() -> object:
     """A key blade 40 x 10 x 2.5 mm as an Alias export: its top one B-spline curve through square notches
     and a rounded bump (C0 at their corners, 90 degrees at the notches), the block converted so that every
@@ -637,6 +670,7 @@ MODELS: dict[str, Callable[[], object]] = {
     "bracket_far": bracket_far, "star_prism": star_prism, "notched_block": notched_block,
     "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal,
     "sphere_sector": sphere_sector, "revolved_sector": revolved_sector, "key_blade": key_blade,
+    "vanishing_fillet": vanishing_fillet,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}

@@ -855,6 +855,17 @@ def test_a_face_meshed_on_the_wrong_side_of_its_boundary_gets_gmshs_other_algori
     assert not result.report.over_target and result.report.min_angle >= 20.0
 
 
+def test_a_strip_whose_parameters_stretch_one_way_is_not_left_a_lantern_over_its_area(tmp_path):
+    """vanishing_fillet of ``scripts/hard_models.py`` at 1e-2: a fillet dying out along 162 mm, its length over
+    0.16 of ``u``. Frontal-Delaunay and Delaunay fanned from its wide end's nodes to the far side (25% over
+    its area, no triangle folded) and it was named as not converging; MeshAdapt meshes it within the target,
+    and the optimiser does not mesh it again as Frontal-Delaunay would."""
+    result = mesh_shape(_hard_model("vanishing_fillet", tmp_path), ald=1e-2)
+    assert result.ok, result.problems()
+    assert np.abs(_independent_deficits(result)).max() <= 1e-2
+    assert not result.report.over_target
+
+
 def test_a_blade_face_meshed_by_delaunay_keeps_its_mesh_through_the_optimiser(tmp_path):
     """sharp_blade of ``scripts/hard_models.py`` at 1e-2: its face 3, held at a size floor, is 2.6e-2
     short as Frontal-Delaunay meshes it and 4.4e-3 as Delaunay does. Written back by the face optimiser

@@ -165,15 +165,24 @@ AT_BUDGET = 0.9
 #: tried on every face far off (LLNL boxed_sphere's 20 faces off in every mesher) its run at 1e-3 took
 #: 146 s instead of 90.
 OTHER_ALGORITHMS = ("Delaunay",)
+#: gmsh's algorithm tried on a face whose mesh is far *larger* than its B-rep area (:func:`other_algorithms`):
+#: Delaunay-based meshers leave the triangulation of its boundary nodes in ``(u, v)`` where the face's
+#: parameters stretch one way far more than the other, a Schwarz lantern. The race car nose of a
+#: DesignModeler file has a B-spline strip 162 x 3 mm whose length takes 0.16 of ``u`` and its width all
+#: of ``v``, narrowing to a point: Frontal-Delaunay and Delaunay both fanned from the wide end's nodes to
+#: the far side, edges up to 162 mm, 49-61% over the face's area (no triangle folded, so nothing told
+#: gmsh's own switch to MeshAdapt); MeshAdapt meshed it within 6e-4 at 1e-2.
+OVER_ALGORITHMS = ("MeshAdapt",)
 
 
 def other_algorithms(s: int, per_circle: float, measured: float, outcomes: dict, deficit, target: float) -> float:
-    """Mesh gmsh surface ``s``, meshed ``measured`` short of its B-rep area (too far to be chased:
-    :func:`not_converging` on one mesh; a mesh larger than its face is the face's boundary or surface
-    disagreeing, which no algorithm changes), again by gmsh's other algorithms (:data:`OTHER_ALGORITHMS`) at the same
-    sizes, until one is no longer that far; its mesh is kept only then, and only if its smallest angle is
-    at least the first mesh's or 20 degrees; the deficit of the mesh kept is returned
-    (:func:`cadedge.mesh.remesh.keep_closer`).
+    """Mesh gmsh surface ``s``, whose mesh is ``measured`` off its B-rep area (too far to be chased:
+    :func:`not_converging` on one mesh), again by gmsh's other algorithms at the same sizes, until one is
+    no longer that far; the deficit of the mesh kept is returned (:func:`cadedge.mesh.remesh.keep_closer`).
+    A mesh short of its face is tried by :data:`OTHER_ALGORITHMS` and the new mesh kept only if its
+    smallest angle is at least the first mesh's or 20 degrees; one larger than its face by
+    :data:`OVER_ALGORITHMS`, whatever its angles: flat triangles cannot cover more than their face's area
+    but by folding or spanning it (the optimiser then works on its angles).
 
     A face of a periodic surface spanning more than half a turn between two poles (a 270-degree sphere or
     revolved spline sector; the round corner patches of a swept elbow) was meshed by Frontal-Delaunay on
@@ -188,8 +197,8 @@ def other_algorithms(s: int, per_circle: float, measured: float, outcomes: dict,
     from .remesh import keep_closer
 
     first = triangle_min_angles(s)
-    floor = min(GOOD_DEG, float(first.min())) if first is not None else 0.0
-    for name in OTHER_ALGORITHMS:
+    floor = min(GOOD_DEG, float(first.min())) if first is not None and measured > 0 else 0.0
+    for name in OTHER_ALGORITHMS if measured > 0 else OVER_ALGORITHMS:
         if outcomes[s].strategy != name and not_converging(measured, None, target):
             measured = keep_closer(s, name, per_circle, measured, outcomes, deficit,
                                    within=max(DISAGREE * target, DISAGREE_FLOOR), min_angle=floor)
@@ -377,6 +386,7 @@ def after_generate(ctx) -> None:
     def at_budget(s: int) -> bool:  # or its curvature sizes held to the budget already
         return len(gmsh.model.mesh.getElementsByType(2, s)[0]) >= AT_BUDGET * MAX_FACE_TRIANGLES or SIZES.held(s)
 
+    other: set[int] = set()  # surfaces kept as another algorithm meshed them (other_algorithms)
     best: dict[int, tuple] = {}  # floored surface -> its smallest deficit so far, that mesh, outcome, count
 
     def keep_best(s: int, d: float) -> float:
@@ -397,13 +407,16 @@ def after_generate(ctx) -> None:
     for k in range(PASSES + 1):
         late = ctx.job.deadline is not None and time.time() > ctx.job.deadline
         measured = {s: deficit(s, a) for s, a in unfolded_areas(pending).items()}
-        for s in [s for s in measured if not late and s not in floored and measured[s] > 0
+        for s in [s for s in measured if not late and s not in floored and s not in other
                   and face_of.get(s, s) not in no_refine and not_converging(measured[s], None, target)
-                  and measured[s] > loose.get(face_of.get(s, s), (0.0, 0.0))[1] and face_order(s)[0] == 0]:
-            f = face_of.get(s, s)  # far short on this mesh, first or finer, more than its edges' tolerances allow
+                  and abs(measured[s]) > loose.get(face_of.get(s, s), (0.0, 0.0))[1] and face_order(s)[0] == 0]:
+            f = face_of.get(s, s)  # far off on this mesh, first or finer, more than its edges' tolerances allow
             say(f"refine {f}")  # the watchdog bounds it; a hang or crash here keeps the face as first meshed
+            was = ctx.outcomes[s].strategy
             measured[s] = other_algorithms(s, per_face.get(f, opts["face_per_circle"].get(f, n0)), measured[s],
                                            ctx.outcomes, lambda a, s=s: deficit(s, a), target)
+            if ctx.outcomes[s].strategy != was:
+                other.add(s)
             say(f"refined {f}")
         for s in [s for s in measured if s in floored and abs(measured[s]) > target and not late]:
             f = face_of.get(s, s)
@@ -435,7 +448,7 @@ def after_generate(ctx) -> None:
         # propeller's blades at 1e-3: 7.5e-3 to 9.8e-3 -> within 1e-3)
         full.update(s for s, d in measured.items() if abs(d) > target and at_budget(s))
         pending = [s for s, d in measured.items() if abs(d) > target and face_of.get(s, s) not in stuck
-                   and face_of.get(s, s) not in no_refine and s not in full]
+                   and face_of.get(s, s) not in no_refine and s not in full and s not in other]
         if not pending or k == PASSES:
             break
         old = {s: per_face.get(face_of.get(s, s), opts["face_per_circle"].get(face_of.get(s, s), n0))
@@ -463,9 +476,10 @@ def after_generate(ctx) -> None:
     # a face kept as Delaunay meshed it is not coarsened: coarsening meshes a face it did not coarsen again
     # as it was, by Frontal-Delaunay (sharp_blade's face 3: 4.4e-3 as Delaunay meshed it, back at 2.6e-2);
     # leaving out every floored face cost mesh_T106_V3 at 1e-3 13 333 triangles against 8 975. Nor a grid,
-    # whose mesh its boundary sets (cadedge.mesh.gridded)
+    # whose mesh its boundary sets (cadedge.mesh.gridded), nor a face another algorithm meshed closer
     calm = [s for s in ok if face_of.get(s, s) in curved and face_of.get(s, s) not in no_refine
-            and face_of.get(s, s) not in per_face and ctx.outcomes[s].strategy not in (DELAUNAY, GRID)]
+            and face_of.get(s, s) not in per_face and ctx.outcomes[s].strategy not in (DELAUNAY, GRID)
+            and s not in other]
     coarser = coarsen(ctx, level=level, deficit=deficit, measured={s: final[s] for s in calm},
                       per_circle={s: opts["face_per_circle"].get(face_of.get(s, s), n0) for s in calm})
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", n0)
