@@ -264,6 +264,45 @@ def _delivered_when_stopped(cylinder, tmp_path, first: int):
     return delivered(str(path), job, {}, "stopped by the test", [])
 
 
+def test_two_solids_touching_face_to_face_stay_two_closed_shells_when_delivered(tmp_path):
+    """Two cubes of an assembly touching along a face, each with its own faces, edges and vertices there:
+    the faces a process delivered (what a stopped or timed-out job hands over) are welded per connected
+    piece of the shape, as gmsh gives each solid its own nodes. Welded by coordinates alone, a Fusion
+    pump's two solids shared the segments round their common face, each used four times: check FAILED
+    on a mesh that had none."""
+    import pickle
+
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    from cadedge.mesh.delivered import delivered
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.shards import pieces
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    pair, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(pair)
+    for x in (0.0, 10.0):
+        builder.Add(pair, BRepPrimAPI_MakeBox(gp_Pnt(x, 0.0, 0.0), 10.0, 10.0, 10.0).Shape())
+    grid = cadedge.refine_shape(pair, ald=ALD, max_growth=2.0)
+    assert sorted(set(pieces(grid)[0].values())) == [0, 1]
+    job = MeshJob(source="pair", brep=shape_to_brep(pair), grid=dataclasses.replace(grid, shape=None),
+                  field=SizeField(grid), mode="nodes")
+    path = tmp_path / "faces"
+    with open(path, "wb") as f:
+        run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
+    res = delivered(str(path), job, {}, "stopped by the test", []).result
+    assert {o.face for o in res.faces if o.ok} == set(range(1, 13))
+    multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
+    check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
+                            edge_multiplicity=multiplicity)
+    assert check.ok, check.lines()
+    assert len(check.shells) == 2 and all(s.watertight for s in check.shells)
+
+
 def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neighbours(cylinder, tmp_path,
                                                                                       monkeypatch):
     """A face whose earlier strategies are barred splits its curves, which clears its meshed neighbours in

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from .outcomes import FaceOutcome
-from .shards import edge_uses, faces_text, weld
+from .shards import edge_uses, faces_text, pieces, weld
 from .strategies import STRATEGIES
 from .worker import JobResult, MeshJob, empty_result
 
@@ -54,16 +54,19 @@ def read_deliveries(path: str) -> tuple[dict[int, np.ndarray], dict[int, np.ndar
 def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
                events: list[str]) -> Delivered | None:
     """The faces the killed children delivered, as a result whose other faces fail with ``reason``; None
-    when no face was delivered. Nodes are merged by exact coordinates: faces share their boundary nodes,
-    and the delivered edge segments are the faces' boundary segments, so each edge's multiplicity for the
-    check is known (how many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
+    when no face was delivered. Nodes are merged by exact coordinates within each connected piece of the
+    shape (:func:`~cadedge.mesh.shards.pieces`): faces share their boundary nodes, and the delivered edge
+    segments are the faces' boundary segments, so each edge's multiplicity for the check is known (how
+    many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
     faces, edges = read_deliveries(path)
     if not faces:
         return None
     order = sorted(faces)
     result = empty_result("")
     result.error = None
-    result.nodes, index, lines, line_edges = weld([faces[f] for f in order], edges)
+    piece, edge_piece = pieces(job.grid)
+    result.nodes, index, lines, line_edges = weld([faces[f] for f in order], edges,
+                                                  groups=([piece.get(f, -1) for f in order], edge_piece))
     result.triangles = index.reshape(-1, 3)
     result.triangle_faces = np.repeat(np.array(order, dtype=np.int64), [len(faces[f]) for f in order])
     result.edge_pairs = np.sort(lines, axis=1)
