@@ -107,7 +107,7 @@ def with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dic
                                  triangle_faces=union.result.triangle_faces, edge_pairs=union.result.edge_pairs,
                                  edge_uses=union.result.edge_uses, faces=outcomes, written=False)
     merged.notes = result.notes + ([
-        f"faces {', '.join(map(str, extra))}: meshed by an earlier mesh process that was stopped; the last one "
+        f"{faces_text(set(extra))}: meshed by an earlier mesh process that was stopped; the last one "
         "did not mesh them again, so they are delivered as that process meshed them (the mesh written by "
         "meshio, not gmsh's writer)"] if extra else [])
     return Delivered(merged, union.lines, union.line_edges)
