@@ -859,7 +859,7 @@ def test_a_strip_whose_parameters_stretch_one_way_is_not_left_a_lantern_over_its
     """vanishing_fillet of ``scripts/hard_models.py`` at 1e-2: a fillet dying out along 162 mm, its length over
     0.16 of ``u``. Frontal-Delaunay and Delaunay fanned from its wide end's nodes to the far side (25% over
     its area, no triangle folded) and it was named as not converging; MeshAdapt meshes it within the target,
-    and the optimiser does not mesh it again as Frontal-Delaunay would."""
+    and it is neither coarsened nor meshed finer by Frontal-Delaunay afterwards."""
     result = mesh_shape(_hard_model("vanishing_fillet", tmp_path), ald=1e-2)
     assert result.ok, result.problems()
     assert np.abs(_independent_deficits(result)).max() <= 1e-2
