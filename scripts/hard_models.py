@@ -444,8 +444,9 @@ def vanishing_fillet() -> object:
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
     from OCP.Geom import Geom_BSplineSurface
     from OCP.gp import gp_Pnt
-    from OCP.TColgp import TColgp_Array2OfPnt
-    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
+
+    from cadedge.occt.compat import (TColgp_Array2OfPnt, TColStd_Array1OfInteger, TColStd_Array1OfReal,
+                                     TColStd_Array2OfReal)
 
     rows = 8
     poles, weights = TColgp_Array2OfPnt(1, rows, 1, 3), TColStd_Array2OfReal(1, rows, 1, 3)

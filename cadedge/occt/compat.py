@@ -14,6 +14,7 @@ from __future__ import annotations
 
 try:  # OCP 8.0
     from OCP.collections import Array1_double as TColStd_Array1OfReal
+    from OCP.collections import Array2_double as TColStd_Array2OfReal
     from OCP.collections import Array1_gp_Pnt as TColgp_Array1OfPnt
     from OCP.collections import Array2_gp_Pnt as TColgp_Array2OfPnt
     from OCP.collections import HArray1_gp_Pnt as TColgp_HArray1OfPnt
@@ -29,7 +30,8 @@ except ImportError:  # OCP 7.9
     from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
     from OCP.TColgp import TColgp_HArray1OfPnt
     from OCP.TDF import TDF_LabelSequence
-    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_SequenceOfAsciiString
+    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
+    from OCP.TColStd import TColStd_SequenceOfAsciiString
     from OCP.TopTools import (TopTools_IndexedDataMapOfShapeListOfShape, TopTools_IndexedMapOfShape,
                               TopTools_ListOfShape)
 
@@ -73,7 +75,7 @@ def _occt_errors() -> tuple[type[Exception], ...]:
 #: Every OCCT exception OCP raises (see :func:`_occt_errors`): ``except OCCT_ERRORS`` where OCCT may fail.
 OCCT_ERRORS = _occt_errors()
 
-__all__ = ["OCCT_ERRORS", "TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal",
+__all__ = ["OCCT_ERRORS", "TopoDS", "TColStd_Array1OfInteger", "TColStd_Array1OfReal", "TColStd_Array2OfReal",
            "TColStd_SequenceOfAsciiString", "TColgp_Array1OfPnt", "TColgp_Array2OfPnt", "TColgp_HArray1OfPnt",
            "TDF_LabelSequence", "TopTools_IndexedDataMapOfShapeListOfShape", "TopTools_IndexedMapOfShape",
            "TopTools_ListOfShape"]
