@@ -250,30 +250,18 @@ def pieces(grid) -> tuple[dict[int, int], dict[int, int]]:
     >>> pieces(grid)
     ({1: 0, 2: 0, 3: 1}, {1: 0, 2: 1, 3: 0})
     """
-    parent = list(range(grid.faces + 1))  # faces 1..n, then one slot per vertex
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
 
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    slot: dict[int, int] = {}
-    for e in grid.edges:
-        ends = []
-        for v in e.vertices:
-            if v not in slot:
-                slot[v] = len(parent)
-                parent.append(len(parent))
-            ends.append(slot[v])
-        members = list(e.faces) + ends
-        for m in members[1:]:
-            parent[find(m)] = find(members[0])
-    roots: dict[int, int] = {}
-    label = {f: roots.setdefault(find(f), len(roots)) for f in range(1, grid.faces + 1)}
-    edge_label = {e.id: label[e.faces[0]] if e.faces else roots.setdefault(find(slot[e.vertices[0]]), len(roots))
-                  for e in grid.edges}
-    return label, edge_label
+    vertex_ids = sorted({int(v) for e in grid.edges for v in e.vertices})
+    vertex = {v: grid.faces + len(grid.edges) + k for k, v in enumerate(vertex_ids)}
+    pairs = [(grid.faces + i, f - 1) for i, e in enumerate(grid.edges) for f in e.faces] + \
+            [(grid.faces + i, vertex[int(v)]) for i, e in enumerate(grid.edges) for v in e.vertices]
+    a, b = np.array(pairs, dtype=np.int64).reshape(-1, 2).T
+    n = grid.faces + len(grid.edges) + len(vertex_ids)  # nodes: faces, then edges, then vertices
+    _, label = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+    return ({f: int(label[f - 1]) for f in range(1, grid.faces + 1)},
+            {e.id: int(label[grid.faces + i]) for i, e in enumerate(grid.edges)})
 
 
 def _repeats(keys: np.ndarray) -> np.ndarray:
