@@ -303,6 +303,36 @@ def test_two_solids_touching_face_to_face_stay_two_closed_shells_when_delivered(
     assert len(check.shells) == 2 and all(s.watertight for s in check.shells)
 
 
+def test_faces_a_stopped_process_meshed_on_curves_a_later_one_changed_are_left_out(cylinder, tmp_path):
+    """A first process meshes every face and is stopped; the next meshes the side again on finer curve
+    meshes (as when a failed face's curves are meshed at other spacings) and is stopped in turn. The caps
+    the first delivered sit on the old circles: joined, they would not conform to the side (an Inventor
+    worm gear's check failed on 9 segments), so they are left out and named, and the rest checks."""
+    import pickle
+
+    from cadedge.mesh.delivered import STALE, delivered
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    path = tmp_path / "faces"
+    finer = cadedge.refine_shape(CYL, ald=ALD / 10, max_growth=2.0)
+    jobs = [MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape), grid=dataclasses.replace(g, shape=None),
+                    field=SizeField(g), mode="nodes", faces=faces)
+            for g, faces in ((cylinder, None), (finer, frozenset({FAULT_FACE})))]
+    with open(path, "wb") as f:
+        for job in jobs:
+            run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
+    r = delivered(str(path), dataclasses.replace(jobs[-1], faces=None), {}, "stopped by the test", []).result
+    outcomes = {o.face: o for o in r.faces}
+    assert {f for f, o in outcomes.items() if o.ok} == {FAULT_FACE}
+    assert all(o.attempts[0][1] == STALE for f, o in outcomes.items() if f != FAULT_FACE)
+    assert any(n.endswith(STALE) for n in r.notes)
+    multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(r.edge_pairs, r.edge_uses)}
+    check = check_triangles(r.nodes, r.triangles, triangle_faces=r.triangle_faces, edge_multiplicity=multiplicity)
+    assert check.ok, check.lines()
+
+
 def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neighbours(cylinder, tmp_path,
                                                                                       monkeypatch):
     """A face whose earlier strategies are barred splits its curves, which clears its meshed neighbours in

@@ -17,7 +17,8 @@ import numpy as np
 
 from ..atomic import atomic_path
 from .outcomes import FaceOutcome
-from .shards import edge_uses, faces_text, pieces, weld
+from .check import row_keys
+from .shards import edge_uses, face_edges, faces_text, pieces, weld
 from .strategies import STRATEGIES
 from .worker import JobResult, MeshJob, empty_result
 
@@ -51,6 +52,63 @@ def read_deliveries(path: str) -> tuple[dict[int, np.ndarray], dict[int, np.ndar
     return {f: t for f, t in faces.items() if len(t)}, {e: c for e, c in edges.items() if len(c)}
 
 
+#: Why a delivered face is left out: its boundary is not its edges' last delivered curve meshes.
+STALE = ("meshed by a stopped mesh process on curve meshes a later process changed: left out, as it "
+         "would not conform to its neighbours")
+
+
+def stale(faces: dict[int, np.ndarray], edges: dict[int, np.ndarray], grid) -> set[int]:
+    """The delivered ``faces`` (id -> triangle corners (m, 3, 3)) meshed on other curve meshes than the
+    last delivered ``edges`` (id -> segment corners (k, 2, 3)): a node of one of its edges is not among
+    its corners, or (all its edges delivered) a corner on its mesh's boundary is on none of them. A later
+    process re-meshes curves (another spacing for a failed face, a strategy's own curve mesh) and
+    delivers them at once; faces an earlier, stopped process meshed on the old ones, and the later did
+    not mesh again, joined to the rest, made the check fail where each process's own mesh conformed
+    (an Inventor worm gear: 9 segments).
+
+    A triangle meshed with a node ``m`` on its first edge, then that edge meshed finer (a node of the
+    edge is not in the face) and coarser (a node of the face is on none of its edges):
+
+    >>> from types import SimpleNamespace as E
+    >>> grid = E(faces=1, edges=[E(id=i, degenerate=False, faces=[1]) for i in (1, 2, 3)])
+    >>> a, b, c = np.eye(3)
+    >>> m = (a + b) / 2
+    >>> face = {1: np.array([[a, m, c], [m, b, c]])}
+    >>> edges = {1: np.array([[a, m], [m, b]]), 2: np.array([[b, c]]), 3: np.array([[c, a]])}
+    >>> stale(face, edges, grid)
+    set()
+    >>> stale(face, {**edges, 1: np.array([[a, (a + m) / 2], [(a + m) / 2, m], [m, b]])}, grid)
+    {1}
+    >>> stale(face, {**edges, 1: np.array([[a, b]])}, grid)
+    {1}
+    """
+    bounded = face_edges(grid)
+    keyed = {e: row_keys(c.reshape(-1, 3)) for e, c in edges.items()}
+    out = set()
+    for f, corners in faces.items():
+        mine = bounded.get(f, set())
+        points = row_keys(corners.reshape(-1, 3))
+        on_edges = [keyed[e] for e in mine if e in keyed]
+        if on_edges and not np.isin(np.concatenate(on_edges), points).all():
+            out.add(f)
+        elif on_edges and len(on_edges) == len(mine) and \
+                not np.isin(points[_boundary_corners(points)], np.concatenate(on_edges)).all():
+            out.add(f)
+    return out
+
+
+def _boundary_corners(keys: np.ndarray) -> np.ndarray:
+    """Indices into a face's corner ``keys`` (3 a triangle) of the ends of the segments only one of its
+    triangles has."""
+    _, node = np.unique(keys, return_inverse=True)
+    tri = node.reshape(-1, 3)
+    at = np.arange(len(keys)).reshape(-1, 3)
+    sides = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    ends = np.concatenate([at[:, [0, 1]], at[:, [1, 2]], at[:, [2, 0]]])
+    _, which, count = np.unique(np.sort(sides, axis=1), axis=0, return_inverse=True, return_counts=True)
+    return ends[count[which.ravel()] == 1].ravel()
+
+
 def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
                events: list[str]) -> Delivered | None:
     """The faces the killed children delivered, as a result whose other faces fail with ``reason``; None
@@ -59,6 +117,8 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     segments are the faces' boundary segments, so each edge's multiplicity for the check is known (how
     many delivered faces it bounds; 1-or-2 for a single-face edge, a possible seam)."""
     faces, edges = read_deliveries(path)
+    dropped = stale(faces, edges, job.grid)
+    faces = {f: t for f, t in faces.items() if f not in dropped}
     if not faces:
         return None
     order = sorted(faces)
@@ -74,14 +134,16 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
     mine = sorted(job.faces) if job.faces is not None else range(1, job.grid.faces + 1)
     result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))
-                    if f in faces else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
+                    if f in faces else FaceOutcome(face=f, surface=f, attempts=[("joining what was delivered", STALE)])
+                    if f in dropped else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
                     for f in mine]
     missing = len(mine) - len(faces)
     which = "the mesh process" if job.faces is None else f"the mesh process of {faces_text(set(job.faces))}"
     result.notes = events + [f"{which} was stopped ({reason}); the {len(faces)} faces it had meshed are "
                              "delivered as last meshed (re-meshed finer where that had finished), without the "
                              "face optimiser's last pass or gmsh's writer"
-                             + (f"; {missing} faces are missing" if missing else "")]
+                             + (f"; {missing} faces are missing" if missing else "")] \
+        + ([f"{faces_text(dropped)}: {STALE}"] if dropped else [])
     return Delivered(result, lines, line_edges)
 
 
@@ -97,19 +159,24 @@ def with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dic
         return None
     faces, _ = read_deliveries(path)
     meshed = {o.face for o in result.faces if o.ok}
-    extra = sorted(set(faces) - meshed)
-    if not extra and not (rewrite and faces):
+    if not set(faces) - meshed and not (rewrite and faces):
         return None
     union = delivered(path, job, known_ok, "", [])
+    if union is None:
+        return None
+    extra = sorted({o.face for o in union.result.faces if o.ok} - meshed)
+    if not extra and not rewrite:
+        return None
     mine = {o.face: o for o in result.faces}
     outcomes = [o if o.face in extra or o.face not in mine else mine[o.face] for o in union.result.faces]
     merged = replace(result, nodes=union.result.nodes, triangles=union.result.triangles,
                                  triangle_faces=union.result.triangle_faces, edge_pairs=union.result.edge_pairs,
                                  edge_uses=union.result.edge_uses, faces=outcomes, written=False)
+    dropped = {o.face for o in union.result.faces if o.attempts and o.attempts[0][1] == STALE} - meshed
     merged.notes = result.notes + ([
         f"{faces_text(set(extra))}: meshed by an earlier mesh process that was stopped; the last one "
         "did not mesh them again, so they are delivered as that process meshed them (the mesh written by "
-        "meshio, not gmsh's writer)"] if extra else [])
+        "meshio, not gmsh's writer)"] if extra else []) + ([f"{faces_text(dropped)}: {STALE}"] if dropped else [])
     return Delivered(merged, union.lines, union.line_edges)
 
 

@@ -283,6 +283,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     from .impose import impose_edge_grids
     from .readback import boundary_multiplicity, read_mesh
     from .sizes import apply_spacing_sizes, configure_gmsh_sizes, curves_from_spacings
+    from .strategies import STRATEGIES
 
     notes: list[str] = []
 
@@ -351,6 +352,8 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
             if reason is None and deliver is not None and face in emap.faces:
+                if STRATEGIES[k].split or STRATEGIES[k].own_curves:  # its curves as it was meshed on them
+                    deliver_edges()
                 deliver(2, face, element_corners(2, emap.faces[face]))
 
         def batch_started(faces: list[int]) -> None:
