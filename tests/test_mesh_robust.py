@@ -333,6 +333,45 @@ def test_faces_a_stopped_process_meshed_on_curves_a_later_one_changed_are_left_o
     assert check.ok, check.lines()
 
 
+def test_faces_whose_meshes_gmsh_deletes_splitting_a_curve_are_meshed_again_on_it(tmp_path):
+    """A disk with a hole next to its rim, meshed on coarse grids (4 segments a circle): the top and bottom
+    faces' boundaries cross in their parameters, so gmsh splits the rim's and the hole's segments as it
+    meshes them and deletes the rim face meshed before. That face is meshed again on the split curves
+    before the hooks (not left empty as "meshed": an Inventor worm gear's flanks came out missing), the
+    split edges are named, and what the process delivered joins into a mesh that checks."""
+    import pickle
+
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+
+    from cadedge.mesh.delivered import delivered
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+    from cadedge.mesh.worker import MeshJob, run_job
+
+    at = 7.99 * np.sqrt(0.5)  # 45 degrees round, between the rim's grid points; 0.01 from the rim
+    hole = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(at, at, -1.0), gp_Dir(0.0, 0.0, 1.0)), 2.0, 4.0).Shape()
+    shape = BRepAlgoAPI_Cut(BRepPrimAPI_MakeCylinder(10.0, 2.0).Shape(), hole).Shape()
+    grid = cadedge.refine_shape(shape, ald=0.1)
+    assert max(e.segments for e in grid.edges) == 4
+    job = MeshJob(source="rim", brep=shape_to_brep(shape), grid=dataclasses.replace(grid, shape=None),
+                  field=SizeField(grid), mode="nodes")
+    path = tmp_path / "faces"
+    with open(path, "wb") as f:
+        res = run_job(job, deliver=lambda dim, tag, corners: pickle.dump((dim, tag, corners), f))
+    assert all(o.ok and o.triangles for o in res.faces)
+    assert set(np.unique(res.triangle_faces)) == set(range(1, grid.faces + 1))
+    assert any("gmsh added nodes to their grids" in n for n in res.notes)
+    assert not any("the steps after meshing" in n for n in res.notes), res.notes  # not left to the last check
+    got = delivered(str(path), job, {}, "stopped by the test", []).result
+    assert {o.face for o in got.faces if o.ok} == set(range(1, grid.faces + 1))
+    multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(got.edge_pairs, got.edge_uses)}
+    check = check_triangles(got.nodes, got.triangles, triangle_faces=got.triangle_faces,
+                            edge_multiplicity=multiplicity)
+    assert check.ok and all(s.watertight for s in check.shells), check.lines()
+
+
 def test_a_process_stopped_during_a_splitting_attempt_still_hands_over_the_neighbours(cylinder, tmp_path,
                                                                                       monkeypatch):
     """A face whose earlier strategies are barred splits its curves, which clears its meshed neighbours in

@@ -312,6 +312,43 @@ def curve_surfaces(curves: list[int]) -> set[int]:
     return {int(s) for c in curves for s in gmsh.model.getAdjacencies(1, c)[0]}
 
 
+def curve_counts() -> dict[int, int]:
+    """Segments on each gmsh curve."""
+    return {c: len(gmsh.model.mesh.getElementsByType(1, c)[0]) for _, c in gmsh.model.getEntities(1)}
+
+
+class CurveWatch:
+    """Curves gmsh splits as it meshes a face, and the meshed faces it deletes for that.
+
+    A face whose boundary segments cross in its parameters (two nearby curves' chords on a plane) has
+    gmsh split them and mesh it again (``remeshUnrecoveredEdges`` in its ``meshGFace.cpp``); the other
+    faces on those curves lose their meshes, to be meshed again in the same call, but with only the
+    face's own surface visible they stay empty. An Inventor worm gear's helical flanks (31 000 triangles
+    each) were deleted so as their side planes were meshed, counted as meshed, and came out missing.
+    :meth:`deleted`, after every gmsh call, counts all segments in one call and looks further only when
+    the count moved; :meth:`reset` follows a strategy that changes curves itself. With ``per_curve`` the
+    curves split are collected in :attr:`split` (from a count per curve, taken again at each change)."""
+
+    def __init__(self, *, per_curve: bool = False) -> None:
+        self.per_curve = per_curve
+        self.split: set[int] = set()
+        self.reset()
+
+    def reset(self) -> None:
+        self.counts = curve_counts() if self.per_curve else {}
+        self.total = len(gmsh.model.mesh.getElementsByType(1)[0])
+
+    def deleted(self, meshed: list[int]) -> list[int]:
+        """The surfaces of ``meshed`` (meshed before the last gmsh call) left empty by it, when it split
+        curves."""
+        if len(gmsh.model.mesh.getElementsByType(1)[0]) == self.total:
+            return []
+        before = self.counts
+        self.reset()
+        self.split.update(c for c, n in self.counts.items() if n != before.get(c))
+        return [s for s in meshed if not len(gmsh.model.mesh.getElementTypes(2, s))]
+
+
 def remesh_curves(curves: list[int]) -> list[int]:
     """Replace the 1-D mesh of ``curves`` by gmsh's own, from the sizes set on them alone
     (:func:`~cadedge.mesh.sizes.curves_from_spacings`; the worker sets their edge grids' spacings: by the
@@ -336,6 +373,14 @@ def remesh_curves(curves: list[int]) -> list[int]:
         gmsh.model.setVisibility(visible, 0)
     wiped = {t for t in meshed if not len(gmsh.model.mesh.getElementsByType(2, t)[0])}
     return sorted(touched | wiped)
+
+
+#: Times a face is meshed again after gmsh deleted its mesh splitting a curve for a neighbour
+#: (:class:`CurveWatch`); deleted once more, it is left failed with :data:`GMSH_DELETED`.
+MESHED_AGAIN = 2
+#: The reason for such a face.
+GMSH_DELETED = (f"meshed, then its mesh deleted by gmsh, which split a curve it shares with a face meshed after "
+                f"it; meshed again {MESHED_AGAIN} times already")
 
 
 #: Faces meshed in one gmsh call on the first attempt (see the module doc); a chunk must finish within the
@@ -365,11 +410,14 @@ def _chunk_size(last: int, per_face: float, bound: float | None) -> int:
 
 def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
                   batch_started: Callable[[list[int]], None], prepare: Callable[[int, int], None],
-                  finished: Callable[[int, int, str | None], None], bound: float | None = None) -> None:
+                  finished: Callable[[int, int, str | None], None], bound: float | None = None,
+                  deleted: Callable[[], list[int]] = lambda: []) -> set[int]:
     """The first strategy on ``surfaces`` in chunks (:func:`_chunk_size`, with the watchdog's ``bound`` on
     one attempt), one gmsh call per group of faces whose ``prepare`` leaves the same :data:`FACE_OPTIONS`;
-    outcomes go into ``out``."""
+    outcomes go into ``out``. Returns the surfaces meshed in an earlier chunk whose meshes gmsh deleted
+    (``deleted()`` after each call, see :class:`CurveWatch`), reset in ``out`` to be meshed again."""
     first = STRATEGIES[0]
+    again: set[int] = set()
     done, size, per_face = 0, 0, 0.0
     while done < len(surfaces):
         size = _chunk_size(size, per_face, bound)
@@ -392,7 +440,11 @@ def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
                     out[s].strategy = first.name
                 else:
                     out[s].attempts.append((first.name, reason))
+            for s in deleted():
+                out[s] = FaceOutcome(face=out[s].face, surface=s)
+                again.add(s)
         per_face = (time.process_time() - cpu) / len(chunk)
+    return again
 
 
 def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
@@ -406,7 +458,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                no_batch: set[int] | frozenset[int] = frozenset(),
                cleared: Callable[[list[int]], None] = lambda faces: None,
                as_gmsh_alone: frozenset[int] | set[int] = frozenset(),
-               batch_bound: float | None = None) -> dict[int, FaceOutcome]:
+               batch_bound: float | None = None,
+               watch: CurveWatch | None = None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`~cadedge.mesh.strategies.STRATEGIES`; returns each surface's outcome.
 
     ``skip[face][k]`` marks strategy ``k`` as not to be tried on ``face`` (it failed, hung or crashed gmsh
@@ -424,6 +477,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     that strategy has meshed the neighbour: until then their last meshes, on the curves as they were, are
     the ones a process stopped during the attempt can hand over.
     ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches.
+    ``watch`` (a :class:`CurveWatch`, made here if not given) follows the curves gmsh splits itself; the
+    faces whose meshes it deleted for that are meshed again (at most :data:`MESHED_AGAIN` times each),
+    once ``cleared`` has named them.
     Faces (ids) in ``as_gmsh_alone`` have gmsh mesh their curves as alone, from its boundary size field,
     when a strategy drops their imposed meshes; the others' follow the sizes set on the curves (their
     grids' spacings: :func:`remesh_curves`).
@@ -435,6 +491,21 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
     gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
     out = {s: FaceOutcome(face=face_of.get(s, s), surface=s) for s in surfaces}
+    watch = CurveWatch() if watch is None else watch
+    again: dict[int, int] = {}  # surface -> times its mesh was deleted by gmsh
+
+    def deleted() -> list[int]:
+        """Faces whose meshes gmsh deleted in the last call: cleared, and (but a face deleted too often)
+        reset in ``out``, to be meshed again."""
+        lost = watch.deleted([n for n, o in out.items() if o.ok])
+        cleared([out[n].face for n in lost])
+        for n in lost:
+            again[n] = again.get(n, 0) + 1
+            out[n] = FaceOutcome(face=out[n].face, surface=n)
+            if again[n] > MESHED_AGAIN:
+                out[n].attempts.append(("meshing", GMSH_DELETED))
+        return [n for n in lost if again[n] <= MESHED_AGAIN]
+
     order = {s: face_order(s) for s in surfaces}
     split_done: set[int] = set()
     # faces meshed as grids go first (a second for a million triangles: cadedge.mesh.gridded; after the
@@ -453,9 +524,10 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
         while queue:
             s = queue.pop(0)
             if batched and s not in quick:  # the grids are done: the first strategy's batches
-                _mesh_batches(out, batched, batch_started=batch_started, prepare=prepare, finished=finished,
-                              bound=batch_bound)
-                tried_first, batched = set(batched), []
+                redo = _mesh_batches(out, batched, batch_started=batch_started, prepare=prepare,
+                                     finished=finished, bound=batch_bound, deleted=deleted)
+                tried_first, batched = set(batched) - redo, []
+                queue += sorted(n for n in redo if n not in queue)
             rec = out[s]
             if rec.ok:
                 continue
@@ -490,6 +562,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                             gmsh.model.mesh.setSizeAtParametricPoints(1, c, [], [])
                     users = curve_surfaces(curves)
                     touched = remesh_curves(curves)
+                if touched:
+                    watch.reset()
                 # the neighbours' last meshes stand for them until this attempt meshes the face: a process
                 # stopped during it (a hang, the timeout) delivers them as they were, on the curves as they
                 # were; faces gmsh's 1-D step wiped whose curves did not change keep theirs until meshed
@@ -507,6 +581,10 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                 reason = _attempt(s, strategy)
                 if reason is None:
                     cleared(lost)
+                for n in deleted():
+                    tried_first.discard(n)
+                    if n not in queue:
+                        queue.append(n)
                 finished(rec.face, k, reason)
                 if reason is None:
                     rec.strategy = strategy.name

@@ -154,11 +154,12 @@ def drop_faces(part: Part, faces: set[int], reason: str) -> None:
                if o.face in faces else o for o in r.faces]
 
 
-def faces_text(faces: set[int], limit: int = 8) -> str:
-    """``face 3``, ``faces 3, 7`` or ``faces 1, 2, ... (12 in all)`` (at most ``limit`` named)."""
+def faces_text(faces: set[int], limit: int = 8, *, noun: str = "face") -> str:
+    """``face 3``, ``faces 3, 7`` or ``faces 1, 2, ... (12 in all)`` (at most ``limit`` named); ``noun``
+    for other ids (``edges 4, 9``)."""
     ids = sorted(faces)
     shown = ", ".join(map(str, ids[:limit])) + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
-    return ("faces " if len(ids) > 1 else "face ") + shown
+    return f"{noun}{'s' if len(ids) > 1 else ''} {shown}"
 
 
 def edge_uses(grid, edge_ids: np.ndarray, meshed: set[int], seams: dict[int, tuple[int, ...]]) -> np.ndarray:

@@ -282,6 +282,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     from .gmsh_model import gmsh_session, map_entities
     from .impose import impose_edge_grids
     from .readback import boundary_multiplicity, read_mesh
+    from .shards import faces_text
     from .sizes import apply_spacing_sizes, configure_gmsh_sizes, curves_from_spacings
     from .strategies import STRATEGIES
 
@@ -363,12 +364,19 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                                  + "\n")
                 sys.stdout.flush()
 
+        def cleared(faces: list[int]) -> None:  # their curves changed: the curves as they are now
+            if deliver is not None and faces:
+                deliver_edges()
+                for f in faces:
+                    deliver(2, f, None)
+
         own_curves: set[int] = set()
+        watch = generate.CurveWatch(per_curve=True)
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
                                   batch_started=batch_started, as_gmsh_alone=job.as_gmsh_alone,
                                   prepare=prepare, no_batch=job.no_batch | ctx.alone, batch_bound=job.attempt_bound,
-                                  cleared=lambda faces: [deliver(2, f, None) for f in faces] if deliver else None)
+                                  cleared=cleared, watch=watch)
         deliver_edges()
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
             from .outcomes import FaceOutcome
@@ -377,6 +385,10 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             ctx.outcomes.update({-f: FaceOutcome(face=f, surface=0, attempts=[("gmsh import", partial)])
                                  for f in missing})
         edge_of = {m.tag: eid for eid, m in emap.edges.items()}
+        if watch.split:  # gmsh split them for a face whose boundary crossed itself (generate.CurveWatch)
+            notes.append(f"{faces_text({edge_of[c] for c in watch.split if c in edge_of}, noun='edge')}: gmsh "
+                         "added nodes to their grids where a face's boundary segments crossed in its parameters; "
+                         "the faces on them were meshed again on those nodes")
         own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
