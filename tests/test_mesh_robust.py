@@ -366,6 +366,7 @@ def test_faces_whose_meshes_gmsh_deletes_splitting_a_curve_are_meshed_again_on_i
     assert not any("the steps after meshing" in n for n in res.notes), res.notes  # not left to the last check
     got = delivered(str(path), job, {}, "stopped by the test", []).result
     assert {o.face for o in got.faces if o.ok} == set(range(1, grid.faces + 1))
+    assert any("meshed on other nodes than their grids" in n for n in got.notes)  # said when stopped too
     multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(got.edge_pairs, got.edge_uses)}
     check = check_triangles(got.nodes, got.triangles, triangle_faces=got.triangle_faces,
                             edge_multiplicity=multiplicity)

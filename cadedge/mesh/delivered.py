@@ -143,8 +143,18 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
                              "delivered as last meshed (re-meshed finer where that had finished), without the "
                              "face optimiser's last pass or gmsh's writer"
                              + (f"; {missing} faces are missing" if missing else "")] \
-        + ([f"{faces_text(dropped)}: {STALE}"] if dropped else [])
+        + ([f"{faces_text(dropped)}: {STALE}"] if dropped else []) + (_regridded(edges, job.grid) if job.mode == "nodes" else [])
     return Delivered(result, lines, line_edges)
+
+
+def _regridded(edges: dict[int, np.ndarray], grid) -> list[str]:
+    """A note naming the edges delivered with other segments than their grids (split by a fallback
+    strategy or by gmsh, or meshed by gmsh itself; ``nodes`` mode): the stopped process's own notes on
+    them are lost."""
+    count = {e.id: len(e.points) - 1 for e in grid.edges if not e.degenerate}
+    other = {e for e, c in edges.items() if e in count and len(c) != count[e]}
+    return [f"{faces_text(other, noun='edge')}: meshed on other nodes than their grids (split by a fallback "
+            "strategy or by gmsh, or meshed by gmsh itself)"] if other else []
 
 
 def with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dict[int, int], *,
