@@ -478,8 +478,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     the ones a process stopped during the attempt can hand over.
     ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches.
     ``watch`` (a :class:`CurveWatch`, made here if not given) follows the curves gmsh splits itself; the
-    faces whose meshes it deleted for that are meshed again (at most :data:`MESHED_AGAIN` times each),
-    once ``cleared`` has named them.
+    faces whose meshes it deleted for that are meshed again (at most :data:`MESHED_AGAIN` times each; past
+    ``deadline`` too, by the strategy that meshed them), once ``cleared`` has named them.
     Faces (ids) in ``as_gmsh_alone`` have gmsh mesh their curves as alone, from its boundary size field,
     when a strategy drops their imposed meshes; the others' follow the sizes set on the curves (their
     grids' spacings: :func:`remesh_curves`).
@@ -493,14 +493,17 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     out = {s: FaceOutcome(face=face_of.get(s, s), surface=s) for s in surfaces}
     watch = CurveWatch() if watch is None else watch
     again: dict[int, int] = {}  # surface -> times its mesh was deleted by gmsh
+    replay: dict[int, int] = {}  # surface -> the strategy that meshed it before gmsh deleted its mesh
+    index = {st.name: k for k, st in enumerate(STRATEGIES)}
 
     def deleted() -> list[int]:
         """Faces whose meshes gmsh deleted in the last call: cleared, and (but a face deleted too often)
-        reset in ``out``, to be meshed again."""
+        reset in ``out``, to be meshed again, past ``deadline`` too by the strategy that meshed it."""
         lost = watch.deleted([n for n, o in out.items() if o.ok])
         cleared([out[n].face for n in lost])
         for n in lost:
             again[n] = again.get(n, 0) + 1
+            replay[n] = index.get(out[n].strategy, 0)
             out[n] = FaceOutcome(face=out[n].face, surface=n)
             if again[n] > MESHED_AGAIN:
                 out[n].attempts.append(("meshing", GMSH_DELETED))
@@ -539,7 +542,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     rec.attempts.append((strategy.name, skip[rec.face][k]))
                     continue
                 rescue = k == 0 and rec.face not in skip and not known_ok and not any(o.ok for o in out.values())
-                if deadline is not None and time.time() > deadline and known_ok.get(rec.face) != k and not rescue:
+                if deadline is not None and time.time() > deadline and known_ok.get(rec.face) != k \
+                        and replay.get(s) != k and not rescue:
                     rec.attempts.append((strategy.name, "not tried: out of time (timeout)"))
                     break
                 started(rec.face, k)
