@@ -134,8 +134,9 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
     names = {f: STRATEGIES[k].name for f, k in known_ok.items()}
     mine = sorted(job.faces) if job.faces is not None else range(1, job.grid.faces + 1)
     result.faces = [FaceOutcome(face=f, surface=f, strategy=names.get(f, STRATEGIES[0].name), triangles=len(faces[f]))
-                    if f in faces else FaceOutcome(face=f, surface=f, attempts=[("joining what was delivered", STALE)])
-                    if f in dropped else FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
+                    if f in faces else
+                    FaceOutcome(face=f, surface=f, attempts=[("joining what was delivered", STALE)]) if f in dropped else
+                    FaceOutcome(face=f, surface=f, attempts=[("meshing", f"not finished: {reason}")])
                     for f in mine]
     missing = len(mine) - len(faces)
     which = "the mesh process" if job.faces is None else f"the mesh process of {faces_text(set(job.faces))}"
@@ -143,7 +144,8 @@ def delivered(path: str, job: MeshJob, known_ok: dict[int, int], reason: str,
                              "delivered as last meshed (re-meshed finer where that had finished), without the "
                              "face optimiser's last pass or gmsh's writer"
                              + (f"; {missing} faces are missing" if missing else "")] \
-        + ([f"{faces_text(dropped)}: {STALE}"] if dropped else []) + (_regridded(edges, job.grid) if job.mode == "nodes" else [])
+        + ([f"{faces_text(dropped)}: {STALE}"] if dropped else []) \
+        + (_regridded(edges, job.grid) if job.mode == "nodes" else [])
     return Delivered(result, lines, line_edges)
 
 
@@ -186,7 +188,8 @@ def with_earlier_faces(result: JobResult, path: str, job: MeshJob, known_ok: dic
     merged.notes = result.notes + ([
         f"{faces_text(set(extra))}: meshed by an earlier mesh process that was stopped; the last one "
         "did not mesh them again, so they are delivered as that process meshed them (the mesh written by "
-        "meshio, not gmsh's writer)"] if extra else []) + ([f"{faces_text(dropped)}: {STALE}"] if dropped else [])
+        "meshio, not gmsh's writer)"] if extra else []) \
+        + ([f"{faces_text(dropped)}: {STALE}"] if dropped else [])
     return Delivered(merged, union.lines, union.line_edges)
 
 

@@ -498,12 +498,14 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
 
     def deleted() -> list[int]:
         """Faces whose meshes gmsh deleted in the last call: cleared, and (but a face deleted too often)
-        reset in ``out``, to be meshed again, past ``deadline`` too by the strategy that meshed it."""
+        reset in ``out``, to be meshed again, first (and past ``deadline`` too) by the strategy that
+        meshed it."""
         lost = watch.deleted([n for n, o in out.items() if o.ok])
         cleared([out[n].face for n in lost])
         for n in lost:
             again[n] = again.get(n, 0) + 1
-            replay[n] = index.get(out[n].strategy, 0)
+            k = replay[n] = index.get(out[n].strategy, 0)
+            order[n] = [k] + [j for j in order[n] if j != k]
             out[n] = FaceOutcome(face=out[n].face, surface=n)
             if again[n] > MESHED_AGAIN:
                 out[n].attempts.append(("meshing", GMSH_DELETED))
