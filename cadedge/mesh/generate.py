@@ -26,6 +26,7 @@ import gmsh
 import numpy as np
 
 from .budget import filling_size
+from .curve_watch import GMSH_DELETED, MESHED_AGAIN, CurveWatch
 from .facemesh import element_corners
 from .gmsh_model import surface_curve_uses
 from .outcomes import FaceOutcome
@@ -312,43 +313,6 @@ def curve_surfaces(curves: list[int]) -> set[int]:
     return {int(s) for c in curves for s in gmsh.model.getAdjacencies(1, c)[0]}
 
 
-def curve_counts() -> dict[int, int]:
-    """Segments on each gmsh curve."""
-    return {c: len(gmsh.model.mesh.getElementsByType(1, c)[0]) for _, c in gmsh.model.getEntities(1)}
-
-
-class CurveWatch:
-    """Curves gmsh splits as it meshes a face, and the meshed faces it deletes for that.
-
-    A face whose boundary segments cross in its parameters (two nearby curves' chords on a plane) has
-    gmsh split them and mesh it again (``remeshUnrecoveredEdges`` in its ``meshGFace.cpp``); the other
-    faces on those curves lose their meshes, to be meshed again in the same call, but with only the
-    face's own surface visible they stay empty. An Inventor worm gear's helical flanks (31 000 triangles
-    each) were deleted so as their side planes were meshed, counted as meshed, and came out missing.
-    :meth:`deleted`, after every gmsh call, counts all segments in one call and looks further only when
-    the count moved; :meth:`reset` follows a strategy that changes curves itself. With ``per_curve`` the
-    curves split are collected in :attr:`split` (from a count per curve, taken again at each change)."""
-
-    def __init__(self, *, per_curve: bool = False) -> None:
-        self.per_curve = per_curve
-        self.split: set[int] = set()
-        self.reset()
-
-    def reset(self) -> None:
-        self.counts = curve_counts() if self.per_curve else {}
-        self.total = len(gmsh.model.mesh.getElementsByType(1)[0])
-
-    def deleted(self, meshed: list[int]) -> list[int]:
-        """The surfaces of ``meshed`` (meshed before the last gmsh call) left empty by it, when it split
-        curves."""
-        if len(gmsh.model.mesh.getElementsByType(1)[0]) == self.total:
-            return []
-        before = self.counts
-        self.reset()
-        self.split.update(c for c, n in self.counts.items() if n != before.get(c))
-        return [s for s in meshed if not len(gmsh.model.mesh.getElementTypes(2, s))]
-
-
 def remesh_curves(curves: list[int]) -> list[int]:
     """Replace the 1-D mesh of ``curves`` by gmsh's own, from the sizes set on them alone
     (:func:`~cadedge.mesh.sizes.curves_from_spacings`; the worker sets their edge grids' spacings: by the
@@ -373,14 +337,6 @@ def remesh_curves(curves: list[int]) -> list[int]:
         gmsh.model.setVisibility(visible, 0)
     wiped = {t for t in meshed if not len(gmsh.model.mesh.getElementsByType(2, t)[0])}
     return sorted(touched | wiped)
-
-
-#: Times a face is meshed again after gmsh deleted its mesh splitting a curve for a neighbour
-#: (:class:`CurveWatch`); deleted once more, it is left failed with :data:`GMSH_DELETED`.
-MESHED_AGAIN = 2
-#: The reason for such a face.
-GMSH_DELETED = (f"meshed, then its mesh deleted by gmsh, which split a curve it shares with a face meshed after "
-                f"it; meshed again {MESHED_AGAIN} times already")
 
 
 #: Faces meshed in one gmsh call on the first attempt (see the module doc); a chunk must finish within the

@@ -278,6 +278,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
 
     from . import generate
     from .budget import held, job_budget
+    from .curve_watch import CurveWatch
     from .generate import mesh_faces
     from .gmsh_model import gmsh_session, map_entities
     from .impose import impose_edge_grids
@@ -371,7 +372,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                     deliver(2, f, None)
 
         own_curves: set[int] = set()
-        watch = generate.CurveWatch(per_curve=True)
+        watch = CurveWatch(per_curve=True)
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
                                   batch_started=batch_started, as_gmsh_alone=job.as_gmsh_alone,
@@ -385,7 +386,7 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             ctx.outcomes.update({-f: FaceOutcome(face=f, surface=0, attempts=[("gmsh import", partial)])
                                  for f in missing})
         edge_of = {m.tag: eid for eid, m in emap.edges.items()}
-        if watch.split:  # gmsh split them for a face whose boundary crossed itself (generate.CurveWatch)
+        if watch.split:  # gmsh split them for a face whose boundary crossed itself (curve_watch.CurveWatch)
             notes.append(f"{faces_text({edge_of[c] for c in watch.split if c in edge_of}, noun='edge')}: gmsh "
                          "added nodes to their grids where a face's boundary segments crossed in its parameters; "
                          "the faces on them were meshed again on those nodes")
