@@ -387,9 +387,10 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                                  for f in missing})
         edge_of = {m.tag: eid for eid, m in emap.edges.items()}
         if watch.split:  # gmsh split them for a face whose boundary crossed itself (curve_watch.CurveWatch)
+            meshes = "grids" if job.mode == "nodes" else "curve meshes"  # sizes mode: gmsh's own
             notes.append(f"{faces_text({edge_of[c] for c in watch.split if c in edge_of}, noun='edge')}: gmsh "
-                         "added nodes to their grids where a face's boundary segments crossed in its parameters; "
-                         "the faces on them were meshed again on those nodes")
+                         f"added nodes to their {meshes} where a face's boundary segments crossed in its "
+                         "parameters; the faces on them were meshed again on those nodes")
         own_edges = sorted(edge_of[c] for c in own_curves if c in edge_of and edge_of[c] in imposed_edges)
         imposed_edges = [e for e in imposed_edges if e not in set(own_edges)]
         _hooks(ctx, "after_generate")
