@@ -42,11 +42,11 @@ class CurveWatch:
         self.counts = curve_counts() if self.per_curve else {}
         self.total = len(gmsh.model.mesh.getElementsByType(1)[0])
 
-    def deleted(self, meshed: list[int]) -> list[int]:
-        """The surfaces of ``meshed`` (meshed before the last gmsh call) left empty by it, when it split
-        curves."""
+    def deleted(self, meshed: list[int]) -> list[int] | None:
+        """The surfaces of ``meshed`` (meshed before the last gmsh call) left empty by it when it split
+        curves (maybe none); None when no curve changed since the last look."""
         if len(gmsh.model.mesh.getElementsByType(1)[0]) == self.total:
-            return []
+            return None
         before = self.counts
         self.reset()
         self.split.update(c for c, n in self.counts.items() if n != before.get(c))

@@ -371,7 +371,7 @@ def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
     """The first strategy on ``surfaces`` in chunks (:func:`_chunk_size`, with the watchdog's ``bound`` on
     one attempt), one gmsh call per group of faces whose ``prepare`` leaves the same :data:`FACE_OPTIONS`;
     outcomes go into ``out``. Returns the surfaces meshed in an earlier chunk whose meshes gmsh deleted
-    (``deleted()`` after each call, see :class:`CurveWatch`), reset in ``out`` to be meshed again."""
+    (``deleted()`` after each call, which resets them in ``out``; see :class:`CurveWatch`)."""
     first = STRATEGIES[0]
     again: set[int] = set()
     done, size, per_face = 0, 0, 0.0
@@ -396,9 +396,7 @@ def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
                     out[s].strategy = first.name
                 else:
                     out[s].attempts.append((first.name, reason))
-            for s in deleted():
-                out[s] = FaceOutcome(face=out[s].face, surface=s)
-                again.add(s)
+            again.update(deleted())
         per_face = (time.process_time() - cpu) / len(chunk)
     return again
 
@@ -428,10 +426,11 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
 
     With ``batch_started``, the first strategy meshes faces in batches (faces in ``no_batch`` excepted):
     ``batch_started(faces)`` is called before each chunk, ``prepare(face, k)`` sets a face's options (it is
-    also what ``started`` should call), ``finished`` follows each face of the batch. ``cleared(faces)`` names
-    meshed faces cleared because a neighbour's strategy changed their boundary (they are meshed again), once
-    that strategy has meshed the neighbour: until then their last meshes, on the curves as they were, are
-    the ones a process stopped during the attempt can hand over.
+    also what ``started`` should call), ``finished`` follows each face of the batch. ``cleared(faces)`` is
+    called whenever curves changed (a strategy's splits or own curve mesh, once it has meshed its face;
+    gmsh's own splits, after the call), with the meshed faces cleared for it (maybe none; they are meshed
+    again): until a strategy has meshed the face, its neighbours' last meshes, on the curves as they were,
+    are the ones a process stopped during the attempt can hand over.
     ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches.
     ``watch`` (a :class:`CurveWatch`, made here if not given) follows the curves gmsh splits itself; the
     faces whose meshes it deleted for that are meshed again (at most :data:`MESHED_AGAIN` times each; past
@@ -457,6 +456,8 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
         reset in ``out``, to be meshed again, first (and past ``deadline`` too) by the strategy that
         meshed it."""
         lost = watch.deleted([n for n, o in out.items() if o.ok])
+        if lost is None:
+            return []
         cleared([out[n].face for n in lost])
         for n in lost:
             again[n] = again.get(n, 0) + 1
@@ -541,7 +542,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                     tried_first.discard(n)
                     queue.append(n)
                 reason = _attempt(s, strategy)
-                if reason is None:
+                if reason is None and touched:
                     cleared(lost)
                 for n in deleted():
                     tried_first.discard(n)

@@ -285,7 +285,6 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
     from .readback import boundary_multiplicity, read_mesh
     from .shards import faces_text
     from .sizes import apply_spacing_sizes, configure_gmsh_sizes, curves_from_spacings
-    from .strategies import STRATEGIES
 
     notes: list[str] = []
 
@@ -354,8 +353,6 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
         def finished(face: int, k: int, reason: str | None) -> None:
             say(f"result {face} {k} ok" if reason is None else f"result {face} {k} fail {' '.join(reason.split())}")
             if reason is None and deliver is not None and face in emap.faces:
-                if STRATEGIES[k].split or STRATEGIES[k].own_curves:  # its curves as it was meshed on them
-                    deliver_edges()
                 deliver(2, face, element_corners(2, emap.faces[face]))
 
         def batch_started(faces: list[int]) -> None:
@@ -365,8 +362,8 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
                                  + "\n")
                 sys.stdout.flush()
 
-        def cleared(faces: list[int]) -> None:  # their curves changed: the curves as they are now
-            if deliver is not None and faces:
+        def cleared(faces: list[int]) -> None:  # curves changed: as they are now, and faces cleared for it
+            if deliver is not None:
                 deliver_edges()
                 for f in faces:
                     deliver(2, f, None)
