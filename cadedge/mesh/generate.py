@@ -224,6 +224,10 @@ def _unrolled(surface: int, strategy: Strategy) -> str | None:
         from .gridded import mesh_grid
 
         reason = mesh_grid(surface)
+    elif strategy.unrolled == "parameters":
+        from .parametric import mesh_parametric
+
+        reason = mesh_parametric(surface, strategy.algorithm)
     elif strategy.unrolled == "cone":
         from .developed import cone_of, mesh_unrolled
 

@@ -19,7 +19,8 @@ class Strategy:
     uniform: bool = False  # curvature sizes as one size from the face's sampled curvature (cheap to evaluate)
     unrolled: str = ""  # meshed flat: "cone", a cone with its apex on its boundary (:mod:`cadedge.mesh.developed`);
     # "extrusion", a face of linear extrusion (:mod:`cadedge.mesh.extruded`); "grid", a cylinder between two
-    # circles as a grid of right triangles (:mod:`cadedge.mesh.gridded`)
+    # circles as a grid of right triangles (:mod:`cadedge.mesh.gridded`); "parameters", any face whose
+    # parameters are even on it, in them scaled to lengths (:mod:`cadedge.mesh.parametric`)
 
     @property
     def sizes(self) -> tuple:
@@ -36,6 +37,8 @@ class Strategy:
 #: curvature size" replaces gmsh's curvature sizing (evaluated on the surface at every candidate point:
 #: about 1 ms a triangle on the twisted blade's lofted B-spline face, 20 s for 19k triangles) by one size
 #: from the face's sampled largest curvature (:func:`~cadedge.mesh.generate.uniform_curvature_size`).
+#: "parameters laid flat" meshes a face whose parameters are even on it as a plane face in them
+#: (:mod:`cadedge.mesh.parametric`), on the curves as they are: before any strategy changes them.
 STRATEGIES = (
     Strategy("Frontal-Delaunay", 6),
     Strategy("MeshAdapt", 1),
@@ -43,6 +46,7 @@ STRATEGIES = (
     Strategy("Frontal-Delaunay, one curvature size", 6, 1.0, False, False, True),
     Strategy("Frontal-Delaunay, finer sizes", 6, 0.5),
     Strategy("MeshAdapt, coarser sizes", 1, 2.0),
+    Strategy("parameters laid flat, Frontal-Delaunay", 6, unrolled="parameters"),
     Strategy("split boundary segments, Frontal-Delaunay", 6, 1.0, True),
     Strategy("split boundary segments, MeshAdapt", 1, 1.0, True),
     Strategy("gmsh's own curve mesh, Frontal-Delaunay", 6, 1.0, False, True),
@@ -53,11 +57,11 @@ STRATEGIES = (
     Strategy("unrolled extrusion, MeshAdapt", 1, unrolled="extrusion"),
     Strategy("grid", 0, unrolled="grid"),
 )
-#: The strategies of any face, in order (gmsh's), and of a cone with its apex on its boundary: unrolled
+#: The strategies of any face, in order (gmsh's, with the parameters laid flat), and of a cone with its apex on its boundary: unrolled
 #: right after the first (gmsh's meshers leave triangles overlapping beside the seam near the apex of
 #: narrow cones, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone at 1e-2, 60 s and more at
 #: 1e-3), then the others; a cone narrower than :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
-GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if not s.unrolled)
+GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled in ("", "parameters"))
 #: A cylinder between two circles whose boundary suits a grid (:func:`cadedge.mesh.gridded.layout`) is
 #: meshed as one first: its area deficit is its columns' polygon's, its triangles right-angled, and gmsh's
 #: time saved.

@@ -1,0 +1,175 @@
+"""Inside the gmsh job: a face gmsh's own meshers failed on, meshed in its own parameters laid flat at their
+scale, as a plane face in a model of its own (:func:`cadedge.mesh.flat.mesh_plane`).
+
+gmsh meshes a face in its parameters too, but a face on a periodic surface goes through its own periodic
+mesher (``meshGeneratorPeriodic`` in its ``meshGFace.cpp``), which gives up on some: the ventilator pump's
+face 704, a B-spline band 0.1 mm wide and 73 mm round, periodic along its length and closed by a seam of
+one segment, failed in every strategy with "Impossible to mesh periodic surface", and so did gmsh alone.
+Its parameters are uniform on it (the surface's derivatives vary by 0.5% over the face and are square to
+each other): laid out at their scale, ``x = |S_u| u`` and ``y = |S_v| v``, the face is a plane strip whose
+lengths and angles are the surface's to that share. Here its boundary nodes are laid out there, each curve
+at its own parameters on the face (a seam's nodes twice, once on each of its sides), the plane is meshed as
+a plane face, sized from its boundary and no coarser than the face's curvature asks
+(:func:`~cadedge.mesh.generate.uniform_curvature_size`), and the new nodes are evaluated on the surface at
+their parameters, so they lie on it exactly.
+
+Only faces whose parameters are that even are meshed so (:func:`scales`, :data:`MAX_STRETCH`,
+:data:`MAX_SHEAR`): elsewhere the plane's triangles would be stretched on the surface as the parameters
+are. It comes after gmsh's algorithms and sizes have failed, before the strategies that change the face's
+curve meshes (:data:`~cadedge.mesh.strategies.STRATEGIES`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .flat import add_triangles, boundary_sizes, mesh_plane
+
+#: The surface's derivative along each parameter is sampled on this many points a side of the face's
+#: parameter box.
+SAMPLES = 9
+#: The most the derivative along a parameter may vary over the face (largest over smallest): triangles laid
+#: out in the plane are stretched on the surface by up to this much.
+MAX_STRETCH = 1.5
+#: The largest cosine between the two derivatives: the parameters' skew (0.26: 15 degrees off square).
+MAX_SHEAR = 0.26
+#: Two places of one boundary node closer than this share of the face's narrower side in the plane are one
+#: place (its curves' parameters at it differ within their tolerances); a seam's node has two, a period
+#: apart.
+SAME_PLACE = 0.25
+
+
+def scales(surface: int) -> tuple[float, float, np.ndarray, np.ndarray] | str:
+    """The lengths per unit of gmsh ``surface``'s two parameters (their derivatives' medians over the face's
+    parameter box) and the box's corners (low, high); or why its parameters are too uneven to be laid flat
+    (:data:`MAX_STRETCH`, :data:`MAX_SHEAR`)."""
+    import gmsh
+
+    lo, hi = (np.asarray(b, dtype=float) for b in gmsh.model.getParametrizationBounds(2, surface))
+    u, v = np.meshgrid(np.linspace(lo[0], hi[0], SAMPLES), np.linspace(lo[1], hi[1], SAMPLES), indexing="ij")
+    try:
+        d = np.asarray(gmsh.model.getDerivative(2, surface, np.column_stack([u.ravel(), v.ravel()]).ravel().tolist()),
+                       dtype=float).reshape(-1, 6)
+    except Exception as err:  # gmsh's bare Exception: a surface it cannot evaluate
+        return f"its parameters cannot be evaluated ({err})"
+    du, dv = np.linalg.norm(d[:, :3], axis=1), np.linalg.norm(d[:, 3:], axis=1)
+    if not (np.all(np.isfinite(du)) and np.all(np.isfinite(dv)) and du.min() > 0 and dv.min() > 0):
+        return "its parameters degenerate on it (a pole)"
+    stretch = max(du.max() / du.min(), dv.max() / dv.min())
+    shear = float(np.max(np.abs(np.einsum("ij,ij->i", d[:, :3], d[:, 3:])) / (du * dv)))
+    if stretch > MAX_STRETCH or shear > MAX_SHEAR:
+        return (f"its parameters are too uneven to be laid flat (lengths vary {stretch:.3g}-fold, "
+                f"skew cosine {shear:.2g})")
+    return float(np.median(du)), float(np.median(dv)), lo, hi
+
+
+def _uses(surface: int) -> list[tuple[int, int]]:
+    """The curves bounding ``surface`` once per use, each with which of its parametrisations on the face that
+    use takes (0, or 1 for a seam's second side)."""
+    import gmsh
+
+    seen: dict[int, int] = {}
+    out = []
+    for _, c in gmsh.model.getBoundary([(2, surface)], combined=False, oriented=False):
+        c = abs(c)
+        out.append((c, seen.get(c, 0)))
+        seen[c] = seen.get(c, 0) + 1
+    return out
+
+
+def layout(surface: int, scale: tuple[float, float], lo: np.ndarray) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[tuple[int, int]]] | str:
+    """``surface``'s boundary nodes laid out in the plane of its parameters scaled by ``scale`` from ``lo``:
+    their places (n, 2), node tags (n,), parameters (n, 2), points (n, 3), and the boundary segments as
+    pairs of rows; or why not. A node has one place, or one per side of a seam it lies on."""
+    import gmsh
+
+    scale = np.array(scale, dtype=float)
+    ends = []  # per boundary segment: (tag, parameters, point) of its two ends
+    for curve, which in _uses(surface):
+        node_tags, coords, par = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
+        _, seg = gmsh.model.mesh.getElementsByType(1, curve)
+        if not len(seg) or len(par) != len(node_tags):
+            return "its boundary curves carry no nodes at their parameters"
+        node_tags = np.asarray(node_tags, dtype=np.int64)
+        xyz = np.asarray(coords, dtype=float).reshape(-1, 3)
+        uv = np.asarray(gmsh.model.reparametrizeOnSurface(1, curve, par, surface, which),
+                        dtype=float).reshape(-1, 2)
+        row = dict(zip(node_tags.tolist(), range(len(node_tags))))
+        # a closed curve's end node is listed twice with one parameter: it takes the curve's first or last,
+        # whichever the segment's other end is nearer
+        unique, count = np.unique(node_tags, return_counts=True)
+        closing = set(unique[count > 1].tolist())
+        both = (np.reshape(gmsh.model.reparametrizeOnSurface(
+            1, curve, np.ravel(gmsh.model.getParametrizationBounds(1, curve)).tolist(), surface, which),
+            (-1, 2)) if closing else None)
+        for a, b in np.asarray(seg, dtype=np.int64).reshape(-1, 2).tolist():
+            pa, pb = uv[row[a]], uv[row[b]]
+            if a in closing:
+                pa = both[np.argmin(np.linalg.norm((both - pb) * scale, axis=1))]
+            if b in closing:
+                pb = both[np.argmin(np.linalg.norm((both - pa) * scale, axis=1))]
+            ends.append(((a, pa, xyz[row[a]]), (b, pb, xyz[row[b]])))
+    if not ends:
+        return "its boundary curves carry no nodes"
+    extent = np.ptp((np.array([p for pair in ends for _, p, _ in pair]) - lo) * scale, axis=0)
+    near = SAME_PLACE * max(float(extent.min()), 1e-12 * float(extent.max()))
+    places: list[np.ndarray] = []
+    found_at: dict[int, list[int]] = {}  # node tag -> the rows of its places
+    rows_of: list[tuple[int, np.ndarray, np.ndarray]] = []
+    segments = []
+    for pair in ends:
+        rows = []
+        for tag, p, point in pair:
+            xy = (p - lo) * scale
+            found = next((r for r in found_at.get(tag, ()) if np.linalg.norm(places[r] - xy) <= near), None)
+            if found is None:
+                found = len(places)
+                places.append(xy)
+                rows_of.append((tag, p, point))
+                found_at.setdefault(tag, []).append(found)
+            rows.append(found)
+        if rows[0] != rows[1]:
+            segments.append((rows[0], rows[1]))
+    return (np.array(places, dtype=float), np.array([t for t, _, _ in rows_of], dtype=np.int64),
+            np.array([p for _, p, _ in rows_of], dtype=float), np.array([x for _, _, x in rows_of], dtype=float),
+            segments)
+
+
+def mesh_parametric(surface: int, algorithm: int) -> str | None:
+    """Mesh (empty) gmsh ``surface`` in its parameters laid flat (see the module doc) with gmsh's 2-D
+    ``algorithm``; None if it passed, else why not (the surface is then left empty)."""
+    import gmsh
+
+    from .generate import uniform_curvature_size
+    from .interior import SIZES
+
+    found = scales(surface)
+    if isinstance(found, str):
+        return found
+    su, sv, lo, _ = found
+    laid = layout(surface, (su, sv), lo)
+    if isinstance(laid, str):
+        return laid
+    plane, tags, params, coords, rows = laid
+    # a node far from where its curve's parameters put it on the face (more than a share of the face's
+    # width): the plane's boundary would not be the face's
+    points = np.reshape(gmsh.model.getValue(2, surface, params.ravel().tolist()), (-1, 3))
+    off = float(np.linalg.norm(points - coords, axis=1).max())
+    if off > SAME_PLACE * max(float(np.ptp(plane, axis=0).min()), 1e-12 * float(np.ptp(coords, axis=0).max())):
+        return f"its boundary nodes lie up to {off:.3g} from their curves' parameters on it"
+    per_circle = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") or SIZES.per_circle.get(surface, 0.0)
+    largest = gmsh.option.getNumber("Mesh.MeshSizeMax")
+    h = uniform_curvature_size(surface, per_circle) if per_circle > 0 else None
+    options = {"Mesh.MeshSizeFromCurvature": 0.0,
+               "Mesh.MeshSizeMax": largest if h is None else max(min(h, largest),
+                                                                  gmsh.option.getNumber("Mesh.MeshSizeMin"))}
+    got = mesh_plane(plane, rows, boundary_sizes(plane, rows), algorithm, lambda: None, options)
+    if isinstance(got, str):
+        return got.replace("unrolled", "laid flat")
+    flat, tri = got
+    uv = np.vstack([params, flat[len(plane):] / np.array([su, sv]) + lo])
+    new = np.reshape(gmsh.model.getValue(2, surface, uv[len(plane):].ravel().tolist()), (-1, 3))
+    all_tags = np.concatenate([tags, -np.ones(len(flat) - len(plane), dtype=np.int64)])
+    add_triangles(surface, all_tags, np.vstack([coords, new]), tri, uv)
+    return None
