@@ -40,6 +40,26 @@ def test_flip_edges_swaps_a_bad_diagonal_but_never_a_fixed_one():
     assert np.array_equal(flip_edges(x, tri, {(0, 1)}), tri)
 
 
+def test_a_sliver_capping_two_segments_is_swapped_away_beside_nodes_of_unknown_normal():
+    """A triangle capping two boundary segments of one edge that meet at 179.7 degrees (0.09 degrees; the
+    SolidWorks motor's face 106 at 1e-3, nodes as meshed) and its neighbour across the chord: two of the
+    new triangles' nodes have no known surface normal (a B-rep vertex, and the cap's apex), so the swap
+    is judged as across a ridge, by the old triangles' normals; the sliver's own normal no longer vetoes
+    it, its neighbour's passes it, and the worst angle rises from 0.09 to over 5 degrees. A swap whose new
+    triangles would stand off the surface still stops: the neighbour's far node raised well off the plane."""
+    x = np.array([[0.0, 0.0, 0.0], [0.0331, 0.0, 0.0003], [-0.0799, 0.0, -0.0003], [0.0045, -0.0084, -0.0003]])
+    tri = np.array([[0, 1, 2], [1, 3, 2]])
+    up = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+    fixed = {(0, 1), (0, 2)}  # the two boundary segments
+    assert triangle_angles(x, tri).min() < 0.1
+    flipped = flip_edges(x, tri, fixed, up=up)
+    assert triangle_angles(x, flipped).min() > 5.0
+    assert {tuple(sorted(t)) for t in flipped} == {(0, 1, 3), (0, 2, 3)}
+    ridge = x.copy()
+    ridge[3, 2] = 0.05  # the new triangles would turn about 80 degrees from their nodes' normals
+    assert np.array_equal(flip_edges(ridge, tri, fixed, up=up), tri)
+
+
 @pytest.mark.parametrize("mover", [smooth_nodes, climb_nodes], ids=["laplace", "climb"])
 def test_movers_raise_the_worst_angle_and_keep_boundary_nodes(mover):
     x, tri, inner = _grid()

@@ -33,6 +33,9 @@ FLIP_ROUNDS = 10
 #: 3 left in the final mesh), which the test against the sum of the old normals could not tell. A mesh
 #: at ALD 1e-2 bends about 28 degrees between neighbours on a curved face.
 FLIP_TURN = 45.0
+#: An old triangle with an angle under this many degrees is a sliver whose normal tells nothing of the
+#: surface: across a ridge a swap is judged by the other old triangle alone (see :func:`_swap_keeps_shape`).
+SLIVER_NORMAL = 1.0
 #: Rounds of :func:`untangle_nodes`; each moves at most one node per neighbourhood.
 UNTANGLE_ROUNDS = 8
 #: An unfolding move may leave the node's triangles no worse than their smallest angle before it or this
@@ -175,7 +178,8 @@ def _swap_keeps_shape(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray
 
     With the nodes' oriented surface normals ``up`` (:mod:`cadedge.mesh.folds`): each new triangle's
     normal within :data:`FLIP_TURN` degrees of its nodes' normals, where those agree; where they do not
-    (across a ridge), within :data:`FLIP_TURN` of both old triangles' normals. Without ``up``, the new
+    (across a ridge), within :data:`FLIP_TURN` of both old triangles' normals (of the other alone where one
+    is a sliver, :data:`SLIVER_NORMAL`). Without ``up``, the new
     triangles turn less than 90 degrees from the sum of the old ones' normals (a sliver's normal can
     point anywhere about its long edge, so only a face with trusted normals gets the stricter test)."""
     normals_new = [_normals(x, b) for b in new]
@@ -184,10 +188,14 @@ def _swap_keeps_shape(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray
         return (np.einsum("ij,ij->i", normals_new[0], ref) > 0) & (np.einsum("ij,ij->i", normals_new[1], ref) > 0)
     cos = np.cos(np.radians(FLIP_TURN))
     bend = np.ones(len(old[0]), dtype=bool)
-    for a in old:
+    # a sliver's normal can point anywhere about its long edge: it does not judge the bend, its
+    # neighbour's does (a triangle capping two segments of one edge at 179.7 degrees, 0.09 degrees, stayed
+    # beside a B-rep vertex whose nodes' normals made the swap a ridge's)
+    thin = [min_angles(x, a) < SLIVER_NORMAL for a in old]
+    for a, skip in zip(old, [thin[0] & ~thin[1], thin[1] & ~thin[0]]):
         na = _unit(_normals(x, a))
         for nb in normals_new:
-            bend &= np.einsum("ij,ij->i", na, _unit(nb)) > cos
+            bend &= skip | (np.einsum("ij,ij->i", na, _unit(nb)) > cos)
     ok = np.ones(len(old[0]), dtype=bool)
     ridge = np.zeros(len(old[0]), dtype=bool)
     for b, nb in zip(new, normals_new):
