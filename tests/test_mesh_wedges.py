@@ -294,6 +294,40 @@ def test_a_cusps_tips_reach_the_points_the_edges_were_refined_with_where_the_are
     assert result.report.min_angle > 8.0
 
 
+def _ringed_hole(width: float = 0.01):
+    """A disk of radius 3 and 2 thick whose top and bottom are each split into a ring ``width`` wide round a
+    disk face (a disk and a ring fused, not cleaned), with a hole of radius 1.2 touching the ring's inner
+    circle from inside: the disk faces narrow to cusps on that circle, the thin ring across it."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2
+
+    def cylinder(x: float, radius: float):
+        return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(x, 0, 0), gp_Dir(0, 0, 1)), radius, 2.0).Shape()
+
+    inner = 3.0 - width
+    ring = BRepAlgoAPI_Cut(cylinder(0.0, 3.0), cylinder(0.0, inner)).Shape()
+    body = BRepAlgoAPI_Fuse(cylinder(0.0, inner), ring).Shape()
+    return BRepAlgoAPI_Cut(body, cylinder(inner - 1.2, 1.2)).Shape()
+
+
+def test_a_cusps_tips_leave_the_thin_faces_across_them_no_sliver():
+    """A cusp's tips reach the points the edges were refined with only as far as the faces across them
+    keep triangles of ACROSS_DEG: the ring 0.01 wide across the cusps' circle had that circle's tips
+    lengthened past its width splits, and 7 triangles under 5 degrees (4.3), none forced by the B-rep
+    (the Fusion pump's plane 12 of *Files from elsewhere*: 24, the ring 0.05 wide, the tip 2.4). Now
+    only the cusps' own forced triangles are under 5 degrees, every face within the target."""
+    from cadedge.mesh import mesh_shape
+    from cadedge.mesh.wedges import ACROSS_DEG
+
+    assert ACROSS_DEG >= 5.0
+    result = mesh_shape(_ringed_hole(), ald=1e-2, workers=1)
+    assert result.ok, result.problems()
+    report = result.report
+    assert report.worst_deficit <= 1e-2 and report.unforced_slivers == 0
+    assert {a.face for a in report.small_angles} == {c.face for c in narrow_corners(list(result.grid.edges))}
+
+
 def test_a_cusps_tips_drop_the_points_the_growth_limit_put_there_within_the_edges_slack():
     """The refiner's growth limit grades an edge's segments from the shortest edge at each vertex: a fan's
     shroud, a cylinder band whose seam is cut 0.2 above the cusps where its circle touches the square's

@@ -73,6 +73,11 @@ CUSP_GAIN = 1.2
 #: put there, grading the segments from a short edge at the vertex): an edge may give up this share of
 #: what its grid has left below its arc-length deficit target (see :func:`_growth_points`).
 SLACK_SHARE = 0.5
+#: A cusp's tips reach the first points the edges were refined with only as far as leaves the faces across
+#: them no triangle under this many degrees (a tip ``L`` beside a strip ``w`` wide: ``atan(2 w / L)``): the
+#: Fusion pump's cusp at the circle of a ring 0.05 wide took that circle's first refined point, 2.4 away,
+#: and the ring 24 triangles under 5 degrees, none forced.
+ACROSS_DEG = 10.0
 #: Lengthened tips may move each face's area by at most this share of its target (the surface ALD times
 #: its B-rep area), all its corners' together: the chords of the longer tips cut off what the points
 #: dropped had followed.
@@ -322,7 +327,8 @@ def _growth_points(edges: list, c: Corner, sides: list, reach: list, kept: list,
     tips may be long, or one whose drop with all before it would use more than :data:`SLACK_SHARE` of
     what the edge's grid has left below its target (``targets``, by edge id; its true length from
     ``kept``, the edges as refined, and their deficit estimates); and how long the tips may be: up to
-    the first points kept before, and past them no more than :data:`JUMP_AIM` times the shortest first
+    the first points kept before (as far as the faces across keep triangles of :data:`ACROSS_DEG`), and
+    past them no more than :data:`JUMP_AIM` times the shortest first
     segment of the vertex's other edges (the faces across the tips see the jump between those and the
     tips), nor ``ratio`` times the width of a face across (:func:`_across_room`, measured only where the
     jump allows that much); nothing is freed where that is under :data:`CUSP_GAIN` times as far as the
@@ -340,8 +346,11 @@ def _growth_points(edges: list, c: Corner, sides: list, reach: list, kept: list,
     if cap >= CUSP_GAIN * before:  # the faces across measured only where the jump leaves something to gain
         cap = min([cap] + [_across_room(edges, c, k, side, dist, cap, ratio, near)
                            for (k, _), side, (dist, _, _) in zip(c.sides, sides, reach)])
-    if cap < CUSP_GAIN * before:
-        return reach, before  # not much longer than the points kept already reach
+    if cap < CUSP_GAIN * before:  # not much longer than the points kept already reach: up to those, as far
+        # as the faces across keep triangles of ACROSS_DEG
+        loose = 2.0 / np.tan(np.radians(ACROSS_DEG))
+        return reach, min([before] + [_across_room(edges, c, k, side, dist, before, loose, near)
+                                      for (k, _), side, (dist, _, _) in zip(c.sides, sides, reach)])
     out = []
     for (k, _), side, (dist, free, jumps) in zip(c.sides, sides, reach):
         e, ref = edges[k], kept[k]
