@@ -179,9 +179,9 @@ def _swap_keeps_shape(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray
     With the nodes' oriented surface normals ``up`` (:mod:`cadedge.mesh.folds`): each new triangle's
     normal within :data:`FLIP_TURN` degrees of its nodes' normals, where those agree; where they do not
     (across a ridge), within :data:`FLIP_TURN` of both old triangles' normals (of the other alone where one
-    is a sliver, :data:`SLIVER_NORMAL`). Without ``up``, the new
-    triangles turn less than 90 degrees from the sum of the old ones' normals (a sliver's normal can
-    point anywhere about its long edge, so only a face with trusted normals gets the stricter test)."""
+    is a sliver, :data:`SLIVER_NORMAL`). Without ``up``, the new triangles turn less than 90 degrees from
+    the sum of the old ones' normals (a sliver's normal can point anywhere about its long edge, so only a
+    face with trusted normals gets the stricter test)."""
     normals_new = [_normals(x, b) for b in new]
     if up is None:
         ref = _normals(x, old[0]) + _normals(x, old[1])

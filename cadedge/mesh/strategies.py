@@ -57,10 +57,11 @@ STRATEGIES = (
     Strategy("unrolled extrusion, MeshAdapt", 1, unrolled="extrusion"),
     Strategy("grid", 0, unrolled="grid"),
 )
-#: The strategies of any face, in order (gmsh's, with the parameters laid flat), and of a cone with its apex on its boundary: unrolled
-#: right after the first (gmsh's meshers leave triangles overlapping beside the seam near the apex of
-#: narrow cones, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone at 1e-2, 60 s and more at
-#: 1e-3), then the others; a cone narrower than :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
+#: The strategies of any face, in order (gmsh's, with the parameters laid flat), and of a cone with its
+#: apex on its boundary: unrolled right after the first (gmsh's meshers leave triangles overlapping beside
+#: the seam near the apex of narrow cones, each attempt taking seconds: 10 s a strategy on a 1 x 40 cone at
+#: 1e-2, 60 s and more at 1e-3), then the others; a cone narrower than
+#: :data:`~cadedge.mesh.developed.NARROW` is unrolled first.
 GMSH_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled in ("", "parameters"))
 #: A cylinder between two circles whose boundary suits a grid (:func:`cadedge.mesh.gridded.layout`) is
 #: meshed as one first: its area deficit is its columns' polygon's, its triangles right-angled, and gmsh's

@@ -328,11 +328,10 @@ def _growth_points(edges: list, c: Corner, sides: list, reach: list, kept: list,
     what the edge's grid has left below its target (``targets``, by edge id; its true length from
     ``kept``, the edges as refined, and their deficit estimates); and how long the tips may be: up to
     the first points kept before (as far as the faces across keep triangles of :data:`ACROSS_DEG`), and
-    past them no more than :data:`JUMP_AIM` times the shortest first
-    segment of the vertex's other edges (the faces across the tips see the jump between those and the
-    tips), nor ``ratio`` times the width of a face across (:func:`_across_room`, measured only where the
-    jump allows that much); nothing is freed where that is under :data:`CUSP_GAIN` times as far as the
-    points kept before reach.
+    past them no more than :data:`JUMP_AIM` times the shortest first segment of the vertex's other edges
+    (the faces across the tips see the jump between those and the tips), nor ``ratio`` times the width of
+    a face across (:func:`_across_room`, measured only where the jump allows that much); nothing is freed
+    where that is under :data:`CUSP_GAIN` times as far as the points kept before reach.
 
     The refiner's growth limit grades an edge's segments from the shortest one at each of its vertices: a
     fan's shroud, a cylinder whose seam is cut 0.2 above the cusps where its circle touches the square's
