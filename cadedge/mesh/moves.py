@@ -173,15 +173,15 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def _swap_keeps_shape(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray],
-                      up: np.ndarray | None) -> np.ndarray:
+                      up: np.ndarray | None, old_min: list[np.ndarray]) -> np.ndarray:
     """Whether swapping the diagonal of the triangle pairs ``old`` into ``new`` keeps the surface's shape.
 
     With the nodes' oriented surface normals ``up`` (:mod:`cadedge.mesh.folds`): each new triangle's
     normal within :data:`FLIP_TURN` degrees of its nodes' normals, where those agree; where they do not
     (across a ridge), within :data:`FLIP_TURN` of both old triangles' normals (of the other alone where one
-    is a sliver, :data:`SLIVER_NORMAL`). Without ``up``, the new triangles turn less than 90 degrees from
-    the sum of the old ones' normals (a sliver's normal can point anywhere about its long edge, so only a
-    face with trusted normals gets the stricter test)."""
+    is a sliver, :data:`SLIVER_NORMAL`; ``old_min``: the old triangles' smallest angles). Without ``up``, the
+    new triangles turn less than 90 degrees from the sum of the old ones' normals (a sliver's normal can
+    point anywhere about its long edge, so only a face with trusted normals gets the stricter test)."""
     normals_new = [_normals(x, b) for b in new]
     if up is None:
         ref = _normals(x, old[0]) + _normals(x, old[1])
@@ -191,7 +191,7 @@ def _swap_keeps_shape(x: np.ndarray, old: list[np.ndarray], new: list[np.ndarray
     # a sliver's normal can point anywhere about its long edge: it does not judge the bend, its
     # neighbour's does (a triangle capping two segments of one edge at 179.7 degrees, 0.09 degrees, stayed
     # beside a B-rep vertex whose nodes' normals made the swap a ridge's)
-    thin = [min_angles(x, a) < SLIVER_NORMAL for a in old]
+    thin = [a < SLIVER_NORMAL for a in old_min]
     for a, skip in zip(old, [thin[0] & ~thin[1], thin[1] & ~thin[0]]):
         na = _unit(_normals(x, a))
         for nb in normals_new:
@@ -278,13 +278,15 @@ def flip_edges(x: np.ndarray, tri: np.ndarray, fixed: set[tuple[int, int]], *,
             break
         new1 = np.column_stack([pa, pd, pc])
         new2 = np.column_stack([pd, pb, pc])
-        before = np.minimum(min_angles(x, tri[t1]), min_angles(x, tri[t2]))
+        old_min = [min_angles(x, tri[t1]), min_angles(x, tri[t2])]
+        before = np.minimum(*old_min)
         after = np.minimum(min_angles(x, new1), min_angles(x, new2))
         new_key = np.minimum(pc, pd) * (len(x) + 1) + np.maximum(pc, pd)
         ok = (after - before > 1e-6) & (pc != pd)
         ok[ok] = ~np.isin(new_key[ok], ks)  # the new diagonal already joins c and d (a fan at an apex): a flip
         # would stack a second pair of triangles on the existing ones
-        ok[ok] = _swap_keeps_shape(x, [tri[t1[ok]], tri[t2[ok]]], [new1[ok], new2[ok]], up)  # only swaps that gain
+        ok[ok] = _swap_keeps_shape(x, [tri[t1[ok]], tri[t2[ok]]], [new1[ok], new2[ok]], up,  # only swaps that gain
+                                   [a[ok] for a in old_min])
         gain = np.where(ok, after - before, 0.0)
         good = gain > 1e-6
         if not good.any():
