@@ -348,9 +348,20 @@ def _nearest_surfaces(grid: ShapeGrid, faces: list[int], free: dict[int, set[int
     return out
 
 
+def boundary_uses(surface: int) -> list[tuple[int, int]]:
+    """The curves bounding ``surface`` in gmsh's order, once per use, each with its use's number (0, or 1
+    for a seam's second side: gmsh's ``which`` for the curve's parametrisation on the face)."""
+    seen: dict[int, int] = {}
+    out = []
+    for _, t in gmsh.model.getBoundary([(2, surface)], combined=False, oriented=False):
+        out.append((abs(t), seen.get(abs(t), 0)))
+        seen[abs(t)] = out[-1][1] + 1
+    return out
+
+
 def surface_curve_uses(surface: int) -> dict[int, int]:
     """How many times each curve bounds ``surface`` (a seam bounds its face twice)."""
     uses: dict[int, int] = {}
-    for _, t in gmsh.model.getBoundary([(2, surface)], combined=False, oriented=False):
-        uses[abs(t)] = uses.get(abs(t), 0) + 1
+    for curve, k in boundary_uses(surface):
+        uses[curve] = k + 1
     return uses

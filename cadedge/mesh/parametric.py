@@ -63,20 +63,6 @@ def scales(surface: int) -> tuple[float, float, np.ndarray, np.ndarray] | str:
     return float(np.median(du)), float(np.median(dv)), lo, hi
 
 
-def _uses(surface: int) -> list[tuple[int, int]]:
-    """The curves bounding ``surface`` once per use, each with which of its parametrisations on the face that
-    use takes (0, or 1 for a seam's second side)."""
-    import gmsh
-
-    seen: dict[int, int] = {}
-    out = []
-    for _, c in gmsh.model.getBoundary([(2, surface)], combined=False, oriented=False):
-        c = abs(c)
-        out.append((c, seen.get(c, 0)))
-        seen[c] = seen.get(c, 0) + 1
-    return out
-
-
 def layout(surface: int, scale: tuple[float, float], lo: np.ndarray) -> tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[tuple[int, int]]] | str:
     """``surface``'s boundary nodes laid out in the plane of its parameters scaled by ``scale`` from ``lo``:
@@ -84,9 +70,11 @@ def layout(surface: int, scale: tuple[float, float], lo: np.ndarray) -> tuple[
     pairs of rows; or why not. A node has one place, or one per side of a seam it lies on."""
     import gmsh
 
+    from .gmsh_model import boundary_uses
+
     scale = np.array(scale, dtype=float)
     ends = []  # per boundary segment: (tag, parameters, point) of its two ends
-    for curve, which in _uses(surface):
+    for curve, which in boundary_uses(surface):
         node_tags, coords, par = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
         _, seg = gmsh.model.mesh.getElementsByType(1, curve)
         if not len(seg) or len(par) != len(node_tags):
