@@ -21,6 +21,8 @@ curve meshes (:data:`~cadedge.mesh.strategies.STRATEGIES`).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .flat import add_triangles, boundary_sizes, mesh_plane
@@ -63,65 +65,88 @@ def scales(surface: int) -> tuple[float, float, np.ndarray, np.ndarray] | str:
     return float(np.median(du)), float(np.median(dv)), lo, hi
 
 
-def layout(surface: int, scale: tuple[float, float], lo: np.ndarray) -> tuple[
-        np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[tuple[int, int]]] | str:
-    """``surface``'s boundary nodes laid out in the plane of its parameters scaled by ``scale`` from ``lo``:
-    their places (n, 2), node tags (n,), parameters (n, 2), points (n, 3), and the boundary segments as
-    pairs of rows; or why not. A node has one place, or one per side of a seam it lies on."""
+class Layout(NamedTuple):
+    """A face's boundary nodes laid out flat (:func:`layout`)."""
+
+    plane: np.ndarray  # (n, 2) places
+    tags: np.ndarray  # (n,) gmsh node tags
+    params: np.ndarray  # (n, 2) parameters on the face
+    coords: np.ndarray  # (n, 3) points
+    segments: np.ndarray  # (m, 2) the boundary segments, as pairs of rows
+    curves: np.ndarray  # (m, 2) per segment: its curve and use (gmsh's ``which``)
+    spans: np.ndarray  # (m, 2) per segment: its ends' parameters on its curve
+
+
+def layout(surface: int, scale: tuple[float, float], lo: np.ndarray) -> Layout | str:
+    """``surface``'s boundary nodes laid out in the plane of its parameters scaled by ``scale`` from ``lo``;
+    or why not. A node has one place, or one per side of a seam it lies on: its places within
+    :data:`SAME_PLACE` of the first are one."""
     import gmsh
 
     from .gmsh_model import boundary_uses
 
     scale = np.array(scale, dtype=float)
-    ends = []  # per boundary segment: (tag, parameters, point) of its two ends
+    ends: list[tuple[np.ndarray, ...]] = []  # per curve use, per segment: tags, parameters, points, curve, span
     for curve, which in boundary_uses(surface):
         node_tags, coords, par = gmsh.model.mesh.getNodes(1, curve, includeBoundary=True)
         _, seg = gmsh.model.mesh.getElementsByType(1, curve)
         if not len(seg) or len(par) != len(node_tags):
             return "its boundary curves carry no nodes at their parameters"
         node_tags = np.asarray(node_tags, dtype=np.int64)
+        seg = np.asarray(seg, dtype=np.int64).reshape(-1, 2)
         xyz = np.asarray(coords, dtype=float).reshape(-1, 3)
+        t = np.asarray(par, dtype=float)
         uv = np.asarray(gmsh.model.reparametrizeOnSurface(1, curve, par, surface, which),
                         dtype=float).reshape(-1, 2)
-        row = dict(zip(node_tags.tolist(), range(len(node_tags))))
+        by_tag = np.argsort(node_tags, kind="stable")
+        at = by_tag[np.searchsorted(node_tags[by_tag], seg, side="right") - 1]  # a tag's last listing
+        p, span = uv[at], t[at]
         # a closed curve's end node is listed twice with one parameter: it takes the curve's first or last,
-        # whichever the segment's other end is nearer
+        # whichever the segment's other end is nearer on the face (its place) and along the curve (its
+        # parameter: on a plane both ends are one place)
         unique, count = np.unique(node_tags, return_counts=True)
-        closing = set(unique[count > 1].tolist())
-        both = (np.reshape(gmsh.model.reparametrizeOnSurface(
-            1, curve, np.ravel(gmsh.model.getParametrizationBounds(1, curve)).tolist(), surface, which),
-            (-1, 2)) if closing else None)
-        for a, b in np.asarray(seg, dtype=np.int64).reshape(-1, 2).tolist():
-            pa, pb = uv[row[a]], uv[row[b]]
-            if a in closing:
-                pa = both[np.argmin(np.linalg.norm((both - pb) * scale, axis=1))]
-            if b in closing:
-                pb = both[np.argmin(np.linalg.norm((both - pa) * scale, axis=1))]
-            ends.append(((a, pa, xyz[row[a]]), (b, pb, xyz[row[b]])))
+        closing = unique[count > 1]
+        if len(closing):
+            bounds = np.ravel(gmsh.model.getParametrizationBounds(1, curve))
+            both = np.reshape(gmsh.model.reparametrizeOnSurface(1, curve, bounds.tolist(), surface, which), (-1, 2))
+            for k in np.flatnonzero(np.isin(seg, closing).any(axis=1)).tolist():
+                for end in (0, 1):
+                    if seg[k, end] in closing:
+                        p[k, end] = both[int(np.argmin(np.linalg.norm((both - p[k, 1 - end]) * scale, axis=1)))]
+                        span[k, end] = bounds[int(np.argmin(np.abs(bounds - span[k, 1 - end])))]
+                if np.isin(seg[k], closing).all():  # a closed curve of one segment: the whole way round
+                    span[k] = bounds
+        ends.append((seg, p, xyz[at], np.tile([curve, which], (len(seg), 1)), span))
     if not ends:
         return "its boundary curves carry no nodes"
-    extent = np.ptp((np.array([p for pair in ends for _, p, _ in pair]) - lo) * scale, axis=0)
+    seg, p, xyz, curves, spans = (np.concatenate(parts) for parts in zip(*ends))
+    tags, p, xyz = seg.ravel(), p.reshape(-1, 2), xyz.reshape(-1, 3)  # every segment end, in order
+    xy = (p - lo) * scale
+    extent = np.ptp(xy, axis=0)
     near = SAME_PLACE * max(float(extent.min()), 1e-12 * float(extent.max()))
-    places: list[np.ndarray] = []
-    found_at: dict[int, list[int]] = {}  # node tag -> the rows of its places
-    rows_of: list[tuple[int, np.ndarray, np.ndarray]] = []
-    segments = []
-    for pair in ends:
-        rows = []
-        for tag, p, point in pair:
-            xy = (p - lo) * scale
-            found = next((r for r in found_at.get(tag, ()) if np.linalg.norm(places[r] - xy) <= near), None)
-            if found is None:
-                found = len(places)
-                places.append(xy)
-                rows_of.append((tag, p, point))
-                found_at.setdefault(tag, []).append(found)
-            rows.append(found)
-        if rows[0] != rows[1]:
-            segments.append((rows[0], rows[1]))
-    return (np.array(places, dtype=float), np.array([t for t, _, _ in rows_of], dtype=np.int64),
-            np.array([p for _, p, _ in rows_of], dtype=float), np.array([x for _, _, x in rows_of], dtype=float),
-            segments)
+    # each end to a place: a tag's first end not yet placed starts one, which takes its ends within near
+    order = np.argsort(tags, kind="stable")
+    group = np.cumsum(np.r_[True, tags[order][1:] != tags[order][:-1]]) - 1
+    cluster = np.full(len(tags), -1, dtype=np.int64)  # per sorted end
+    starts: list[np.ndarray] = []
+    while (left := np.flatnonzero(cluster < 0)).size:
+        first = left[np.r_[True, group[left][1:] != group[left][:-1]]]
+        lead = np.empty(group[-1] + 1, dtype=np.int64)
+        lead[group[first]] = first
+        number = np.empty_like(lead)
+        number[group[first]] = sum(len(s) for s in starts) + np.arange(len(first))
+        take = left[np.linalg.norm(xy[order[left]] - xy[order[lead[group[left]]]], axis=1) <= near]
+        cluster[take] = number[group[take]]
+        starts.append(order[first])
+    start = np.concatenate(starts)  # each place's first end, by place number
+    rank = np.empty(len(start), dtype=np.int64)
+    rank[np.argsort(start, kind="stable")] = np.arange(len(start))  # places numbered as first met
+    row = np.empty(len(tags), dtype=np.int64)
+    row[order] = rank[cluster]
+    rows = row.reshape(-1, 2)
+    keep = rows[:, 0] != rows[:, 1]
+    first = np.sort(start)
+    return Layout(xy[first], tags[first], p[first], xyz[first], rows[keep], curves[keep], spans[keep])
 
 
 def mesh_parametric(surface: int, algorithm: int) -> str | None:
@@ -139,7 +164,8 @@ def mesh_parametric(surface: int, algorithm: int) -> str | None:
     laid = layout(surface, (su, sv), lo)
     if isinstance(laid, str):
         return laid
-    plane, tags, params, coords, rows = laid
+    plane, tags, params, coords, segments, _, _ = laid
+    rows = [tuple(r) for r in segments.tolist()]
     # a node far from where its curve's parameters put it on the face (more than a share of the face's
     # width): the plane's boundary would not be the face's
     points = np.reshape(gmsh.model.getValue(2, surface, params.ravel().tolist()), (-1, 3))
