@@ -16,6 +16,8 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from .tangles import cross_properly
+
 if TYPE_CHECKING:
     from .extruded import Extrusion
 
@@ -155,15 +157,6 @@ def graded_points(p: np.ndarray, q: np.ndarray, size_p: float, size_q: float, si
     return p + np.outer(at / max(length, 1e-300), q - p)
 
 
-def _crosses(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Whether the segment ``p``-``q`` properly crosses each segment ``a``-``b`` (rows)."""
-    def side(o, d, r):
-        return np.sign(d[..., 0] * (r[..., 1] - o[..., 1]) - d[..., 1] * (r[..., 0] - o[..., 0]))
-
-    return ((side(p, q - p, a) * side(p, q - p, b) < 0)
-            & (side(a, b - a, p) * side(a, b - a, q) < 0))
-
-
 def _inside(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
     """Whether ``point`` is inside the region bounded by segments ``a``-``b`` (rows): even-odd rule."""
     up = (a[:, 1] > point[1]) != (b[:, 1] > point[1])
@@ -194,7 +187,7 @@ def fold_lines(plane: np.ndarray, segments: list[tuple[int, int]], at: np.ndarra
         same = same[np.argsort(plane[same, 1])]
         for lo, hi in zip(same[:-1].tolist(), same[1:].tolist()):
             p, q = plane[lo], plane[hi]
-            if (tuple(sorted((lo, hi))) in known or _crosses(p, q, a, b).any()
+            if (tuple(sorted((lo, hi))) in known or cross_properly(p, q, a, b).any()
                     or not _inside(0.5 * (p + q), a, b)):
                 continue
             lines.append((lo, hi, f))

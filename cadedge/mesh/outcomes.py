@@ -20,13 +20,16 @@ class FaceFailure:
 
 @dataclass
 class FaceOutcome:
-    """How a face fared: the strategy that meshed it (``None``: failed) and every failed attempt's reason."""
+    """How a face fared: the strategy that meshed it (``None``: failed) and every failed attempt's reason;
+    ``tangles``, where its boundary crossed itself, as balls (centre, radius) round those places
+    (:func:`cadedge.mesh.parametric.tangle_zones`)."""
 
     face: int
     surface: int
     strategy: str | None = None
     attempts: list[tuple[str, str]] = field(default_factory=list)
     triangles: int = 0
+    tangles: list[tuple[tuple[float, float, float], float]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:

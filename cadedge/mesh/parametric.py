@@ -17,6 +17,10 @@ Only faces whose parameters are that even are meshed so (:func:`scales`, :data:`
 :data:`MAX_SHEAR`): elsewhere the plane's triangles would be stretched on the surface as the parameters
 are. It comes after gmsh's algorithms and sizes have failed, before the strategies that change the face's
 curve meshes (:data:`~cadedge.mesh.strategies.STRATEGIES`).
+
+A face whose boundary crosses itself, its edges crossing within their tolerance, is laid out the same way,
+its crossings undone in the plane only (:mod:`cadedge.mesh.tangles`), and meshed so before gmsh's
+strategies, which hang on it (:func:`crossed`, :data:`~cadedge.mesh.strategies.CROSSED_ORDER`).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .flat import add_triangles, boundary_sizes, mesh_plane
+from .tangles import crossings, untangle
 
 #: The surface's derivative along each parameter is sampled on this many points a side of the face's
 #: parameter box.
@@ -39,6 +44,17 @@ MAX_SHEAR = 0.26
 #: place (its curves' parameters at it differ within their tolerances); a seam's node has two, a period
 #: apart.
 SAME_PLACE = 0.25
+#: Gmsh surface -> where its boundary crossed itself when it was last meshed laid flat
+#: (:func:`tangle_zones`), for the report to name the triangles there (in the mesh process).
+TANGLED: dict[int, list[tuple[tuple[float, float, float], float]]] = {}
+#: :func:`crossed` traces crossing segments along their curves in this many pieces, then pieces this many
+#: times finer, :data:`LEVELS` times: two chords of curves that do not cross part as their sagittas shrink
+#: (256-fold a level), curves that cross still do. :data:`RING` neighbours each way along the boundary are traced too, and no
+#: more than :data:`MAX_TRACED` pieces.
+FINE = 16
+LEVELS = 3
+RING = 2
+MAX_TRACED = 200_000
 
 
 def scales(surface: int) -> tuple[float, float, np.ndarray, np.ndarray] | str:
@@ -149,6 +165,17 @@ def layout(surface: int, scale: tuple[float, float], lo: np.ndarray) -> Layout |
     return Layout(xy[first], tags[first], p[first], xyz[first], rows[keep], curves[keep], spans[keep])
 
 
+def laid_flat(surface: int) -> tuple[Layout, tuple[float, float], np.ndarray] | str:
+    """``surface``'s boundary laid out at its parameters' scale (:func:`scales`, :func:`layout`), the scale
+    and the parameters' low corner; or why not."""
+    found = scales(surface)
+    if isinstance(found, str):
+        return found
+    su, sv, lo, _ = found
+    laid = layout(surface, (su, sv), lo)
+    return laid if isinstance(laid, str) else (laid, (su, sv), lo)
+
+
 def mesh_parametric(surface: int, algorithm: int) -> str | None:
     """Mesh (empty) gmsh ``surface`` in its parameters laid flat (see the module doc) with gmsh's 2-D
     ``algorithm``; None if it passed, else why not (the surface is then left empty)."""
@@ -157,21 +184,23 @@ def mesh_parametric(surface: int, algorithm: int) -> str | None:
     from .generate import uniform_curvature_size
     from .interior import SIZES
 
-    found = scales(surface)
-    if isinstance(found, str):
-        return found
-    su, sv, lo, _ = found
-    laid = layout(surface, (su, sv), lo)
-    if isinstance(laid, str):
-        return laid
-    plane, tags, params, coords, segments, _, _ = laid
+    TANGLED.pop(surface, None)
+    got = laid_flat(surface)
+    if isinstance(got, str):
+        return got
+    (laid_at, tags, params, coords, segments, _, _), (su, sv), lo = got
     rows = [tuple(r) for r in segments.tolist()]
     # a node far from where its curve's parameters put it on the face (more than a share of the face's
     # width): the plane's boundary would not be the face's
     points = np.reshape(gmsh.model.getValue(2, surface, params.ravel().tolist()), (-1, 3))
     off = float(np.linalg.norm(points - coords, axis=1).max())
-    if off > SAME_PLACE * max(float(np.ptp(plane, axis=0).min()), 1e-12 * float(np.ptp(coords, axis=0).max())):
+    near = SAME_PLACE * max(float(np.ptp(laid_at, axis=0).min()), 1e-12 * float(np.ptp(coords, axis=0).max()))
+    if off > near:
         return f"its boundary nodes lie up to {off:.3g} from their curves' parameters on it"
+    untangled = untangle(laid_at, rows, near)  # a boundary crossing itself: meshed as if it did not
+    if isinstance(untangled, str):
+        return untangled
+    plane, places = untangled
     per_circle = gmsh.option.getNumber("Mesh.MeshSizeFromCurvature") or SIZES.per_circle.get(surface, 0.0)
     largest = gmsh.option.getNumber("Mesh.MeshSizeMax")
     h = uniform_curvature_size(surface, per_circle) if per_circle > 0 else None
@@ -186,4 +215,75 @@ def mesh_parametric(surface: int, algorithm: int) -> str | None:
     new = np.reshape(gmsh.model.getValue(2, surface, uv[len(plane):].ravel().tolist()), (-1, 3))
     all_tags = np.concatenate([tags, -np.ones(len(flat) - len(plane), dtype=np.int64)])
     add_triangles(surface, all_tags, np.vstack([coords, new]), tri, uv)
+    if places:
+        TANGLED[surface] = tangle_zones(coords, rows, places)
     return None
+
+
+def tangle_zones(coords: np.ndarray, segments: list[tuple[int, int]],
+                 places: list[np.ndarray]) -> list[tuple[tuple[float, float, float], float]]:
+    """Each place where a boundary crossed itself (rows of ``coords`` (n, 3), :func:`untangle`'s) as a
+    ball round it: the rows' centre and their furthest distance from it plus the longest boundary segment
+    at them, which the triangles there span."""
+    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    length = np.linalg.norm(coords[seg[:, 0]] - coords[seg[:, 1]], axis=1)
+    zones = []
+    for rows in places:
+        centre = coords[rows].mean(axis=0)
+        at = np.isin(seg, rows).any(axis=1)
+        radius = float(np.linalg.norm(coords[rows] - centre, axis=1).max()) + float(length[at].max(initial=0.0))
+        zones.append((tuple(float(c) for c in centre), radius))
+    return zones
+
+
+def crossed(surface: int) -> bool:
+    """Whether gmsh ``surface``'s boundary crosses itself in its parameters where its curves do, not only
+    their chords (:mod:`cadedge.mesh.tangles`): gmsh's meshers split crossing chords until they part, and
+    hang on curves that cross. The segments that cross, and :data:`RING` more along the boundary each way,
+    are traced along their curves in :data:`FINE` pieces and looked at again, those still crossing in
+    ``FINE`` times finer pieces, :data:`LEVELS` times. Only faces whose parameters can be laid flat are
+    looked at."""
+    got = laid_flat(surface)
+    if isinstance(got, str):
+        return False
+    laid, (su, sv), lo = got
+    pairs = crossings(laid.plane, laid.segments)
+    if pairs is None or not len(pairs):
+        return False
+    chosen = np.unique(pairs)
+    for level in range(1, LEVELS + 1):
+        for _ in range(RING):  # a crossing moves along the boundary as its chords follow their curves
+            chosen = np.flatnonzero(np.isin(laid.segments, laid.segments[chosen]).any(axis=1))
+        if len(chosen) * FINE ** level > MAX_TRACED:
+            break  # crossing still, too many pieces to look closer
+        traced, pieces = _traced(surface, laid, (su, sv), lo, chosen, FINE ** level)
+        again = crossings(traced, pieces)
+        if again is None:
+            break
+        if not len(again):
+            return False
+        chosen = chosen[np.unique(again) // FINE ** level]
+    return True
+
+
+def _traced(surface: int, laid: Layout, scale: tuple[float, float], lo: np.ndarray, chosen: np.ndarray,
+            fine: int) -> tuple[np.ndarray, np.ndarray]:
+    """Segments ``chosen`` (indices) of ``laid``'s boundary traced along their curves in ``fine`` pieces
+    each: the places (the layout's, then the points between) and the pieces as pairs of rows, ``fine`` a
+    segment in ``chosen``'s order."""
+    import gmsh
+
+    seg = np.asarray(laid.segments, dtype=np.int64)[chosen].reshape(-1, 2)
+    curves, spans = laid.curves[chosen], laid.spans[chosen]
+    inner = np.empty((len(seg), fine - 1, 2))
+    step = np.arange(1, fine) / fine
+    for curve, which in np.unique(curves, axis=0).tolist():
+        ks = np.flatnonzero((curves[:, 0] == curve) & (curves[:, 1] == which))
+        t = spans[ks, :1] + np.outer(spans[ks, 1] - spans[ks, 0], step)
+        uv = np.reshape(gmsh.model.reparametrizeOnSurface(1, curve, t.ravel().tolist(), surface, which), (-1, 2))
+        inner[ks] = ((uv - lo) * np.asarray(scale)).reshape(len(ks), fine - 1, 2)
+    n = len(laid.plane)
+    rows = n + np.arange(len(seg) * (fine - 1)).reshape(len(seg), fine - 1)
+    chain = np.column_stack([seg[:, :1], rows, seg[:, 1:]])
+    pieces = np.stack([chain[:, :-1], chain[:, 1:]], axis=-1).reshape(-1, 2)
+    return np.vstack([laid.plane, inner.reshape(-1, 2)]), pieces

@@ -251,7 +251,8 @@ def corner_angles(tri: np.ndarray, angles: np.ndarray, node: int, sides: set[tup
 def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.ndarray,
                  vertex_points: np.ndarray, angles: np.ndarray | None = None, *,
                  face_edges: Mapping[int, Sequence[np.ndarray]] | None = None,
-                 offsets: Mapping[int, Sequence[tuple[np.ndarray, float]]] | None = None) -> list[SmallAngle]:
+                 offsets: Mapping[int, Sequence[tuple[np.ndarray, float]]] | None = None,
+                 tangles: Mapping[int, Sequence[tuple[Sequence[float], float]]] | None = None) -> list[SmallAngle]:
     """Every triangle under :data:`SLIVER_DEG`, worst first.
 
     Forced: its face narrows to a corner sharper than :data:`SLIVER_DEG` at a B-rep vertex (a node at one
@@ -279,6 +280,10 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     (``offsets``: face id -> (the edge's grid polyline, ``d``) for such edges, measured by
     :func:`cadedge.occt.offsets.edge_offsets`), and the triangle is at most :data:`OFF_REACH` times
     ``d`` long.
+
+    Also forced: the triangle lies where its face's boundary crosses itself (``tangles``: face -> balls
+    (centre, radius) round such places, :func:`cadedge.mesh.parametric.tangle_zones`): its edges cross
+    within their tolerance, and the triangles between them fold or are squeezed.
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     ang = triangle_angles(nodes, tris) if angles is None else angles
@@ -367,5 +372,10 @@ def small_angles(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
             why = _off_boundary(p, float(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1).max()), offsets[f])
             if why is not None:
                 forced, reason = True, why
+        if not forced and tangles and f in tangles:
+            p = nodes[tris[t]]
+            if any(np.linalg.norm(p - np.asarray(c, dtype=float), axis=1).max() <= r for c, r in tangles[f]):
+                forced, reason = True, ("the face's boundary crosses itself there (its edges cross within their "
+                                        "tolerance): the triangles between them fold or are squeezed")
         out.append(SmallAngle(face=f, angle=float(ang[t].min()), forced=forced, reason=reason))
     return out

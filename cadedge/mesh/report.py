@@ -157,7 +157,8 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                  face_edges: dict[int, list[np.ndarray]] | None = None,
                  folded: dict[int, int] | None = None,
                  offsets: dict[int, list[tuple[np.ndarray, float]]] | None = None,
-                 gmsh_curves: dict[int, list[int]] | None = None) -> MeshReport:
+                 gmsh_curves: dict[int, list[int]] | None = None,
+                 tangles: dict[int, list[tuple[tuple[float, float, float], float]]] | None = None) -> MeshReport:
     """The report of a triangle mesh whose triangles carry B-rep face ids (``triangle_faces``, 1-based).
 
     ``failed`` maps faces that were not meshed to the reason; ``vertex_points`` are the B-rep vertices
@@ -174,7 +175,9 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
     surface (face -> how many); ``offsets`` the edges that lie off a face's boundary (face -> (grid
     polyline, distance), :func:`edge_polylines_off`: to tell small angles forced by such an edge);
     ``gmsh_curves`` the faces beside edges whose grid a fallback replaced by gmsh's own curve mesh (face ->
-    those edges): a face over target there is named for them.
+    those edges): a face over target there is named for them; ``tangles`` where a face's boundary
+    crossed itself (face -> balls, :attr:`~cadedge.mesh.outcomes.FaceOutcome.tangles`): small angles
+    there are forced.
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -214,7 +217,7 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
         faces.append(rec)
     measured = [abs(f.area_deficit) for f in faces if f.area_deficit is not None]
     smalls = small_angles(nodes, tris, tri_faces, np.zeros((0, 3)) if vertex_points is None else vertex_points,
-                          angles=angles, face_edges=face_edges, offsets=offsets) if len(tris) else []
+                          angles=angles, face_edges=face_edges, offsets=offsets, tangles=tangles) if len(tris) else []
     return MeshReport(surface_ald=surface_ald, faces=faces, triangles=len(tris),
                       min_angle=float(tri_min.min()) if len(tri_min) else None,
                       below_20=float(np.mean(tri_min < GOOD_DEG)) if len(tri_min) else 0.0,
@@ -303,7 +306,8 @@ def report_of(result, opts: dict) -> MeshReport | None:
                         budget_triangles=extras.get("budget_triangles"),
                         face_edges=face_edge_grids(result.grid),
                         folded=extras.get("folded"), offsets=edge_polylines_off(result.grid, measured),
-                        gmsh_curves=faces_beside(result.grid, result.own_mesh_edges))
+                        gmsh_curves=faces_beside(result.grid, result.own_mesh_edges),
+                        tangles={o.face: o.tangles for o in result.faces if o.tangles})
 
 
 def faces_beside(grid, edges: list[int]) -> dict[int, list[int]]:

@@ -73,6 +73,12 @@ NARROW_CONE_ORDER = UNROLLED + GMSH_ORDER
 #: A face of linear extrusion is meshed flat first: in the plane gmsh meets no parameters to distort (on
 #: a spline with sharp valleys it hung in its own, every strategy), and the triangles keep their shapes.
 EXTRUSION_ORDER = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "extrusion") + GMSH_ORDER
+#: A face whose boundary crosses itself in its parameters, its curves and not only their chords (edges
+#: crossing within their tolerance, :func:`cadedge.mesh.parametric.crossed`), is laid flat and untangled
+#: first: gmsh's meshers split the crossing segments again and again (the Fusion tyre's face 31 hung them
+#: 60 s, then 15 s a strategy, and was left failed).
+PARAMETERS = tuple(k for k, s in enumerate(STRATEGIES) if s.unrolled == "parameters")
+CROSSED_ORDER = PARAMETERS + tuple(k for k in GMSH_ORDER if k not in PARAMETERS)
 #: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
 #: would mesh it, on the imposed curves and on its own, sized as gmsh alone sizes them (from its boundary
 #: field: ``MeshJob.as_gmsh_alone``; on the grids' spacings two tees' run faces, whose wires cross at the
@@ -94,13 +100,17 @@ def invalid_face_skips(problems: dict[int, str]) -> dict[int, dict[int, str]]:
 
 def face_order(surface: int) -> tuple[int, ...]:
     """The strategies (indices into :data:`STRATEGIES`) gmsh surface ``surface`` is tried with, in order:
-    :data:`GRID_ORDER`, :data:`EXTRUSION_ORDER`, the cones' orders or :data:`GMSH_ORDER`."""
+    :data:`GRID_ORDER`, :data:`CROSSED_ORDER`, :data:`EXTRUSION_ORDER`, the cones' orders or
+    :data:`GMSH_ORDER`."""
     from .developed import NARROW, cone_of
     from .extruded import is_extrusion
     from .gridded import layout
+    from .parametric import crossed
 
     if not isinstance(layout(surface), str):
         return GRID_ORDER
+    if crossed(surface):
+        return CROSSED_ORDER
     cone = cone_of(surface)
     if cone is not None:
         return NARROW_CONE_ORDER if cone.sin < NARROW else APEX_CONE_ORDER

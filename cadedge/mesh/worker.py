@@ -411,6 +411,13 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
             except Exception as exc:  # the faces are meshed: the parent writes what they delivered
                 notes.append(f"gmsh's writer failed ({str(exc) or 'giving no reason'}); the mesh was written by meshio")
         extras = _hooks(ctx, "after_mesh")
+    from .parametric import TANGLED
+    from .strategies import STRATEGIES
+
+    flat = {st.name for st in STRATEGIES if st.unrolled == "parameters"}
+    for s, o in ctx.outcomes.items():  # where a face laid flat had its boundary cross itself
+        if o.strategy in flat and s in TANGLED:
+            o.tangles = TANGLED[s]
     tri_faces = np.array([face_of[int(s)] for s in raw.triangle_surfaces], dtype=np.int64)
     return JobResult(nodes=raw.nodes, triangles=raw.triangles, triangle_faces=tri_faces,
                      faces=sorted(ctx.outcomes.values(), key=lambda o: o.face), edge_pairs=pairs, edge_uses=uses,

@@ -1,0 +1,140 @@
+"""A face's boundary segments that cross where it is laid out flat, and the layout moved so that none do.
+
+A face whose edges cross each other within their tolerance has a boundary that crosses itself wherever its
+grids are laid out: the Fusion tyre's face 31, a plane lens 0.01 mm wide between a line and a B-spline that
+passes up to 0.003 mm to the other side of the line near both ends (tolerance 0.0018 mm). gmsh, meshing in the
+face's parameters, hung on it in every strategy (60 s, then 15 s each, and the face was left failed):
+splitting the crossing segments, as it does for the chords of two nearby curves, never ends when the curves
+themselves cross. :func:`crossings` finds the segments that cross (a sweep along the axis where fewer
+overlap), :func:`untangle` moves nodes in the layout only, each across the segment it crosses, until none
+cross. The plane region is then meshed and the nodes keep their places on the surface, so the few triangles
+at a crossing fold there, as the B-rep's own boundary does.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..grid import polygon_area
+from .flat import loops
+
+#: Pairs of segments whose boxes overlap along the sweep's axis past which :func:`crossings` gives up (a
+#: few hundred milliseconds of tests).
+MAX_PAIRS = 2_000_000
+#: Rounds of moves :func:`untangle` makes: a round moves one node per crossing, and the nodes beyond a
+#: crossing go back one a round.
+ROUNDS = 400
+
+
+def cross_properly(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Whether segments ``p``-``q`` properly cross segments ``a``-``b`` (points (..., 2), broadcast): each
+    has the other's ends strictly on both sides."""
+    def side(o, d, r):
+        return np.sign(d[..., 0] * (r[..., 1] - o[..., 1]) - d[..., 1] * (r[..., 0] - o[..., 0]))
+
+    return ((side(p, q - p, a) * side(p, q - p, b) < 0)
+            & (side(a, b - a, p) * side(a, b - a, q) < 0))
+
+
+def crossings(plane: np.ndarray, segments: list[tuple[int, int]] | np.ndarray, *,
+              limit: int = MAX_PAIRS) -> np.ndarray | None:
+    """The pairs of ``segments`` (rows of ``plane`` (n, 2)) that properly cross, as (k, 2) segment indices;
+    segments sharing a point are not tested. None when more than ``limit`` pairs would need testing."""
+    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    a, b = plane[seg[:, 0]], plane[seg[:, 1]]
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    best: tuple[np.ndarray, np.ndarray] | None = None
+    for axis in (0, 1):  # segments sorted by their start along the axis; each against those starting in it
+        order = np.argsort(lo[:, axis], kind="stable")
+        reach = np.searchsorted(lo[order, axis], hi[order, axis], side="right")
+        count = np.maximum(reach - np.arange(1, len(order) + 1), 0)
+        if best is None or count.sum() < best[1].sum():
+            best = (order, count)
+    order, count = best
+    total = int(count.sum())
+    if total > limit:
+        return None
+    first = np.repeat(np.arange(len(order)), count)
+    i = order[first]
+    j = order[first + 1 + np.arange(total) - np.repeat(np.cumsum(count) - count, count)]
+    keep = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+    keep &= ~(seg[i][:, :, None] == seg[j][:, None, :]).any(axis=(1, 2))
+    i, j = i[keep], j[keep]
+    hit = cross_properly(a[i], b[i], a[j], b[j])
+    return np.column_stack([i[hit], j[hit]])
+
+
+def inward(plane: np.ndarray, segments: list[tuple[int, int]]) -> np.ndarray | None:
+    """+1 where the region bounded by ``segments`` is left of a segment (run from its first row to its
+    second), -1 where it is right; None if they do not close into loops. The largest loop is the outer
+    one, the others holes."""
+    chains = loops(segments)
+    if not chains:
+        return None
+    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    areas = [polygon_area(plane[[seg[s, 0] if s >= 0 else seg[-s - 1, 1] for s in chain]]) for chain in chains]
+    outer = int(np.argmax(np.abs(areas)))
+    side = np.zeros(len(seg))
+    for k, chain in enumerate(chains):
+        left = areas[k] > 0 if k == outer else areas[k] < 0
+        for s in chain:
+            side[s if s >= 0 else -s - 1] = 1.0 if left == (s >= 0) else -1.0
+    return side
+
+
+def untangle(plane: np.ndarray, segments: list[tuple[int, int]], reach: float) -> tuple[
+        np.ndarray, list[np.ndarray]] | str:
+    """``plane`` (n, 2) with nodes moved so that no two ``segments`` cross, and the places where they
+    crossed: the rows of the segments that crossed, one array per place (segments crossing in turn as the
+    nodes went across, at one place); or why not. At each crossing, of the four ends the one beyond the
+    other segment by the least goes across that segment's line, as far inside as it was out; a round
+    moves each node once at most. No node goes further than ``reach`` from where it was. A boundary with
+    too many segments to look at (:data:`MAX_PAIRS`) is returned as it is."""
+    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    side = inward(plane, segments)
+    if side is None:
+        return "its boundary does not close"
+    x = np.array(plane, dtype=float)
+    extent = float(np.ptp(x, axis=0).max()) if len(x) else 0.0
+    owner = np.arange(len(x))  # union-find over the rows of segments that crossed
+    took_part = np.zeros(len(x), dtype=bool)
+
+    def root(i: int) -> int:
+        while owner[i] != i:
+            owner[i] = owner[owner[i]]
+            i = int(owner[i])
+        return i
+
+    for round_ in range(ROUNDS):
+        pairs = crossings(x, seg)
+        if pairs is None and not round_:
+            return x, []  # too many to look at: gmsh's mesher will tell
+        if pairs is None:
+            return "too many boundary segments to look for crossings"
+        if not len(pairs):
+            involved = np.flatnonzero(took_part)
+            roots = np.array([root(int(i)) for i in involved], dtype=np.int64)
+            return x, [involved[roots == r] for r in np.unique(roots)]
+        moved: set[int] = set()
+        for s, t in pairs.tolist():
+            ends = seg[[s, t]].ravel().tolist()
+            took_part[ends] = True
+            for i in ends[1:]:
+                owner[root(i)] = root(ends[0])
+            best = None
+            for mine, other in ((s, t), (t, s)):
+                a, b = x[seg[other, 0]], x[seg[other, 1]]
+                d = b - a
+                n = side[other] * np.array([-d[1], d[0]]) / max(float(np.hypot(*d)), 1e-300)
+                for node in seg[mine].tolist():
+                    out = -float((x[node] - a) @ n)  # how far beyond the other segment's line
+                    if out > 0 and node not in moved and (best is None or out < best[0]):
+                        best = (out, node, n)
+            if best is not None:
+                out, node, n = best
+                x[node] += (2.0 * out + 1e-9 * extent) * n
+                moved.add(node)
+        far = float(np.linalg.norm(x - plane, axis=1).max())
+        if far > reach:
+            return f"its boundary crosses itself too deep to untangle ({far:.2g} across, more than {reach:.2g})"
+    return f"its boundary still crosses itself after {ROUNDS} rounds of moves"
