@@ -49,8 +49,8 @@ SAME_PLACE = 0.25
 TANGLED: dict[int, list[tuple[tuple[float, float, float], float]]] = {}
 #: :func:`crossed` traces crossing segments along their curves in this many pieces, then pieces this many
 #: times finer, :data:`LEVELS` times: two chords of curves that do not cross part as their sagittas shrink
-#: (256-fold a level), curves that cross still do. :data:`RING` neighbours each way along the boundary are traced too, and no
-#: more than :data:`MAX_TRACED` pieces.
+#: (256-fold a level), curves that cross still do. :data:`RING` neighbours each way along the boundary are
+#: traced too, and no more than :data:`MAX_TRACED` pieces.
 FINE = 16
 LEVELS = 3
 RING = 2
