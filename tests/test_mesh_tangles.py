@@ -88,11 +88,10 @@ def _crossing_lens_face(dip: float):
     from OCP.BRepCheck import BRepCheck_Analyzer
     from OCP.GeomAPI import GeomAPI_PointsToBSpline
     from OCP.gp import gp_Ax3, gp_Dir, gp_Pln, gp_Pnt
-    from OCP.TColgp import TColgp_Array1OfPnt
     from OCP.TopAbs import TopAbs_EDGE
     from OCP.TopExp import TopExp_Explorer
 
-    from cadedge.occt.compat import TopoDS
+    from cadedge.occt.compat import TColgp_Array1OfPnt, TopoDS
 
     builder = BRep_Builder()
     ends = [BRepBuilderAPI_MakeVertex(gp_Pnt(x, 0.0, 0.0)).Vertex() for x in (0.0, LENGTH)]
