@@ -40,6 +40,15 @@ def loops(segments: list[tuple[int, int]]) -> list[list[int]] | None:
     return found
 
 
+def loop_areas(plane: np.ndarray, segments, chains: list[list[int]]) -> list[float]:
+    """The signed area of each of ``chains`` (:func:`loops` of ``segments``, pairs of rows of ``plane``
+    (n, 2)), walked the way it runs: the largest is the outer loop, the others holes."""
+    from ..grid import polygon_area
+
+    return [polygon_area(plane[[segments[i][0] if i >= 0 else segments[-i - 1][1] for i in chain]])
+            for chain in chains]
+
+
 def boundary_sizes(plane: np.ndarray, segments: list[tuple[int, int]]) -> np.ndarray:
     """Each point of ``plane`` (n, 2) sized as the mean length of the ``segments`` (row pairs) at it: gmsh
     carries these sizes inwards (``Mesh.MeshSizeExtendFromBoundary``)."""
@@ -63,7 +72,6 @@ def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndar
     why not."""
     import gmsh
 
-    from ..grid import polygon_area
     from .generate import OLD_INITIAL_FROM
 
     chains = loops(segments)
@@ -80,9 +88,7 @@ def mesh_plane(plane: np.ndarray, segments: list[tuple[int, int]], near: np.ndar
             gmsh.option.setNumber(o, value)
         points = [gmsh.model.geo.addPoint(px, py, 0.0, h) for (px, py), h in zip(plane, near)]
         lines = [gmsh.model.geo.addLine(points[a], points[b]) for a, b in segments]
-        areas = [polygon_area(plane[[segments[i][0] if i >= 0 else segments[-i - 1][1] for i in loop]])
-                 for loop in chains]
-        outer = int(np.argmax(np.abs(areas)))
+        outer = int(np.argmax(np.abs(loop_areas(plane, segments, chains))))
         curve_loops = [gmsh.model.geo.addCurveLoop([lines[i] if i >= 0 else -lines[-i - 1] for i in chains[k]])
                        for k in [outer] + [k for k in range(len(chains)) if k != outer]]
         surface = gmsh.model.geo.addPlaneSurface(curve_loops)

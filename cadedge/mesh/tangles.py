@@ -15,8 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..grid import polygon_area
-from .flat import loops
+from .flat import loop_areas, loops
 
 #: Pairs of segments whose boxes overlap along the sweep's axis past which :func:`crossings` gives up (a
 #: few hundred milliseconds of tests).
@@ -71,10 +70,9 @@ def inward(plane: np.ndarray, segments: list[tuple[int, int]]) -> np.ndarray | N
     chains = loops(segments)
     if not chains:
         return None
-    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
-    areas = [polygon_area(plane[[seg[s, 0] if s >= 0 else seg[-s - 1, 1] for s in chain]]) for chain in chains]
+    areas = loop_areas(plane, segments, chains)
     outer = int(np.argmax(np.abs(areas)))
-    side = np.zeros(len(seg))
+    side = np.zeros(len(segments))
     for k, chain in enumerate(chains):
         left = areas[k] > 0 if k == outer else areas[k] < 0
         for s in chain:
