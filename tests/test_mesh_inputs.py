@@ -171,3 +171,46 @@ def test_edges_are_excused_by_how_far_they_lie_from_their_faces_not_by_their_tol
     offsets = edge_offsets(gapped.shape, gapped.edges, range(1, 7))
     far = [d for per_face in offsets.values() for d in per_face.values()]
     assert len(far) == 24 and 0.005 < max(far) <= max(e.tolerance for e in gapped.edges)
+
+
+def _bow_tie_walls():
+    """The walls of a prism over a bow-tie (an open shell of six rectangles in a ring): its outline passes
+    the waist twice, by two vertices there, so the ring touches itself along a line as two vertical edges
+    lying on each other, each bounding two walls."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeVertex
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
+    from OCP.gp import gp_Pnt, gp_Vec
+    from OCP.TopoDS import TopoDS_Wire
+
+    corners = [(1, 1), (0, 0), (0, 2), (1, 1), (2, 2), (2, 0)]  # the waist, twice
+    vertices = [BRepBuilderAPI_MakeVertex(gp_Pnt(x, y, 0)).Vertex() for x, y in corners]
+    builder, wire = BRep_Builder(), TopoDS_Wire()  # not BRepBuilderAPI_MakeWire: it merges the two
+    builder.MakeWire(wire)
+    for a, b in zip(vertices, vertices[1:] + vertices[:1]):
+        builder.Add(wire, BRepBuilderAPI_MakeEdge(a, b).Edge())
+    wire.Closed(True)
+    return BRepPrimAPI_MakePrism(wire, gp_Vec(0, 0, 1)).Shape()
+
+
+def test_a_shell_touching_itself_along_a_line_is_no_crack(tmp_path):
+    """Two edges of one shell lying on each other (a Fusion hub motor's spokes, a wind turbine stand's
+    blocks, both closed solids) carry nodes at the same coordinates, apart as the B-rep has them: the
+    check called them a crack and a valid file ended with exit 1. They are named in a note instead."""
+    from cadedge.mesh.check import twin_points
+
+    result = mesh_shape(_bow_tie_walls(), ald=1e-2, max_length=0.25, timeout=120)
+    waist = [e for e in result.grid.edges if np.allclose(e.points[:, :2], 1.0)]
+    assert len(waist) == 2 and all(len(e.faces) == 2 for e in waist)
+    points, pairs = twin_points(result.grid.edges)
+    assert pairs == [tuple(sorted(e.id for e in waist))]
+    common = {tuple(p) for p in waist[0].points} & {tuple(p) for p in waist[1].points}
+    assert len(points) == len(common) >= 3 and np.allclose(points[:, :2], 1.0)  # ends and inner points
+    assert result.ok, result.problems(verbose=True)
+    assert len(result.check.shells) == 1  # one ring of walls, open at top and bottom
+    at_waist = np.all(result.nodes[:, :2] == 1.0, axis=1)
+    assert at_waist.sum() == 2 * len(points) and result.check.duplicate_nodes == 0  # apart, as in the B-rep
+    assert any("lie one on the other" in n and "%d with %d" % pairs[0] in n for n in result.notes)
+    from cadedge.mesh import check_mesh
+
+    assert check_mesh(result.nodes, result.triangles, grid=result.grid).ok  # raw arrays too

@@ -230,7 +230,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from ..occt.empty import without_empty
     from ..occt.sameparam import in_step
     from ..occt.topology import Topology
-    from .check import check_triangles
+    from .check import check_triangles, twin_points
     from .coincident import meshed_as, merged_shape
     from .gmsh_model import shape_to_brep
     from .isolate import run_isolated
@@ -263,6 +263,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         failures = _with_brep_checks([FaceFailure(face=o.face, surface=o.surface, reason=o.reason())
                                       for o in faces if not o.ok], invalid)
     check = None
+    twins, twin_edges = twin_points(meshed.edges)
     if len(res.triangles):
         say("checking the mesh")
         failed = {f.face for f in failures}
@@ -274,8 +275,13 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
             grid_points = np.vstack(pts) if pts else np.zeros((0, 3))
         multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
         check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
-                                grid_points=grid_points, edge_multiplicity=multiplicity)
+                                grid_points=grid_points, edge_multiplicity=multiplicity, twins=twins)
     notes = list(res.notes)
+    if twin_edges:
+        pairs = ", ".join(f"{a} with {b}" for a, b in twin_edges[:10])
+        more = f" ({len(twin_edges)} pairs in all)" if len(twin_edges) > 10 else ""
+        notes.append(f"edges that lie one on the other (the B-rep touches itself there; their nodes coincide, "
+                     f"not joined): {pairs}{more}")
     if coincident:
         pairs = ", ".join(f"{v} with {k}" for v, k in sorted(coincident.items()))
         notes.append(f"vertices of one face at one point, meshed as one node: {pairs}")
@@ -348,7 +354,7 @@ def check_mesh(result_or_nodes: MeshResult | np.ndarray, triangles: np.ndarray |
     For raw arrays, ``grid`` (optional) adds the every-edge-grid-node-is-a-mesh-node test; boundary edges
     are then only expected where a grid edge bounds a single face.
     """
-    from .check import check_triangles
+    from .check import check_triangles, twin_points
 
     if isinstance(result_or_nodes, MeshResult):
         if result_or_nodes.check is None:
@@ -359,10 +365,13 @@ def check_mesh(result_or_nodes: MeshResult | np.ndarray, triangles: np.ndarray |
     nodes = np.asarray(result_or_nodes, dtype=float)
     grid_points = None
     multiplicity = None
+    twins = None
     if grid is not None:
         grid_points = _face_grid_points(grid)
         multiplicity = _multiplicity_from_grid(nodes, grid)
-    return check_triangles(nodes, triangles, grid_points=grid_points, edge_multiplicity=multiplicity)
+        twins = twin_points(grid.edges)[0]
+    return check_triangles(nodes, triangles, grid_points=grid_points, edge_multiplicity=multiplicity,
+                           twins=twins)
 
 
 def _face_grid_points(grid: ShapeGrid) -> np.ndarray:
@@ -372,22 +381,24 @@ def _face_grid_points(grid: ShapeGrid) -> np.ndarray:
 
 
 def _multiplicity_from_grid(nodes: np.ndarray, grid: ShapeGrid) -> dict[tuple[int, int], int]:
-    """Expected triangle counts of grid segments found in a raw mesh (by exact coordinates)."""
+    """Expected triangle counts of grid segments found in a raw mesh (by exact coordinates; where several
+    nodes share a point, as on two B-rep edges lying on each other, every pair of them)."""
     from .check import row_keys
 
     keys = row_keys(nodes)
     order = np.argsort(keys)
+    ordered = keys[order]
     out: dict[tuple[int, int], int] = {}
     for e in grid.edges:
         if e.degenerate:
             continue
         k = row_keys(e.points)
-        pos = np.clip(np.searchsorted(keys[order], k), 0, len(order) - 1)
-        idx = np.where(keys[order][pos] == k, order[pos], -1)
+        lo, hi = np.searchsorted(ordered, k, side="left"), np.searchsorted(ordered, k, side="right")
         n = len(e.faces) if len(e.faces) > 1 else 0  # one face: free boundary or seam, both fine
-        for a, b in np.sort(np.column_stack([idx[:-1], idx[1:]]), axis=1):
-            if a >= 0:
-                out[(int(a), int(b))] = n
+        for i in range(len(k) - 1):
+            for a in order[lo[i]:hi[i]]:
+                for b in order[lo[i + 1]:hi[i + 1]]:
+                    out[(int(min(a, b)), int(max(a, b)))] = n
     return out
 
 

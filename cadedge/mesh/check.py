@@ -5,7 +5,8 @@ shared by exactly two triangles, except edges on B-rep edges that bound fewer or
 boundaries of open shells are expected once; non-manifold edges as often as they have faces). Nodes at
 identical coordinates under different tags within one shell are a hidden crack and fail the check
 (separate shells may touch; nodes that all lie on free-boundary segments of B-rep edges are a gap of the
-input itself, as where an IGES face's seam is two edges). Every edge-grid point must be a node of some
+input itself, as where an IGES face's seam is two edges; nodes at points two B-rep edges or vertices
+share, :func:`twin_points`, are the input's own too: a solid that touches itself along a line). Every edge-grid point must be a node of some
 triangle, at exactly its coordinates. Quality is reported, not judged: the minimum angle, the share of triangles under
 :data:`SMALL_ANGLE` degrees and the faces that hold them (worst first).
 """
@@ -109,15 +110,43 @@ def small_angles(angles: np.ndarray, tri_faces: np.ndarray) -> tuple[float, list
     return float(small.mean()), [(int(faces[i]), int(counts[i]), float(worst[i])) for i in order]
 
 
+def twin_points(edges: list) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """The points that two of the B-rep's own edges or vertices share (its edge grids' inner points, by
+    edge; their end points, by vertex), and the pairs of edges that share them (by id, each pair once).
+    A solid may touch itself along a line as two edges at one place, each bounding two faces (a Fusion
+    hub motor's spokes, 1.75 long: four such pairs); their nodes are apart in any mesh true to it."""
+    keys, owners = [], []
+    for e in edges:
+        if e.degenerate or not len(e.points):
+            continue
+        inner = np.full(len(e.points), e.id, dtype=np.int64)
+        if len(e.vertices) >= 2:  # ends by vertex (negative, apart from edge ids)
+            inner[0], inner[-1] = -1 - e.vertices[0], -1 - e.vertices[-1]
+        keys.append(row_keys(e.points))
+        owners.append(inner)
+    if not keys:
+        return np.zeros((0, 3)), []
+    _, first, index = np.unique(np.concatenate(keys), return_index=True, return_inverse=True)
+    held = np.unique(np.column_stack([index.ravel(), np.concatenate(owners)]), axis=0)  # (point, owner) once
+    at, counts = np.unique(held[:, 0], return_counts=True)
+    both = (held[:-1, 0] == held[1:, 0]) & (held[:-1, 1] > 0) & (held[1:, 1] > 0)  # inner points of two edges
+    twins = np.unique(np.column_stack([held[:-1, 1][both], held[1:, 1][both]]), axis=0)
+    points = np.vstack([e.points for e in edges if not e.degenerate and len(e.points)])
+    return points[first[at[counts > 1]]], [(int(a), int(b)) for a, b in twins]
+
+
 def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces: np.ndarray | None = None,
                     grid_points: np.ndarray | None = None,
-                    edge_multiplicity: dict[tuple[int, int], int] | None = None) -> MeshCheck:
+                    edge_multiplicity: dict[tuple[int, int], int] | None = None,
+                    twins: np.ndarray | None = None) -> MeshCheck:
     """Check a triangle mesh: ``nodes`` (n, 3), ``triangles`` (m, 3) 0-based indices into ``nodes``.
 
     ``triangle_faces`` gives each triangle's B-rep face id (for the report); ``grid_points`` the edge-grid
     points that must be mesh nodes; ``edge_multiplicity`` maps a sorted node-index pair on a B-rep edge to
     the number of triangles it should have (1 on a free boundary, 2 normally, more on non-manifold edges,
     0 for "1 or 2": a single-face edge not known to be a seam); any other mesh edge must have exactly two.
+    ``twins``: points (k, 3) the B-rep holds more than once (:func:`twin_points`), where coinciding nodes
+    are no crack.
     """
     nodes = np.asarray(nodes, dtype=float)
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -171,6 +200,8 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
                                                return_counts=True)
         inner = np.zeros(len(dup_counts), dtype=bool)  # a copy not on a free boundary: a crack of the mesh
         np.logical_or.at(inner, dup_inverse.ravel(), ~on_free[comp_nodes])
+        if twins is not None and len(twins):  # unless two of the B-rep's own edges or vertices hold it
+            inner[np.unique(dup_inverse.ravel()[np.isin(row_keys(nodes[comp_nodes]), row_keys(twins))])] = False
         n_dup += int(((dup_counts > 1) & inner).sum())
     if n_dup:
         problems.append(f"{n_dup} coordinates carry more than one mesh node within a shell (a crack between faces)")
