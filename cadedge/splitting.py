@@ -71,6 +71,9 @@ def split_evenly(params: np.ndarray, pieces: np.ndarray) -> np.ndarray:
 
 #: Samples per piece along which :func:`split_by_arc` measures a segment's arc.
 ARC_SAMPLES = 8
+#: :func:`cut_by_arc` leaves whole a segment the curve spans under this share of (its chord is mostly the
+#: gap between a vertex and its curve's end).
+GAP_SHARE = 0.5
 
 
 def split_by_arc(params: np.ndarray, points: np.ndarray, pieces: np.ndarray,
@@ -97,7 +100,11 @@ def cut_by_arc(params: np.ndarray, points: np.ndarray, cuts: dict[int, np.ndarra
     """Parameters and points cutting segment ``k`` at the shares ``cuts[k]`` (increasing, in (0, 1)) of its
     arc length (the interior cuts only, in order), the arc measured along :data:`ARC_SAMPLES` samples per
     piece. The grid's own end points stand for the samples at the segment's ends (a vertex may lie a
-    tolerance off its curve)."""
+    tolerance off its curve). A segment the curve itself spans under :data:`GAP_SHARE` of is left whole:
+    it is mostly the gap between a vertex and a curve ending off it, which no point on the curve divides
+    (a Fusion caster part's B-spline ends 0.005 from its vertex, within the vertex's tolerance: cut in
+    eight, that last segment's points fell 1e-14 apart at the curve's end, the face-wise grading took that
+    for a spacing, and gmsh hung meshing the face beside it at sizes of 3e-14)."""
     split = sorted(k for k, f in cuts.items() if len(f))
     if not split:
         return np.zeros(0), np.zeros((0, points.shape[1]))
@@ -105,16 +112,20 @@ def cut_by_arc(params: np.ndarray, points: np.ndarray, cuts: dict[int, np.ndarra
     intervals[split] = [(len(cuts[k]) + 1) * ARC_SAMPLES for k in split]
     inner = split_evenly(params, intervals)  # the dense samples' parameters, segment after segment
     samples = evaluate(inner)
+    own = evaluate(np.concatenate([params[split], params[np.asarray(split) + 1]])).reshape(2, len(split), -1)
     new_u, start = [], 0
-    for k in split:
+    for j, k in enumerate(split):
         m = intervals[k] - 1
         u = np.concatenate([[params[k]], inner[start:start + m], [params[k + 1]]])
-        arc = np.concatenate([[0.0], np.cumsum(row_norms(np.diff(
-            np.vstack([points[k], samples[start:start + m], points[k + 1]]), axis=0)))])
-        new_u.append(np.interp(arc[-1] * np.asarray(cuts[k], dtype=float), arc, u))
+        between = samples[start:start + m]
         start += m
-    u = np.concatenate(new_u)
-    return u, evaluate(u)
+        arc = np.concatenate([[0.0], np.cumsum(row_norms(np.diff(np.vstack([points[k], between, points[k + 1]]),
+                                                                  axis=0)))])
+        if polyline_length(np.vstack([own[0, j], between, own[1, j]])) < GAP_SHARE * arc[-1]:
+            continue  # mostly a vertex's gap to its curve: left whole
+        new_u.append(np.interp(arc[-1] * np.asarray(cuts[k], dtype=float), arc, u))
+    u = np.concatenate(new_u) if new_u else np.zeros(0)
+    return u, (evaluate(u) if len(u) else np.zeros((0, points.shape[1])))
 
 
 def fits_curve(params: np.ndarray, points: np.ndarray, evaluate: Evaluate, tolerance: float) -> bool:

@@ -129,6 +129,31 @@ def test_face_grading_cuts_a_grid_ending_off_its_curve_within_its_vertices_toler
     assert grade_faces(off).edges[seam].segments == graded > 1
 
 
+def test_face_grading_leaves_a_vertex_gap_to_its_curve_whole():
+    """A grid whose curve ends off its vertex (within the vertex's tolerance) has a last segment that is
+    mostly that gap: cut by arc, its points fell at the curve's end, 1e-14 apart on a Fusion caster part,
+    and the grading took them for a spacing. Here the 20 x 2 cylinder's seam ends 6 from its line's end
+    (vertices' tolerance 1): the gap stays one segment, the seam is graded as before, no piece is short."""
+    import dataclasses
+
+    import cadedge
+    from cadedge.mesh.grading import grade_faces
+    from cadedge.shapegrid import with_edges
+
+    grid = cadedge.refine_shape(cq.Workplane().cylinder(20.0, 2.0).val(), ald=1e-2)
+    seam = next(i for i, e in enumerate(grid.edges) if e.curve == "Line")
+    e = grid.edges[seam]
+    (u0, u1), (p0, p1) = e.params, e.points
+    gap = np.cross(p1 - p0, [0.0, 0.0, 1.0] if abs((p1 - p0)[2]) < 0.9 * np.linalg.norm(p1 - p0) else [1.0, 0, 0])
+    ends = np.vstack([p0, p1, p1 + 6.0 * gap / np.linalg.norm(gap)])
+    moved = list(grid.edges)
+    moved[seam] = dataclasses.replace(e, params=np.array([u0, u1 - 1e-9 * (u1 - u0), u1]), points=ends)
+    vertices = [dataclasses.replace(v, tolerance=1.0) for v in grid.vertices]
+    off = grade_faces(dataclasses.replace(with_edges(grid, moved), vertices=vertices)).edges[seam]
+    assert off.segments > 10 and off.segment_lengths.min() > 0.1
+    assert np.array_equal(off.points[-1], ends[-1]) and np.linalg.norm(off.points[-2] - p1) < 1e-6
+
+
 def test_every_face_and_edge_is_a_physical_group(tmp_path):
     out = tmp_path / "bracket.msh"
     result = mesh_shape(FIXTURES / "bracket.step", ald=1e-2, output=out)

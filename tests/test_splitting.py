@@ -57,6 +57,23 @@ def test_cut_by_arc_cuts_at_shares_of_the_arc_length_segment_by_segment():
     assert len(cut_by_arc(u, p, {1: np.zeros(0)}, _cubic)[0]) == 0
 
 
+def test_a_segment_that_is_mostly_a_vertex_gap_to_its_curve_is_left_whole():
+    """A B-spline of a Fusion caster part ends 0.005 from its vertex (within the vertex's tolerance): the
+    grid's last segment is that gap, over parameters the curve hardly moves on. Cut in eight by arc (the
+    gap measured as arc), its new points all fell at the curve's end, 1e-14 apart, which the face-wise
+    grading then took for a spacing. Such a segment gets no points; the others are cut as before."""
+    u = np.array([0.1, 0.5, 1.0, 1.0 + 1e-7])
+    p = np.vstack([_cubic(u[:3]), _cubic([1.0]) + [0.0, 0.005, 0.0]])  # the vertex 0.005 off the curve's end
+    new_u, new_p = cut_by_arc(u, p, {0: np.array([0.5]), 2: np.arange(1, 8) / 8}, _cubic)
+    assert len(new_u) == 1 and 0.1 < new_u[0] < 0.5 and np.allclose(new_p, _cubic(new_u))
+    assert len(cut_by_arc(u, p, {2: np.arange(1, 8) / 8}, _cubic)[0]) == 0
+    _, grid = split_segments(u, p, np.array([1, 1, 8]), _cubic)
+    assert len(grid) == len(p)
+    wide = np.array([0.1, 0.5, 1.0, 2.0])  # a vertex a hair off its curve (a tolerance) is no gap
+    near = np.vstack([_cubic(wide[:3]), _cubic([2.0]) + [0.0, 1e-9, 0.0]])
+    assert len(cut_by_arc(wide, near, {2: np.arange(1, 8) / 8}, _cubic)[0]) == 7
+
+
 def test_a_grid_fits_its_curve_only_where_its_end_parameters_give_its_end_points():
     u = np.array([0.0, 0.5, 1.0])
     assert fits_curve(u, _circle(u), _circle, 1e-7)
