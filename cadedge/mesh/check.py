@@ -6,9 +6,10 @@ boundaries of open shells are expected once; non-manifold edges as often as they
 identical coordinates under different tags within one shell are a hidden crack and fail the check
 (separate shells may touch; nodes that all lie on free-boundary segments of B-rep edges are a gap of the
 input itself, as where an IGES face's seam is two edges; nodes at points two B-rep edges or vertices
-share, :func:`twin_points`, are the input's own too: a solid that touches itself along a line). Every edge-grid point must be a node of some
-triangle, at exactly its coordinates. Quality is reported, not judged: the minimum angle, the share of triangles under
-:data:`SMALL_ANGLE` degrees and the faces that hold them (worst first).
+share, :func:`twin_points`, are the input's own too: a solid that touches itself along a line). Every
+edge-grid point must be a node of some triangle, at exactly its coordinates. Quality is reported, not
+judged: the minimum angle, the share of triangles under :data:`SMALL_ANGLE` degrees and the faces that
+hold them (worst first).
 """
 
 from __future__ import annotations
