@@ -277,9 +277,10 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
                                 grid_points=grid_points, edge_multiplicity=multiplicity, twins=twins)
     notes = list(res.notes)
-    shell = {f: k for k, sh in enumerate(check.shells) for f in sh.faces} if check is not None else {}
-    shells = {e.id: {shell[f] for f in e.faces if f in shell} for e in meshed.edges}
-    twin_edges = [(a, b) for a, b in twin_edges if shells[a] & shells[b]]  # in one shell (shells may touch)
+    if twin_edges:  # named where both lie in one shell (shells may touch)
+        shell = {f: k for k, sh in enumerate(check.shells) for f in sh.faces} if check is not None else {}
+        shells = {e.id: {shell[f] for f in e.faces if f in shell} for e in meshed.edges}
+        twin_edges = [(a, b) for a, b in twin_edges if shells[a] & shells[b]]
     if twin_edges:
         pairs = ", ".join(f"{a} with {b}" for a, b in twin_edges[:10])
         more = f" ({len(twin_edges)} pairs in all)" if len(twin_edges) > 10 else ""

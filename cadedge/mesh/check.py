@@ -195,14 +195,15 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
     on_free = np.zeros(len(nodes), dtype=bool)
     on_free[uniq[boundary].ravel()] = True
     n_dup = 0
+    twin_keys = row_keys(twins) if twins is not None and len(twins) else None
     for comp in labels:  # separate shells may touch (an assembly); within one shell it is a crack
         comp_nodes = _nodes_of(tris[np.asarray(comp)], len(nodes))
-        _, dup_inverse, dup_counts = np.unique(row_keys(nodes[comp_nodes]), return_inverse=True,
-                                               return_counts=True)
+        point_keys, dup_inverse, dup_counts = np.unique(row_keys(nodes[comp_nodes]), return_inverse=True,
+                                                        return_counts=True)
         inner = np.zeros(len(dup_counts), dtype=bool)  # a copy not on a free boundary: a crack of the mesh
         np.logical_or.at(inner, dup_inverse.ravel(), ~on_free[comp_nodes])
-        if twins is not None and len(twins):  # unless two of the B-rep's own edges or vertices hold it
-            inner[np.unique(dup_inverse.ravel()[np.isin(row_keys(nodes[comp_nodes]), row_keys(twins))])] = False
+        if twin_keys is not None:  # unless two of the B-rep's own edges or vertices hold it
+            inner &= ~np.isin(point_keys, twin_keys)
         n_dup += int(((dup_counts > 1) & inner).sum())
     if n_dup:
         problems.append(f"{n_dup} coordinates carry more than one mesh node within a shell (a crack between faces)")
