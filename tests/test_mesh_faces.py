@@ -288,43 +288,108 @@ def test_a_face_broken_after_meshing_is_meshed_again(cylinder):
     assert any(f"faces {FAULT_FACE}: the steps after meshing" in n for n in result.notes)
 
 
-def test_two_faces_on_one_boundary_loop_get_interior_nodes():
-    """Two surfaces on the same boundary loop (a lens flattened: the wing's revolved face and its cap at
-    ALD 1e-1), meshed coarse from their boundary nodes alone, repeat each other's triangles; the re-check
-    meshes them again finer, with interior nodes, so no inner edge is shared any more."""
+def _two_faces_on_one_loop():
+    """Two gmsh surfaces on one 10 x 10 square loop, one segment a side, each meshed as the same two
+    triangles on the corners (a lens flattened: the wing's revolved face and its cap at ALD 1e-1), and a
+    re-check context for them with the progress lines it writes."""
     import types
 
     import gmsh
 
-    from cadedge.mesh.gmsh_model import gmsh_session
     from cadedge.mesh.outcomes import FaceOutcome
+
+    occ = gmsh.model.occ
+    pts = [occ.addPoint(x, y, 0) for x, y in ((0, 0), (10, 0), (10, 10), (0, 10))]
+    loop = occ.addCurveLoop([occ.addLine(pts[i], pts[(i + 1) % 4]) for i in range(4)])
+    occ.addPlaneSurface([loop])
+    occ.addPlaneSurface([loop])
+    occ.synchronize()
+    gmsh.option.setNumber("Mesh.MeshSizeMin", 20.0)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 20.0)
+    gmsh.model.mesh.generate(1)  # one segment a side; both faces as two triangles on the corners only
+    corner = [int(gmsh.model.mesh.getNodes(0, p)[0][0]) for p in pts]
+    for s in (1, 2):
+        first = int(gmsh.model.mesh.getMaxElementTag()) + 1
+        gmsh.model.mesh.addElementsByType(s, 2, [first, first + 1], [corner[i] for i in (0, 1, 2, 0, 2, 3)])
+    gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
+    lines: list[str] = []
+    ctx = types.SimpleNamespace(emap=types.SimpleNamespace(face_of_surface={1: 1, 2: 2}),
+                                outcomes={s: FaceOutcome(face=s, surface=s, strategy="x") for s in (1, 2)},
+                                job=types.SimpleNamespace(no_refine=set()), progress=lines.append)
+    return ctx, lines
+
+
+def test_two_faces_on_one_boundary_loop_get_interior_nodes():
+    """Faces that repeat each other's triangles are meshed again finer, with interior nodes, so no inner
+    edge is shared any more; each re-mesh is announced to the watchdog as a finer re-mesh."""
+    import gmsh
+
+    from cadedge.mesh.gmsh_model import gmsh_session
     from cadedge.mesh.worker import _overlapping_faces, _recheck
 
     with gmsh_session():
-        occ = gmsh.model.occ
-        pts = [occ.addPoint(x, y, 0) for x, y in ((0, 0), (10, 0), (10, 10), (0, 10))]
-        loop = occ.addCurveLoop([occ.addLine(pts[i], pts[(i + 1) % 4]) for i in range(4)])
-        occ.addPlaneSurface([loop])
-        occ.addPlaneSurface([loop])
-        occ.synchronize()
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 20.0)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 20.0)
-        gmsh.model.mesh.generate(1)  # one segment a side; both faces as two triangles on the corners only
-        corner = [int(gmsh.model.mesh.getNodes(0, p)[0][0]) for p in pts]
-        for s in (1, 2):
-            first = int(gmsh.model.mesh.getMaxElementTag()) + 1
-            gmsh.model.mesh.addElementsByType(s, 2, [first, first + 1],
-                                              [corner[i] for i in (0, 1, 2, 0, 2, 3)])
+        ctx, lines = _two_faces_on_one_loop()
         overlap = _overlapping_faces([1, 2])
         assert set(overlap) == {1, 2} and overlap[1] == pytest.approx(10 * np.sqrt(2))
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
-        ctx = types.SimpleNamespace(emap=types.SimpleNamespace(face_of_surface={1: 1, 2: 2}),
-                                    outcomes={s: FaceOutcome(face=s, surface=s, strategy="x") for s in (1, 2)})
         notes: list[str] = []
         _recheck(ctx, notes)
         assert all(o.ok for o in ctx.outcomes.values()) and _overlapping_faces([1, 2]) == {}
         assert all(len(gmsh.model.mesh.getNodes(2, s, includeBoundary=False)[0]) for s in (1, 2))
         assert any("faces 1, 2: triangulated from their boundary nodes alone" in n for n in notes)
+        assert lines == ["refine 1", "refined 1", "refine 2", "refined 2"]
+
+
+def test_the_recheck_meshes_no_face_finer_than_its_triangle_budget(monkeypatch):
+    """The re-check's sizes stop at the size that fills the face with its triangle budget: a 1.1e-13 inner
+    edge shared with another face (a Fusion caster part) asked gmsh for sizes of 3e-14 on a face of
+    square millimetres, and it ran until the job's timeout. Here the square (area 100) is meshed again
+    at a quarter of its shared diagonal with the default budget, and at the size that fills it with 6
+    triangles when that is all it may have."""
+    import gmsh
+
+    from cadedge.mesh import generate
+    from cadedge.mesh.budget import filling_size, held
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.worker import _recheck
+
+    asked: list[float] = []
+    mesh_faces = generate.mesh_faces
+
+    def recording(surfaces, face_of, **kw):
+        asked.append(gmsh.option.getNumber("Mesh.MeshSizeMax"))
+        return mesh_faces(surfaces, face_of, **kw)
+
+    monkeypatch.setattr(generate, "mesh_faces", recording)
+    sizes = {}
+    for budget in (6, 400_000):
+        asked.clear()
+        with gmsh_session(), held(budget):
+            ctx, _ = _two_faces_on_one_loop()
+            _recheck(ctx, [])
+            sizes[budget] = list(asked)
+            floor = float(filling_size(100.0))
+        assert floor == pytest.approx(np.sqrt(2.3 * 100 / budget))
+    assert sizes[400_000] == pytest.approx([0.25 * 10 * np.sqrt(2)] * 2)
+    assert sizes[6] == pytest.approx([np.sqrt(2.3 * 100 / 6)] * 2)
+
+
+def test_a_face_whose_recheck_hung_before_is_kept_as_it_was():
+    """A face whose re-mesh hung or crashed an earlier child (the watchdog put it in ``job.no_refine``) is
+    not meshed again by the re-check: it keeps its triangles, and a note names it."""
+    import gmsh
+
+    from cadedge.mesh.gmsh_model import gmsh_session
+    from cadedge.mesh.worker import _recheck
+
+    with gmsh_session():
+        ctx, lines = _two_faces_on_one_loop()
+        ctx.job.no_refine.add(2)
+        notes: list[str] = []
+        _recheck(ctx, notes)
+        assert lines == ["refine 1", "refined 1"]
+        assert len(gmsh.model.mesh.getElementsByType(2, 2)[0]) == 2  # its two triangles on the corners
+        assert len(gmsh.model.mesh.getNodes(2, 1, includeBoundary=False)[0])
+        assert any(n.startswith("faces 2: the re-check would have meshed them again") for n in notes), notes
 
 
 def test_a_face_retried_on_curves_gmsh_already_meshed_keeps_every_curve_mesh():

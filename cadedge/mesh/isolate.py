@@ -13,7 +13,7 @@ caller) writes a progress line before each step and each face attempt. The watch
   of first attempts that hangs or crashes is done again face by face, except the first attempt of the
   face gmsh was meshing when it stopped (the child's standard output, ``trace``, holds gmsh's progress
   through each batch: :func:`cadedge.mesh.worker.trace_culprit`); faces meshed again finer for the
-  surface target (``refine F1 F2 ...``) that hang or crash are kept as they were first meshed;
+  surface target or by the worker's re-check (``refine F1 F2 ...``) that hang or crash are kept as they were first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
 - the whole job passes ``timeout``: the faces the children had meshed (each child appends every face it
@@ -373,7 +373,7 @@ def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
             job.no_refine.update(int(w) for w in words[1:])
             what = f"face {words[1]}: meshing it" if len(words) == 2 else \
                 f"faces {', '.join(words[1:])}: meshing them together"
-            events.append(f"{what} again finer for the surface target {run.detail}; "
+            events.append(f"{what} again finer (for the surface target or the re-check) {run.detail}; "
                           f"{'it was' if len(words) == 2 else 'they were'} kept as first meshed")
             continue
         if words[:1] != ["face"] or len(words) != 3:

@@ -18,7 +18,8 @@ hang or exhausted memory costs that child, never the caller. Steps, in order:
    watchdog reads the line); **hooks "after_generate"** (a hook may clear faces and mesh them again with
    ``mesh_faces``, updating ``context.outcomes``, after a ``refine F1 F2 ...`` line through
    ``context.progress`` for each face or group of faces meshed together; faces in ``job.no_refine`` are
-   not meshed again);
+   not meshed again); the re-check of every face (:func:`_recheck`, whose re-meshes are announced the
+   same way);
 5. read the mesh back; **hooks "before_write"**; write ``job.output`` if asked; **hooks "after_mesh"**.
 
 Hooks are ``"module:function"`` names in ``job.hooks[stage]``, imported in the child and called as
@@ -233,36 +234,60 @@ def _recheck(ctx: JobContext, notes: list[str]) -> None:
     and flips): a face whose triangles no longer match its boundary curves exactly, or whose inner edges are
     not each shared by two triangles, is meshed again from scratch; faces whose inner edges coincide with
     another face's (the same triangles twice) are meshed again with sizes under a quarter of those edges,
-    so they get interior nodes. Boundaries are unchanged, so neighbours stay conforming; a note names them."""
+    so they get interior nodes, but not under :func:`~cadedge.mesh.budget.filling_size` of the face's area
+    (a Fusion caster part's face shared a 1.1e-13 inner edge, and gmsh meshing it at 3e-14 ran until the
+    job's timeout). Boundaries are unchanged, so neighbours stay conforming; a note names them.
+
+    Each re-mesh is announced ``refine F`` (``refined F`` after), so the parent's watchdog bounds it; a
+    face whose re-mesh hung or crashed an earlier child (``job.no_refine``) is left as it was, and named."""
     import gmsh
 
+    from .areas import gmsh_surface_areas
+    from .budget import filling_size
     from .generate import mesh_faces, surface_ok
 
     face_of = ctx.emap.face_of_surface
-    meshed = [s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0]
-    broken = [s for s in meshed if not surface_ok(s)]
-    for s in broken:
+    say = ctx.progress or (lambda line: None)
+    held: list[int] = []  # faces the re-check would mesh again, but a re-mesh hung or crashed before
+
+    def again(s: int) -> dict[int, Any]:
+        say(f"refine {face_of.get(s, s)}")
         gmsh.model.mesh.clear([(2, s)])
-        ctx.outcomes[s] = mesh_faces([s], face_of)[s]
+        out = mesh_faces([s], face_of)
+        say(f"refined {face_of.get(s, s)}")
+        return out
+
+    def allowed(faces: list[int]) -> list[int]:
+        held.extend(s for s in faces if face_of.get(s, s) in ctx.job.no_refine)
+        return [s for s in faces if face_of.get(s, s) not in ctx.job.no_refine]
+
+    meshed = [s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0]
+    broken = allowed([s for s in meshed if not surface_ok(s)])
+    for s in broken:
+        ctx.outcomes[s] = again(s)[s]
     if broken:
         notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in broken)}: the steps after meshing (re-mesh "
                      "finer, optimiser) left triangles that do not match the face's boundary; meshed again")
     overlap = _overlapping_faces([s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0])
-    if not overlap:
-        return
-    cap = gmsh.option.getNumber("Mesh.MeshSizeMax")
-    try:
-        for s, length in sorted(overlap.items()):
-            gmsh.option.setNumber("Mesh.MeshSizeMax", min(cap, 0.25 * length))
-            gmsh.model.mesh.clear([(2, s)])
-            ctx.outcomes[s] = mesh_faces([s], face_of)[s]
-            if not ctx.outcomes[s].ok:  # keep a face meshed as before rather than none
-                gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
-                ctx.outcomes[s] = mesh_faces([s], face_of)[s]
-    finally:
-        gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
-    notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in sorted(overlap))}: triangulated from their "
-                 "boundary nodes alone they repeated another face's triangles; meshed again with interior nodes")
+    remesh = allowed(sorted(overlap))
+    if remesh:
+        cap = gmsh.option.getNumber("Mesh.MeshSizeMax")
+        areas = gmsh_surface_areas(remesh)
+        try:
+            for s in remesh:
+                gmsh.option.setNumber("Mesh.MeshSizeMax", min(cap, max(0.25 * overlap[s], filling_size(areas[s]))))
+                ctx.outcomes[s] = again(s)[s]
+                if not ctx.outcomes[s].ok:  # keep a face meshed as before rather than none
+                    gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
+                    ctx.outcomes[s] = again(s)[s]
+        finally:
+            gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
+        notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in remesh)}: triangulated from their "
+                     "boundary nodes alone they repeated another face's triangles; meshed again with interior nodes")
+    if held:
+        names = ", ".join(str(face_of.get(s, s)) for s in sorted(set(held)))
+        notes.append(f"faces {names}: the re-check would have meshed "
+                     "them again, but an earlier re-mesh hung or crashed gmsh; kept as they were")
 
 
 def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResult:
