@@ -751,7 +751,9 @@ def test_loose_bspline_model_meshes_on_its_own_grids_with_good_angles():
     recovery and fell back to gmsh's curve meshes, down to 2.1 degrees."""
     result = mesh_shape(CORPUS / "live-clones__gmsh__mesh_T106_V3.step", ald=1e-2)
     assert len(result.faces) == 8  # its faces of extrusion laid flat, but two whose curves lie off them
-    assert all(f.strategy in ("Frontal-Delaunay", "unrolled extrusion, Frontal-Delaunay") for f in result.faces)
+    # (a plane Frontal-Delaunay fanned may keep gmsh's Delaunay mesh: its loose edges are cut further)
+    assert all(f.strategy in ("Frontal-Delaunay", "unrolled extrusion, Frontal-Delaunay", "Delaunay")
+               for f in result.faces)
     assert not result.own_mesh_edges
     assert result.report.worst_deficit <= 1e-2 and result.report.min_angle > 10.0
 

@@ -417,6 +417,65 @@ def test_an_edge_measured_near_its_faces_is_cut_down_to_twenty_times_its_offset(
     assert not loose.too_loose(edge, 1.01 * piece) and loose.too_loose(edge, 0.99 * piece)
 
 
+def _band_with_a_loose_circle(off: float, r: float = 0.5, h: float = 0.001):
+    """A disc ``h`` thick: its band (the cylinder) between two circles; the top circle lies on the band
+    but its pcurve on the top face is a circle ``off`` wider (its edge and vertex tolerances cover that),
+    as a KOMPAS tactile switch's band circles lie 0.0011 off their B-spline neighbour."""
+    from OCP.BRep import BRep_Builder, BRep_Tool
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.Geom2d import Geom2d_Circle
+    from OCP.GeomAbs import GeomAbs_Plane
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp_Explorer
+
+    from cadedge.occt.compat import TopoDS
+
+    shape = BRepPrimAPI_MakeCylinder(r, h).Shape()
+    builder = BRep_Builder()
+    faces = TopExp_Explorer(shape, TopAbs_FACE)
+    while faces.More():
+        face = TopoDS.Face_s(faces.Current())
+        surface = BRepAdaptor_Surface(face)
+        if surface.GetType() == GeomAbs_Plane and surface.Plane().Location().Z() > 0.5 * h:
+            edge = TopoDS.Edge_s(TopExp_Explorer(face, TopAbs_EDGE).Current())
+            circle = BRep_Tool.CurveOnSurface_s(edge, face, 0.0, 0.0).Circ2d()
+            circle.SetRadius(r + off)
+            builder.UpdateEdge(edge, Geom2d_Circle(circle), face, 1.2 * off)
+            vertices = TopExp_Explorer(edge, TopAbs_VERTEX)
+            while vertices.More():
+                builder.UpdateVertex(TopoDS.Vertex_s(vertices.Current()), 1.2 * off)
+                vertices.Next()
+        faces.Next()
+    return shape
+
+
+def test_a_loose_edge_across_a_thin_face_is_cut_as_far_as_it_allows():
+    """A loose edge whose width asks pieces shorter than it may be cut into is cut to the shortest it
+    allows, not left whole: a KOMPAS tactile switch (not bundled) has four bands 0.001 tall whose top
+    circles lie 0.0011 off their B-spline neighbour; left at 0.12 segments, the bottom circles' widths
+    were measured across those chords' sag and they kept pieces of up to 6.8 times the band, then the
+    face-wise grading cut the top circles unevenly from them: 27% of the bands' triangles under 20
+    degrees (1.6% of the model's at 1e-2), none once the top circles were cut to 0.022."""
+    from cadedge import refine_shape
+    from cadedge.mesh.proximity import MEASURED_SHARE, Looseness
+    from cadedge.mesh.widths import fit_to_widths
+    from cadedge.occt.offsets import edge_offsets
+
+    off = 0.003
+    grid = refine_shape(_band_with_a_loose_circle(off), ald=1e-2)
+    (top,) = [e for e in grid.edges if e.curve == "Circle" and e.tolerance > off]
+    measured = max(d[top.id] for d in edge_offsets(grid.shape, [top], top.faces).values())
+    assert measured == pytest.approx(off, rel=1e-6)
+    shortest = measured / MEASURED_SHARE
+    loose = Looseness(grid)
+    assert loose.too_loose(top, 0.99 * shortest) and not loose.too_loose(top, 1.01 * shortest)
+    assert top.segment_lengths.max() > 3 * shortest  # the width asks it finer than it may be cut
+    (cut,) = [e for e in fit_to_widths(grid).edges if e.id == top.id]
+    assert cut.segment_lengths.min() >= shortest * (1 - 1e-9)
+    assert cut.segment_lengths.max() <= 2 * shortest
+
+
 def test_a_tiny_notch_is_graded_into_its_faces():
     """A 0.05 notch in a 20-long bar: the faces around it are graded down to the notch, not slivered."""
     bar = cq.Workplane().box(20, 5, 2)

@@ -55,19 +55,21 @@ class Looseness:
         self.measured: dict[int, float | None] = {}
 
     def too_loose(self, e, piece: float) -> bool:
-        if e.tolerance <= TOLERANCE_SHARE * piece:
-            return False
+        return e.tolerance > TOLERANCE_SHARE * piece and piece < self.shortest(e)
+
+    def shortest(self, e) -> float:
+        """The shortest piece edge ``e`` may be cut into (its faces measured on first use)."""
+        bound = e.tolerance / TOLERANCE_SHARE
         if self.shape is None or not e.faces:
-            return True
+            return bound
         if e.id not in self.measured:
             from ..occt.offsets import edge_offsets
 
             per_face = [d[e.id] for d in edge_offsets(self.shape, [e], e.faces).values() if e.id in d]
             whole = len(per_face) == len(set(e.faces))  # every face measured, else the bound stands
             self.measured[e.id] = max(max(per_face), CONFUSION) if whole else None
-        if self.measured[e.id] is None:
-            return True
-        return self.measured[e.id] > MEASURED_SHARE * piece
+        measured = self.measured[e.id]
+        return bound if measured is None else min(bound, measured / MEASURED_SHARE)
 
 
 def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np.ndarray], np.ndarray]], *,

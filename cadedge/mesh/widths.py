@@ -14,7 +14,9 @@ it were cut to pieces of 1.5e-5 (26 755 on the end line once loose edges could b
 longer than :data:`WIDTH_RATIO` (or :data:`FINE_RATIO`, where that costs few segments) times that width
 are split into pieces of equal arc length on their OCCT curve, pass after pass: near a tiny edge the
 splits halve towards it, so the boundary is graded down to the tiny edge's length instead of jumping to
-it. Grid points are kept and edge ends never move.
+it. Grid points are kept and edge ends never move. A loose edge is cut into no piece shorter than it
+allows (:class:`~cadedge.mesh.proximity.Looseness`): left whole, its chords sagged across a thin face
+and the width measured from the other side counted the sag.
 
 Then the face corners (:func:`match_corners`): where a face's boundary segments meet at a B-rep vertex,
 those longer than :data:`CORNER_RATIO` times the shortest are halved. A 90-degree corner between a
@@ -302,8 +304,10 @@ def _split_to_widths(grid: ShapeGrid, curves, touches: dict[int, set[int]], rati
                      passes: int) -> tuple[ShapeGrid, bool]:
     """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width (edges
     apart by ``touches``, :func:`face_widths`), and whether the budget (:data:`BUDGET_FACTOR`,
-    :data:`MIN_BUDGET`, :data:`MOST_ADDED`) left a split out; an edge too loose to split
-    (:class:`~cadedge.mesh.proximity.Looseness`) asks nothing of it."""
+    :data:`MIN_BUDGET`, :data:`MOST_ADDED`) left a split out. A loose edge
+    (:class:`~cadedge.mesh.proximity.Looseness`) is cut into no piece shorter than it allows, or, where
+    those cuts do not fit the budget, left whole without asking anything of it: its cuts never reach
+    the width, and the flight's end line, measured across a 2.3e-6 gap, would take a million."""
     edges = list(grid.edges)
     budget = min(BUDGET_FACTOR * grid.segments + MIN_BUDGET, MOST_ADDED)
     added, short = 0, False
@@ -319,9 +323,12 @@ def _split_to_widths(grid: ShapeGrid, curves, touches: dict[int, set[int]], rati
             with np.errstate(invalid="ignore"):
                 pieces = np.where(seg > ratio * w, np.ceil(seg / (ratio * np.maximum(w, 1e-300))), 1)
             pieces = np.nan_to_num(pieces, nan=1.0, posinf=1.0).astype(np.int64)
+            held = np.any(pieces > 1) and loose.too_loose(e, float(np.min(seg / pieces)))
+            if held:  # a loose edge (see proximity.py): cut into no piece shorter than it allows
+                pieces = np.minimum(pieces, np.maximum(np.floor(seg / loose.shortest(e)), 1)).astype(np.int64)
             new = int(np.sum(pieces - 1))
-            if not new or loose.too_loose(e, float(np.min(seg / pieces))):
-                continue  # nothing to split, or a loose edge (see proximity.py)
+            if not new or (held and added + new > budget):
+                continue  # nothing to split; or a loose edge's cuts, which never reach its width, do not fit
             if added + new > budget:
                 short = True
                 continue
