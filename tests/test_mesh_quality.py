@@ -919,6 +919,28 @@ def test_meshadapt_retries_start_only_within_their_triangle_budget(gmsh_cylinder
     assert adapt.face_quality(side) == spoiled
 
 
+def test_a_poor_face_larger_than_the_retries_budget_is_not_retried(gmsh_cylinder, monkeypatch):
+    """A face whose triangles alone overrun what is left of the retries' budget is not retried: a helical
+    blade's B-spline face of 37 000 triangles (a periodic spline section twisted up 600 mm, at 1e-3),
+    against a budget of 6 000, ran MeshAdapt past the 60 s bound, and the job started again (95 s; 29 s
+    once skipped, the same mesh)."""
+    gmsh, side = gmsh_cylinder
+    from cadedge.mesh import adapt
+
+    _spoil(gmsh, side)
+    spoiled = adapt.face_quality(side)
+    assert spoiled[1] > adapt.POOR_SHARE
+    monkeypatch.setattr(adapt, "BUDGET_SHARE", 0.0)
+    monkeypatch.setattr(adapt, "MIN_TRIANGLES", spoiled[2] - 1)
+    ctx, lines = _adapt_context(side, 4.0 * np.pi, 1e-2)
+    adapt.after_generate(ctx)
+    assert lines == [] and ctx.outcomes[side].strategy == "Frontal-Delaunay"
+    assert adapt.face_quality(side) == spoiled
+    monkeypatch.setattr(adapt, "MIN_TRIANGLES", spoiled[2])  # it fits: retried
+    adapt.after_generate(ctx)
+    assert lines == ["refine 1", "refined 1"] and ctx.outcomes[side].strategy == adapt.MESH_ADAPT
+
+
 def test_meshadapt_is_not_kept_past_the_faces_area_target(gmsh_cylinder):
     """A poor face's MeshAdapt mesh misses an area target that its first mesh meets: the face gets its
     first mesh back, and keeps its strategy."""

@@ -97,9 +97,9 @@ def better(new: tuple[float, float, int], old: tuple[float, float, int]) -> bool
 
 def after_generate(ctx) -> None:
     """Hook (after :func:`cadedge.mesh.fidelity.after_generate`): mesh the poor faces again by MeshAdapt
-    and keep the better mesh (see the module docstring), the poorest first, while the faces retried hold
-    under :data:`BUDGET_SHARE` of the job's triangles (at least :data:`MIN_TRIANGLES`) and before the
-    job's soft deadline. Each attempt
+    and keep the better mesh (see the module docstring), the poorest first, each where its triangles fit
+    what is left of :data:`BUDGET_SHARE` of the job's triangles (at least :data:`MIN_TRIANGLES`), before
+    the job's soft deadline. Each attempt
     is announced as ``refine F`` / ``refined F``: the watchdog bounds it like a refinement, and a hang or
     crash there keeps the face as first meshed (it joins ``job.no_refine``, which this hook skips)."""
     import gmsh
@@ -140,6 +140,8 @@ def after_generate(ctx) -> None:
         if meter.late():
             break
         outcome, f, old = ctx.outcomes[s], face_of.get(s, s), quality[s]
+        if old[2] > meter.left():  # this face alone would overrun what is left: a smaller one may fit
+            continue
         meter.charge(old[2])
         before = 1.0 - unfolded_areas([s]).get(s, 0.0) / areas[f - 1]
 
