@@ -13,7 +13,8 @@ caller) writes a progress line before each step and each face attempt. The watch
   of first attempts that hangs or crashes is done again face by face, except the first attempt of the
   face gmsh was meshing when it stopped (the child's standard output, ``trace``, holds gmsh's progress
   through each batch: :func:`cadedge.mesh.worker.trace_culprit`); faces meshed again finer for the
-  surface target or by the worker's re-check (``refine F1 F2 ...``) that hang or crash are kept as they were first meshed;
+  surface target or by the worker's re-check (``refine F1 F2 ...``) that hang or crash are kept as they
+  were first meshed;
 - the child dies (a segfault, an abort, the memory limit): the attempt it was in is marked as crashed,
   and likewise a new child carries on; a crash outside any face attempt fails the job with the reason;
 - the whole job passes ``timeout``: the faces the children had meshed (each child appends every face it

@@ -250,12 +250,13 @@ def _recheck(ctx: JobContext, notes: list[str]) -> None:
     say = ctx.progress or (lambda line: None)
     held: list[int] = []  # faces the re-check would mesh again, but a re-mesh hung or crashed before
 
-    def again(s: int) -> dict[int, Any]:
+    def again(s: int) -> Any:
+        """Face ``s`` meshed again from scratch, announced to the watchdog; its outcome."""
         say(f"refine {face_of.get(s, s)}")
         gmsh.model.mesh.clear([(2, s)])
-        out = mesh_faces([s], face_of)
+        outcome = mesh_faces([s], face_of)[s]
         say(f"refined {face_of.get(s, s)}")
-        return out
+        return outcome
 
     def allowed(faces: list[int]) -> list[int]:
         held.extend(s for s in faces if face_of.get(s, s) in ctx.job.no_refine)
@@ -264,7 +265,7 @@ def _recheck(ctx: JobContext, notes: list[str]) -> None:
     meshed = [s for s, o in sorted(ctx.outcomes.items()) if o.ok and s > 0]
     broken = allowed([s for s in meshed if not surface_ok(s)])
     for s in broken:
-        ctx.outcomes[s] = again(s)[s]
+        ctx.outcomes[s] = again(s)
     if broken:
         notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in broken)}: the steps after meshing (re-mesh "
                      "finer, optimiser) left triangles that do not match the face's boundary; meshed again")
@@ -276,10 +277,10 @@ def _recheck(ctx: JobContext, notes: list[str]) -> None:
         try:
             for s in remesh:
                 gmsh.option.setNumber("Mesh.MeshSizeMax", min(cap, max(0.25 * overlap[s], filling_size(areas[s]))))
-                ctx.outcomes[s] = again(s)[s]
+                ctx.outcomes[s] = again(s)
                 if not ctx.outcomes[s].ok:  # keep a face meshed as before rather than none
                     gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
-                    ctx.outcomes[s] = again(s)[s]
+                    ctx.outcomes[s] = again(s)
         finally:
             gmsh.option.setNumber("Mesh.MeshSizeMax", cap)
         notes.append(f"faces {', '.join(str(face_of.get(s, s)) for s in remesh)}: triangulated from their "
