@@ -3,6 +3,8 @@ swaps and smoothing that never touch the boundary (real cadquery parts, real OCC
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -343,8 +345,6 @@ def test_a_vertex_near_an_edges_end_does_not_touch_it():
     left on the edge: the boundary is graded down to that short edge as before (Solid_56's torus, a
     0.0103 edge between vertices whose edges carry tolerances up to 0.019). A unit cube whose vertices
     carry a tolerance of 1.5: every vertex is that near every edge of its faces, at their ends."""
-    import dataclasses
-
     from cadedge import refine_shape
     from cadedge.mesh.widths import touching_vertices
 
@@ -474,6 +474,53 @@ def test_a_loose_edge_across_a_thin_face_is_cut_as_far_as_it_allows():
     (cut,) = [e for e in fit_to_widths(grid).edges if e.id == top.id]
     assert cut.segment_lengths.min() >= shortest * (1 - 1e-9)
     assert cut.segment_lengths.max() <= 2 * shortest
+
+
+def _loose_top_circle(off: float = 0.002):
+    """The disc of :func:`_band_with_a_loose_circle` refined at 1e-2, its loose top circle, and the
+    shortest piece that circle may be cut into."""
+    from cadedge import refine_shape
+    from cadedge.mesh.proximity import Looseness
+
+    grid = refine_shape(_band_with_a_loose_circle(off), ald=1e-2)
+    (top,) = [e for e in grid.edges if e.curve == "Circle" and e.tolerance > off]
+    return grid, top, Looseness(grid).shortest(top)
+
+
+def test_the_proximity_split_cuts_a_loose_edge_as_far_as_it_allows():
+    """A size field finer than a loose edge may be cut to: its segments are cut to the shortest pieces
+    it allows, segment by segment (``Looseness.capped``), not left whole as before."""
+    from cadedge.mesh.proximity import fit_to_sizes
+
+    grid, top, shortest = _loose_top_circle()
+    assert top.segment_lengths.min() > 3 * shortest
+    fine = 0.1 * shortest
+    (cut,) = [e for e in fit_to_sizes(grid, lambda g: lambda p: np.full(len(p), fine)).edges if e.id == top.id]
+    assert cut.segment_lengths.min() >= shortest * (1 - 1e-9)
+    assert cut.segment_lengths.max() <= 2 * shortest
+
+
+def test_the_corner_match_halves_a_loose_edge_where_it_allows():
+    """At the loose top circle's vertex the band's seam segment is 0.001 long. The circle's last segment,
+    already cut into pieces barely above the shortest the circle allows, cannot be halved; its first
+    segment can, and is (before, one segment too short to halve kept the whole edge as it was)."""
+    from cadedge.mesh.widths import match_corners
+    from cadedge.shapegrid import with_edges
+    from cadedge.splitting import split_segments
+
+    grid, top, shortest = _loose_top_circle()
+    last = len(top.points) - 2
+    k = np.ones(last + 1, dtype=np.int64)
+    k[last] = int(top.segment_lengths[last] // (1.05 * shortest))
+    params, points = split_segments(top.params, top.points, k, grid.curves[top.id].evaluate)
+    top = dataclasses.replace(top, params=params, points=points)
+    grid = with_edges(grid, [top if e.id == top.id else e for e in grid.edges])
+    first = top.segment_lengths[0]
+    assert first > 4 * shortest and top.segment_lengths[-1] < 2 * shortest
+    (cut,) = [e for e in match_corners(grid).edges if e.id == top.id]
+    assert cut.segment_lengths.min() >= shortest * (1 - 1e-9)
+    assert cut.segment_lengths[0] < first / 3  # halved twice
+    assert cut.segment_lengths[-1] == pytest.approx(top.segment_lengths[-1])
 
 
 def test_a_tiny_notch_is_graded_into_its_faces():

@@ -21,9 +21,10 @@ from ..splitting import split_segments
 
 #: A segment is split when it is longer than this many times the size field at its midpoint.
 RATIO = 3.0
-#: Edges that lie off their faces' boundaries by more than this share of the pieces they would be cut
-#: into are left alone: on a loose edge (vertices off the curve, curves off the faces) a new point can
-#: fall so far from the face's own boundary that gmsh builds near-degenerate triangles there.
+#: An edge is not cut into pieces it lies off its faces' boundaries by more than this share of: on a
+#: loose edge (vertices off the curve, curves off the faces) a new point can fall so far from the face's
+#: own boundary that gmsh builds near-degenerate triangles there. Its segments are cut as far as that
+#: allows (:meth:`Looseness.capped`).
 TOLERANCE_SHARE = 1e-3
 #: An edge whose distance from its faces' boundaries is measured, not bounded, may be cut into pieces down
 #: to twenty times that distance (a new point then off the face's boundary by at most 5% of a piece, as
@@ -57,6 +58,17 @@ class Looseness:
     def too_loose(self, e, piece: float) -> bool:
         return e.tolerance > TOLERANCE_SHARE * piece and piece < self.shortest(e)
 
+    def capped(self, e, pieces: np.ndarray) -> np.ndarray:
+        """``pieces`` (how many pieces each segment of ``e`` is to be cut into) cut back so that none is
+        shorter than ``e`` allows: a loose edge is cut as far as it may be, segment by segment, not left
+        whole because one segment would be cut too short. A tight edge's ``pieces`` come back as they are."""
+        if not np.any(pieces > 1):
+            return pieces
+        seg = e.segment_lengths
+        if not self.too_loose(e, float(np.min(seg / pieces))):
+            return pieces
+        return np.minimum(pieces, np.maximum(np.floor(seg / self.shortest(e)), 1)).astype(np.int64)
+
     def shortest(self, e) -> float:
         """The shortest piece edge ``e`` may be cut into (its faces measured on first use)."""
         bound = e.tolerance / TOLERANCE_SHARE
@@ -86,9 +98,10 @@ def fit_to_sizes(grid: ShapeGrid, make_field: Callable[[ShapeGrid], Callable[[np
                 continue  # nothing to fit, or not a grid (params must increase): gmsh will say so
             seg = e.segment_lengths
             size = field(0.5 * (e.points[:-1] + e.points[1:]))
-            pieces = np.where(seg > ratio * size, np.ceil(seg / np.maximum(size, 1e-300)), 1).astype(int)
-            if not np.any(pieces > 1) or loose.too_loose(e, float(np.min(seg / pieces))):
-                continue  # nothing to split, or a loose edge: new points would stray from its faces
+            pieces = np.where(seg > ratio * size, np.ceil(seg / np.maximum(size, 1e-300)), 1).astype(np.int64)
+            pieces = loose.capped(e, pieces)  # a loose edge: shorter pieces would stray from its faces
+            if not np.any(pieces > 1):
+                continue
             params, points = split_segments(e.params, e.points, pieces, curves[e.id].evaluate)
             edges[i] = dataclasses.replace(e, params=params, points=points)
             changed = True

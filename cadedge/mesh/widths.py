@@ -323,9 +323,9 @@ def _split_to_widths(grid: ShapeGrid, curves, touches: dict[int, set[int]], rati
             with np.errstate(invalid="ignore"):
                 pieces = np.where(seg > ratio * w, np.ceil(seg / (ratio * np.maximum(w, 1e-300))), 1)
             pieces = np.nan_to_num(pieces, nan=1.0, posinf=1.0).astype(np.int64)
-            held = np.any(pieces > 1) and loose.too_loose(e, float(np.min(seg / pieces)))
-            if held:  # a loose edge (see proximity.py): cut into no piece shorter than it allows
-                pieces = np.minimum(pieces, np.maximum(np.floor(seg / loose.shortest(e)), 1)).astype(np.int64)
+            wanted = pieces
+            pieces = loose.capped(e, wanted)  # a loose edge (see proximity.py): no piece shorter than it allows
+            held = not np.array_equal(pieces, wanted)
             new = int(np.sum(pieces - 1))
             if not new or (held and added + new > budget):
                 continue  # nothing to split; or a loose edge's cuts, which never reach its width, do not fit
@@ -347,8 +347,10 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
     segments that end there are within ``ratio`` of the shortest of them: longer ones are halved (in
     parameter, on their OCCT curve), pass after pass; a segment that ends at a narrow corner (one of its
     *tips*, :mod:`cadedge.mesh.wedges`, which makes them equal, as long as the shorter) is halved only
-    where its halves are no shorter than the corner's other tip (within :data:`TIP_SLACK`). Grid points
-    are kept and edge ends never move; an edge OCCT cannot evaluate keeps its grid."""
+    where its halves are no shorter than the corner's other tip (within :data:`TIP_SLACK`), and a loose
+    edge's segment only where its halves are no shorter than the edge allows
+    (:meth:`~cadedge.mesh.proximity.Looseness.capped`). Grid points are kept and edge ends never move; an
+    edge OCCT cannot evaluate keeps its grid."""
     from ..errors import GeometryError
     from ..occt.compat import OCCT_ERRORS
     from .wedges import narrow_corners, tip_length, tip_segment
@@ -381,7 +383,8 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
         changed = False
         for i, k in pieces.items():
             e = edges[i]
-            if not np.any(k > 1) or loose.too_loose(e, float(np.min(e.segment_lengths / k))):
+            k = loose.capped(e, k)  # a loose edge's segments halved only where it allows
+            if not np.any(k > 1):
                 continue
             try:
                 params, points = split_segments(e.params, e.points, k, curves[e.id].evaluate)
