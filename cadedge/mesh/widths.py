@@ -71,9 +71,13 @@ CORNER_PASSES = 4
 #: an edge split in two at a thin face (the ridge between two overlapping holes) is halved again at
 #: the neighbouring edge's end, 0.1876 against 2 x 0.09385, and left whole it was later cut in four.
 TIP_SLACK = 0.01
-#: Point-to-segment distances are computed exactly in blocks of this many pairs; a face with more pairs
-#: than this is searched with k-d trees (:func:`_near_distances`).
+#: Point-to-segment distances are computed exactly in blocks of this many pairs.
 _BLOCK = 2_000_000
+#: A face whose midpoints and segments make more pairs than this has its widths, where only those within
+#: a reach are sought, measured by k-d trees (:func:`_near_distances`), near pairs only: an Open CASCADE
+#: 6.8 circuit board (3 379 faces, most of a few hundred segments) took 47 s in the thin faces' splits
+#: when only faces over :data:`_BLOCK` pairs were, 17 s at this (the same splits).
+TREE_PAIRS = 50_000
 #: A numpy call costs about as much as this many point-segment distances: a face's widths are measured in
 #: one call, every midpoint against every segment, where that measures fewer extra pairs than the calls
 #: per edge it saves cost (cadquery-contrib's tetrakaidecahedron lattice: 10 182 faces of a few edges).
@@ -245,7 +249,7 @@ def face_widths(edges: list, *, reach: float | None = None,
             continue
         count = [len(edges[i].points) - 1 for i in idx]
         n = sum(count)
-        large = reach is not None and n * n > _BLOCK  # k-d trees, near pairs only
+        large = reach is not None and n * n > TREE_PAIRS  # k-d trees, near pairs only
         few = n * n <= _BLOCK and n * n - sum(c * (n - c) for c in count) < CALL_PAIRS * (len(idx) - 1)
         if large or few:  # the whole face at once; else (below) each edge against the others
             a = np.vstack([edges[i].points[:-1] for i in idx])
