@@ -6,7 +6,7 @@ import importlib
 import pytest
 
 MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments",
-           "cadedge.mesh.shards",
+           "cadedge.mesh.shards", "cadedge.mesh.report",
            "cadedge.mesh.coincident", "cadedge.mesh.quality", "cadedge.mesh.gridded", "cadedge.mesh.torus_fit"]
 
 

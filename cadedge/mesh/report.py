@@ -224,6 +224,15 @@ def build_report(nodes: np.ndarray, triangles: np.ndarray, triangle_faces: np.nd
                       worst_deficit=max(measured) if measured else None, small_angles=smalls)
 
 
+def _percent(share: float) -> str:
+    """``share`` as a percentage of two significant digits, without an exponent.
+
+    >>> _percent(0.0014), _percent(0.14), _percent(14.0)
+    ('0.14%', '14%', '1400%')
+    """
+    return f"{100 * share:.2g}%" if 100 * share < 100 else f"{100 * share:.0f}%"
+
+
 def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | None, planar: bool,
                floor: float | None, budget: int = 0, gmsh_edges: list[int] | None = None) -> tuple[str, str]:
     """Why a meshed face is over the target: its reason (one of :data:`OVER_REASONS`) and note; ``budget``
@@ -232,7 +241,7 @@ def _over_note(rec: FaceReport, stuck: bool, tolerance: tuple[float, float] | No
     if tolerance is not None and abs(rec.area_deficit) <= tolerance[1]:
         return "tolerances", (f"within what its edges' tolerances allow: they may lie up to {tolerance[0]:.2g} "
                               "from its boundary (their pcurves on its surface), and a boundary moved that far "
-                              f"changes its area by up to {tolerance[1]:.2g} (loose tolerances; the mesh follows "
+                              f"changes its area by up to {_percent(tolerance[1])} (loose tolerances; the mesh follows "
                               "the shared edges)")
     if floor is not None:
         return "size floor", (f"its surface has a sharp ridge: its triangles were held at {floor:.2g} or more "
