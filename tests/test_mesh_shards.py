@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import cadquery as cq
 import numpy as np
 import pytest
 
@@ -130,6 +131,28 @@ def test_a_face_repeated_on_the_same_edges_joins_as_in_one_process(split_small_j
         assert result.ok and result.check.ok, result.problems()[:3]
         assert np.array_equal(np.bincount(result.triangle_faces), np.bincount(one.triangle_faces))
     assert len(two.nodes) == len(one.nodes)  # the twin's interior nodes its own
+
+
+def test_two_touching_solids_are_split_and_keep_their_own_nodes_where_they_touch(split_small_jobs):
+    """Two boxes of an assembly side by side, each with its own faces where they touch: their points
+    there are at the same coordinates but in two pieces of the shape, so the job is split (before, any
+    two points at one place kept it in one process), and the join merges nodes only within a piece:
+    each box's shell closed on its own, the same nodes as in one process."""
+    a = cq.Workplane().box(2, 2, 2).val()
+    b = cq.Workplane().box(2, 2, 2).translate((2, 0, 0)).val()
+    assembly = cq.Compound.makeCompound([a, b])
+    grid = cadedge.refine_shape(assembly, ald=1e-2)
+    assert not shards.coincident(grid)
+    assert shards.coincident(dataclasses.replace(grid, edges=[
+        dataclasses.replace(e, faces=[1]) for e in grid.edges]))  # as if in one piece: the points repeat
+    one = mesh_shape(grid, workers=1)
+    two = mesh_shape(grid, workers=2)
+    assert any("meshed in 2 processes at once" in n for n in two.notes)
+    for result in (one, two):
+        assert result.ok and result.check.ok, result.problems()[:3]
+        assert len(result.check.shells) == 2 and all(s.watertight for s in result.check.shells)
+    assert len(two.nodes) == len(one.nodes)
+    assert len(np.unique(two.nodes, axis=0)) < len(two.nodes)  # the touching points: a node in each box
 
 
 @pytest.mark.parametrize("fallback", ["split", "own_curves"])
