@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 
-import cadquery as cq
 import numpy as np
 import pytest
 
@@ -138,9 +137,15 @@ def test_two_touching_solids_are_split_and_keep_their_own_nodes_where_they_touch
     there are at the same coordinates but in two pieces of the shape, so the job is split (before, any
     two points at one place kept it in one process), and the join merges nodes only within a piece:
     each box's shell closed on its own, the same nodes as in one process."""
-    a = cq.Workplane().box(2, 2, 2).val()
-    b = cq.Workplane().box(2, 2, 2).translate((2, 0, 0)).val()
-    assembly = cq.Compound.makeCompound([a, b])
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    builder, assembly = BRep_Builder(), TopoDS_Compound()
+    builder.MakeCompound(assembly)
+    for x in (-1.0, 1.0):
+        builder.Add(assembly, BRepPrimAPI_MakeBox(gp_Pnt(x, -1.0, -1.0), 2.0, 2.0, 2.0).Shape())
     grid = cadedge.refine_shape(assembly, ald=1e-2)
     assert not shards.coincident(grid)
     assert shards.coincident(dataclasses.replace(grid, edges=[
