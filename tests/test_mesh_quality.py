@@ -457,17 +457,15 @@ def test_a_loose_edge_across_a_thin_face_is_cut_as_far_as_it_allows():
     were measured across those chords' sag and they kept pieces of up to 6.8 times the band, then the
     face-wise grading cut the top circles unevenly from them: 27% of the bands' triangles under 20
     degrees (1.6% of the model's at 1e-2), none once the top circles were cut to 0.022."""
-    from cadedge import refine_shape
     from cadedge.mesh.proximity import MEASURED_SHARE, Looseness
     from cadedge.mesh.widths import fit_to_widths
     from cadedge.occt.offsets import edge_offsets
 
     off = 0.003
-    grid = refine_shape(_band_with_a_loose_circle(off), ald=1e-2)
-    (top,) = [e for e in grid.edges if e.curve == "Circle" and e.tolerance > off]
+    grid, top, shortest = _loose_top_circle(off)
     measured = max(d[top.id] for d in edge_offsets(grid.shape, [top], top.faces).values())
     assert measured == pytest.approx(off, rel=1e-6)
-    shortest = measured / MEASURED_SHARE
+    assert shortest == pytest.approx(measured / MEASURED_SHARE, rel=1e-12)
     loose = Looseness(grid)
     assert loose.too_loose(top, 0.99 * shortest) and not loose.too_loose(top, 1.01 * shortest)
     assert top.segment_lengths.max() > 3 * shortest  # the width asks it finer than it may be cut
