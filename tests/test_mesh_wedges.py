@@ -369,3 +369,30 @@ def test_a_cusps_tips_drop_the_points_the_growth_limit_put_there_within_the_edge
         out, _ = _growth_points(list(fitted.edges), c, sides, reach, list(grown.edges), targets, WIDTH_RATIO,
                                 _Near.of(list(fitted.edges)))
         assert any((after[1] & ~before[1]).any() for after, before in zip(out, reach)) == freed
+
+
+def test_tips_are_not_lengthened_past_what_a_thin_face_across_them_allows():
+    """The thin faces' splits cut the ring's inner circle, 0.003 across to its outer one, into pieces of
+    about 0.003, and the disk faces' cusps on that circle had their tips lengthened to 0.11 by dropping
+    those points: each tip then spanned the ring (the Ultimaker 2 feeder's cylinder band 0.001 wide: 62
+    triangles of 0.09-5 degrees that nothing forced). A corner whose tips would span a face across them
+    over WIDTH_RATIO times its width is left as the splits made it."""
+    from cadedge.mesh.boundary_fit import fit_boundaries
+    from cadedge.mesh.fidelity import brep_face_areas, meshed_kinds
+    from cadedge.mesh.widths import fit_to_widths
+
+    width = 0.003
+    refined = refine_shape(_ringed_hole(width), ald=1e-2)
+    areas = brep_face_areas(refined.shape)
+    fitted = fit_to_widths(fit_boundaries(refined, 1e-2, brep_areas=areas, kinds=meshed_kinds(refined.shape))[0])
+    graded = grade_wedges(fitted, keep=refined, areas=areas, target=1e-2)
+    corners = narrow_corners(list(graded.edges))
+    assert len(corners) == 4
+    ring = {f for f in range(1, len(areas) + 1) if areas[f - 1] < 2 * math.pi * 3.0 * width * 1.01}
+    assert len(ring) == 2  # the top and bottom rings
+    for c in corners:
+        for k, s in c.sides:
+            if set(graded.edges[k].faces) & ring:  # the ring's inner circle, the ring across its tip
+                assert tip_length(graded.edges[k], s) <= WIDTH_RATIO * width
+        tips = [tip_length(graded.edges[k], s) for k, s in c.sides]
+        assert max(tips) <= TIP_RATIO * min(tips)

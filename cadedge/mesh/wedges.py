@@ -21,7 +21,8 @@ A corner is graded only where its tips are at most :data:`MAX_JUMP` times the fi
 (the face on a tip's other side sees that jump). Where the tips, made equal, are over :data:`JUMP_AIM`
 times those pieces (the nut at 1e-3: its cone faces' area target cut the cusps' sides into 0.09 pieces,
 70 times the first graded piece; at 1e-2, 22 times), the points the boundary fits added near the
-corner are dropped and the tips cut where that jump is :data:`JUMP_AIM`:
+corner are dropped and the tips cut where that jump is :data:`JUMP_AIM`, unless a face across them is
+too thin for tips that long (the thin faces' splits put those points there):
 in a cusp the width grows as the square of the distance, so longer tips stand beside relatively longer
 pieces. What their chords cut off grows as the cube of their length, and each face's area may move by
 at most :data:`TIP_AREA_SHARE` of its target in all. A cusp's tips are then made longer still, up to
@@ -167,13 +168,14 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     if keep is not None and areas is not None and target is not None:  # then lengthened where too short
         room = TIP_AREA_SHARE * target * np.asarray(areas, dtype=float)
         full = room.copy()
+        near = _Near.of(edges)  # indices only: the tips' changes below leave it valid
         for c in corners:
-            changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, ends, room)
+            changed |= _lengthen_tips(edges, c, keep.edges, ratio, curves, ends, room, near)
         if spare is not None:  # then cusps' tips longer still, each face's room shared among its corners
             # spare() measures the grid as given: less what the tips above moved
             free = np.minimum(room, np.asarray(spare(), dtype=float) - (full - room))
             count = np.zeros(len(room))
-            targets, near = recorded_targets(grid), _Near.of(edges)
+            targets = recorded_targets(grid)
             touches = [_touched(edges, c) for c in corners]
             for touched in touches:
                 count[touched] += 1
@@ -254,14 +256,18 @@ def _no_piece_under(cuts: dict[int, np.ndarray], lengths: np.ndarray, least: flo
 
 
 def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, ends: dict[int, float],
-                   room: np.ndarray) -> bool:
+                   room: np.ndarray, near: _Near) -> bool:
     """Drop the points near corner ``c`` that ``kept`` (the edges as refined) does not hold and cut both
     tips at the length where they are :data:`JUMP_AIM` times the first graded piece beside them (up to
     :data:`LAST_AIM` where the faces' area allows no more); True if ``edges`` changed. A corner whose tips
     (made equal) are that long already, cannot get that long without dropping a kept point, or whose
     chords would move a face's area by more than its ``room`` (by face id - 1; what is used is taken from
-    it) is left alone (``ends``: edge id -> how far a grid may end from its curve, see
-    :func:`~cadedge.mesh.grading.cut_on_curve`). In a cusp the wedge's width grows as the square of the
+    it), or whose tips would span a face across them (``near``: the edges at each vertex and on each face)
+    over ``ratio`` times as long as it is wide there (:func:`_across_room`) is left alone (``ends``: edge
+    id -> how far a grid may end from its curve, see :func:`~cadedge.mesh.grading.cut_on_curve`). The
+    thin faces' splits put those points there: an Ultimaker 2 feeder part's plane narrows to two cusps on
+    a B-spline whose cylinder band across is 0.001 wide, and its tips, lengthened to 0.17, left the band
+    62 triangles of 0.09-5 degrees that nothing forced. In a cusp the wedge's width grows as the square of the
     distance from the vertex, so a longer tip stands beside pieces that are relatively longer, and its
     forced triangle is wider; what the chords cut off grows as the cube of the tips' length."""
     found = _reach(edges, c, kept, ratio)
@@ -269,10 +275,16 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, end
         return False
     sides, reach, now = found
     aim = JUMP_AIM
+    across = None
     while aim <= LAST_AIM:
         need = max(_length_at(dist, jumps, aim) for dist, _, jumps in reach)
         if need <= now * (1.0 + 1e-9):
             return False  # the tips, made equal, are long enough already
+        if across is None:  # measured out to the first aim's length, the longest asked
+            across = min(_across_room(edges, c, k, side, dist, need, ratio, near)
+                         for (k, _), side, (dist, _, _) in zip(c.sides, sides, reach))
+        if need > across:
+            return False  # a face across is too thin for tips that long
         tried = _tips_at(edges, c, sides, reach, need, need / aim, room)
         if tried is None:
             return False  # a kept point inside the tips' new length, or too loose an edge
