@@ -189,6 +189,33 @@ def test_check_finds_cracks_and_holes(grids, meshed):
     assert check_mesh(result) is result.check
 
 
+def test_check_names_faces_meeting_inside_their_boundaries_and_fails_only_cracks(grids, meshed):
+    """Two faces whose surfaces meet away from their edges (the SolidWorks part 2242-A's planes 337 and
+    367 share an edge and lie on its same side, one overlapping the other) may each have an interior node
+    at one point. No mesh closes that: the check named it a crack and failed. It now names the faces and
+    passes; a copy of a node on a B-rep edge, or a point whose faces it cannot tell, is still a crack."""
+    from cadedge.mesh import _multiplicity_from_grid
+
+    result = meshed("cylinder")
+    nodes, tris, faces = result.nodes, result.triangles, result.triangle_faces
+    multiplicity = _multiplicity_from_grid(nodes, result.grid)  # the grid as meshed, every segment
+    on_edge = np.zeros(len(nodes), dtype=bool)
+    on_edge[np.array(list(multiplicity)).ravel()] = True
+    inner = {int(f): [int(v) for v in np.unique(tris[faces == f]) if not on_edge[v]] for f in np.unique(faces)}
+    a, b = sorted(f for f in inner if inner[f])[:2]
+    met = nodes.copy()
+    met[inner[a][0]] = nodes[inner[b][0]]
+    check = check_triangles(met, tris, triangle_faces=faces, edge_multiplicity=multiplicity)
+    assert check.ok and check.duplicate_nodes == 0 and check.meeting_faces == [(a, b)]
+    assert any(f"{a} with {b}" in line for line in check.lines())
+    unknown = check_triangles(met, tris, edge_multiplicity=multiplicity)  # no face ids: a crack
+    assert not unknown.ok and unknown.duplicate_nodes == 1 and not unknown.meeting_faces
+    cracked = nodes.copy()
+    cracked[np.flatnonzero(on_edge & np.isin(np.arange(len(nodes)), tris[faces == a]))[0]] = nodes[inner[b][0]]
+    crack = check_triangles(cracked, tris, triangle_faces=faces, edge_multiplicity=multiplicity)
+    assert not crack.ok and crack.duplicate_nodes == 1 and not crack.meeting_faces
+
+
 def test_geo_export_meshes_in_gmsh(grids, tmp_path):
     out = tmp_path / "cyl.geo"
     result = mesh_shape(grids["cylinder"], output=out)

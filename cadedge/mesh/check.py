@@ -6,7 +6,10 @@ boundaries of open shells are expected once; non-manifold edges as often as they
 identical coordinates under different tags within one shell are a hidden crack and fail the check
 (separate shells may touch; nodes that all lie on free-boundary segments of B-rep edges are a gap of the
 input itself, as where an IGES face's seam is two edges; nodes at points two B-rep edges or vertices
-share, :func:`twin_points`, are the input's own too: a solid that touches itself along a line). Every
+share, :func:`twin_points`, are the input's own too: a solid that touches itself along a line; and nodes
+of two or more faces, none on a B-rep edge, where the faces' surfaces meet inside their boundaries: the
+SolidWorks part 2242-A's planes 337 and 367 share an edge and both lie on its same side, one overlapping
+the other, and at 1e-3 an interior node of each fell on one point; they are named, not failed). Every
 edge-grid point must be a node of some triangle, at exactly its coordinates. Quality is reported, not
 judged: the minimum angle, the share of triangles under :data:`SMALL_ANGLE` degrees and the faces that
 hold them (worst first).
@@ -53,6 +56,9 @@ class MeshCheck:
     small_angle_share: float = 0.0
     #: faces holding such triangles, worst first: (face id, how many, smallest angle in degrees)
     small_angle_faces: list[tuple[int, int, float]] = field(default_factory=list)
+    #: faces (sorted ids, per point) with nodes at one point where none lies on a B-rep edge: the faces'
+    #: own surfaces meet there, away from their edges (one overlapping another), which no mesh closes
+    meeting_faces: list[tuple[int, ...]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -75,6 +81,11 @@ class MeshCheck:
             more = len(self.small_angle_faces) - MAX_FACES_SHOWN
             out.append(f"  quality: {100 * self.small_angle_share:.2g}% of triangles under {SMALL_ANGLE:g} deg, "
                        f"on faces {worst}" + (f" and {more} more" if more > 0 else ""))
+        if self.meeting_faces:
+            pairs = ", ".join(" with ".join(map(str, f)) for f in self.meeting_faces[:MAX_FACES_SHOWN])
+            more = len(self.meeting_faces) - MAX_FACES_SHOWN
+            out.append(f"  faces meeting inside their boundaries (the B-rep's own surfaces overlap or touch there; "
+                       f"their nodes coincide, not joined): {pairs}" + (f" and {more} more" if more > 0 else ""))
         verdict = "check: ok" if self.ok else f"check: FAILED ({len(self.problems)} problems)"
         if self.ok and missing:
             verdict += (f" on the faces meshed, open where the {missing} failed "
@@ -194,7 +205,13 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
     # (an IGES face whose seam is two edges), so their coinciding nodes are the input's gap, not a crack
     on_free = np.zeros(len(nodes), dtype=bool)
     on_free[uniq[boundary].ravel()] = True
+    # nodes on B-rep edges: where none of a point's nodes is, faces meet there away from their boundaries
+    on_edge = None
+    if edge_multiplicity:
+        on_edge = np.zeros(len(nodes), dtype=bool)
+        on_edge[np.array(list(edge_multiplicity), dtype=np.int64).ravel()] = True
     n_dup = 0
+    overlaps: set[tuple[int, ...]] = set()
     twin_keys = row_keys(twins) if twins is not None and len(twins) else None
     for comp in labels:  # separate shells may touch (an assembly); within one shell it is a crack
         comp_nodes = _nodes_of(tris[np.asarray(comp)], len(nodes))
@@ -204,7 +221,19 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
         np.logical_or.at(inner, dup_inverse.ravel(), ~on_free[comp_nodes])
         if twin_keys is not None:  # unless two of the B-rep's own edges or vertices hold it
             inner &= ~np.isin(point_keys, twin_keys)
-        n_dup += int(((dup_counts > 1) & inner).sum())
+        dup = (dup_counts > 1) & inner
+        if on_edge is not None and dup.any():  # every node there inside its face: the faces meet, no crack
+            edged = np.zeros(len(dup_counts), dtype=bool)
+            np.logical_or.at(edged, dup_inverse.ravel(), on_edge[comp_nodes])
+            away = dup & ~edged
+            if away.any():
+                point = dup_inverse.ravel()
+                mine = away[point]
+                for k, faces in _faces_at(tris, tri_faces, comp_nodes[mine], point[mine]).items():
+                    if len(faces) > 1:  # nodes of one face alone at one point stay a crack
+                        overlaps.add(faces)
+                        dup[k] = False
+        n_dup += int(dup.sum())
     if n_dup:
         problems.append(f"{n_dup} coordinates carry more than one mesh node within a shell (a crack between faces)")
     n_grid = n_missing = 0
@@ -219,4 +248,18 @@ def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces:
     return MeshCheck(nodes=len(used_nodes), triangles=len(tris), shells=shells, grid_nodes=n_grid,
                      missing_grid_nodes=n_missing, duplicate_nodes=n_dup,
                      min_angle_deg=float(angles.min()) if len(angles) else float("nan"), problems=problems,
-                     small_angle_share=share, small_angle_faces=worst_faces)
+                     small_angle_share=share, small_angle_faces=worst_faces, meeting_faces=sorted(overlaps))
+
+
+def _faces_at(tris: np.ndarray, tri_faces: np.ndarray, at: np.ndarray,
+              point: np.ndarray) -> dict[int, tuple[int, ...]]:
+    """Point -> the faces (sorted ids) of the triangles on the nodes ``at`` that stand there (``point``:
+    which point each node stands at)."""
+    node_faces: dict[int, set[int]] = {}
+    for t in np.flatnonzero(np.isin(tris, at).any(axis=1)):
+        for v in tris[t]:
+            node_faces.setdefault(int(v), set()).add(int(tri_faces[t]))
+    faces: dict[int, set[int]] = {}
+    for v, k in zip(at.tolist(), point.tolist()):
+        faces.setdefault(k, set()).update(node_faces.get(v, ()))
+    return {k: tuple(sorted(f)) for k, f in faces.items()}
