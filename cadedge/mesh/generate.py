@@ -371,13 +371,18 @@ def _chunk_size(last: int, per_face: float, bound: float | None) -> int:
 def _mesh_batches(out: dict[int, FaceOutcome], surfaces: list[int], *,
                   batch_started: Callable[[list[int]], None], prepare: Callable[[int, int], None],
                   finished: Callable[[int, int, str | None], None], bound: float | None = None,
-                  deleted: Callable[[], list[int]] = lambda: []) -> set[int]:
+                  deleted: Callable[[], list[int]] = lambda: [],
+                  order: Callable[[int], float] | None = None) -> set[int]:
     """The first strategy on ``surfaces`` in chunks (:func:`_chunk_size`, with the watchdog's ``bound`` on
     one attempt), one gmsh call per group of faces whose ``prepare`` leaves the same :data:`FACE_OPTIONS`;
-    outcomes go into ``out``. Returns the surfaces meshed in an earlier chunk whose meshes gmsh deleted
-    (``deleted()`` after each call, which resets them in ``out``; see :class:`CurveWatch`)."""
+    outcomes go into ``out``. With ``order`` (face -> a number), the faces are taken in its order (ties
+    as given), so that faces likely to get the same options share chunks and calls. Returns the surfaces
+    meshed in an earlier chunk whose meshes gmsh deleted (``deleted()`` after each call, which resets them
+    in ``out``; see :class:`CurveWatch`)."""
     first = STRATEGIES[0]
     again: set[int] = set()
+    if order is not None:
+        surfaces = sorted(surfaces, key=lambda s: order(out[s].face))
     done, size, per_face = 0, 0, 0.0
     while done < len(surfaces):
         size = _chunk_size(size, per_face, bound)
@@ -417,6 +422,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
                cleared: Callable[[list[int]], None] = lambda faces: None,
                as_gmsh_alone: frozenset[int] | set[int] = frozenset(),
                batch_bound: float | None = None,
+               batch_order: Callable[[int], float] | None = None,
                watch: CurveWatch | None = None) -> dict[int, FaceOutcome]:
     """Mesh every surface on its own through :data:`~cadedge.mesh.strategies.STRATEGIES`; returns each surface's outcome.
 
@@ -435,7 +441,9 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
     gmsh's own splits, after the call), with the meshed faces cleared for it (maybe none; they are meshed
     again): until a strategy has meshed the face, its neighbours' last meshes, on the curves as they were,
     are the ones a process stopped during the attempt can hand over.
-    ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches.
+    ``batch_bound``: the watchdog's bound on one attempt (CPU seconds), which sizes the batches;
+    ``batch_order(face)``: a number by which the batches take their faces, those likely to get the same
+    options side by side (a face's options are known only once ``prepare`` has run, inside its batch).
     ``watch`` (a :class:`CurveWatch`, made here if not given) follows the curves gmsh splits itself; the
     faces whose meshes it deleted for that are meshed again (at most :data:`MESHED_AGAIN` times each; past
     ``deadline`` too, by the strategy that meshed them), once ``cleared`` has named them.
@@ -491,7 +499,7 @@ def mesh_faces(surfaces: list[int], face_of: dict[int, int], *,
             s = queue.pop(0)
             if batched and s not in quick:  # the grids are done: the first strategy's batches
                 redo = _mesh_batches(out, batched, batch_started=batch_started, prepare=prepare,
-                                     finished=finished, bound=batch_bound, deleted=deleted)
+                                     finished=finished, bound=batch_bound, deleted=deleted, order=batch_order)
                 tried_first, batched = set(batched) - redo, []
                 queue += sorted(n for n in redo if n not in queue)
             rec = out[s]

@@ -396,11 +396,14 @@ def run_job(job: MeshJob, progress: Any = None, deliver: Any = None) -> JobResul
 
         own_curves: set[int] = set()
         watch = CurveWatch(per_curve=True)
+        # faces of one curvature count (by surface type, cadedge.mesh.fidelity) side by side in the batches:
+        # a gmsh call costs about as much for one face as for 24 (it rebuilds every element of the model)
+        per_circle = (job.options.get("fidelity") or {}).get("face_per_circle", {})
         ctx.outcomes = mesh_faces(ctx.surfaces, face_of, skip=job.skip, started=started, finished=finished,
                                   deadline=job.deadline, known_ok=job.known_ok, own_curves=own_curves,
                                   batch_started=batch_started, as_gmsh_alone=job.as_gmsh_alone,
                                   prepare=prepare, no_batch=job.no_batch | ctx.alone, batch_bound=job.attempt_bound,
-                                  cleared=cleared, watch=watch)
+                                  batch_order=lambda face: per_circle.get(face, 0.0), cleared=cleared, watch=watch)
         deliver_edges()
         if partial is not None:  # faces gmsh did not import: named with its reason, keyed apart from surfaces
             from .outcomes import FaceOutcome
