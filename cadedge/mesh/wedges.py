@@ -267,9 +267,9 @@ def _lengthen_tips(edges: list, c: Corner, kept: list, ratio: float, curves, end
     id -> how far a grid may end from its curve, see :func:`~cadedge.mesh.grading.cut_on_curve`). The
     thin faces' splits put those points there: an Ultimaker 2 feeder part's plane narrows to two cusps on
     a B-spline whose cylinder band across is 0.001 wide, and its tips, lengthened to 0.17, left the band
-    62 triangles of 0.09-5 degrees that nothing forced. In a cusp the wedge's width grows as the square of the
-    distance from the vertex, so a longer tip stands beside pieces that are relatively longer, and its
-    forced triangle is wider; what the chords cut off grows as the cube of the tips' length."""
+    62 triangles of 0.09-4.8 degrees that nothing forced. In a cusp the wedge's width grows as the square
+    of the distance from the vertex, so a longer tip stands beside pieces that are relatively longer, and
+    its forced triangle is wider; what the chords cut off grows as the cube of the tips' length."""
     found = _reach(edges, c, kept, ratio)
     if found is None:
         return False
