@@ -53,26 +53,34 @@ def test_a_face_with_many_boundary_nodes_starts_from_the_older_triangulation_in_
     from cadedge.mesh.generate import OLD_INITIAL_FROM, boundary_nodes, mesh_faces
     from cadedge.mesh.gmsh_model import gmsh_session
 
-    calls = []
-    generate = gmsh.model.mesh.generate
-
-    def recorded(dim=3):
-        if dim == 2:
-            visible = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getVisibility(2, s)]
-            calls.append((visible, gmsh.option.getNumber("Mesh.OldInitialDelaunay2D")))
-        return generate(dim)
-
     with gmsh_session():
         strip, square = _rectangle(0.0, 2.0, 100.0, 3, 1001), _rectangle(20.0, 1.0, 1.0, 4, 4)
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
         gmsh.model.mesh.generate(1)
         assert boundary_nodes(strip) >= OLD_INITIAL_FROM > boundary_nodes(square)
-        monkeypatch.setattr(gmsh.model.mesh, "generate", recorded)
+        calls = _record_calls(monkeypatch, "Mesh.OldInitialDelaunay2D")
         out = mesh_faces([strip, square], {}, batch_started=lambda faces: None)
         assert all(o.ok for o in out.values()), out
         assert sorted(calls) == [([strip], 1.0), ([square], 0.0)]
         assert gmsh.option.getNumber("Mesh.OldInitialDelaunay2D") == 0
+
+
+def _record_calls(monkeypatch, option: str) -> list:
+    """gmsh's ``generate`` patched to record each 2-D call: its visible surfaces and ``option``'s value."""
+    import gmsh
+
+    calls = []
+    generate = gmsh.model.mesh.generate
+
+    def recorded(dim=3):
+        if dim == 2:
+            visible = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getVisibility(2, s)]
+            calls.append((visible, gmsh.option.getNumber(option)))
+        return generate(dim)
+
+    monkeypatch.setattr(gmsh.model.mesh, "generate", recorded)
+    return calls
 
 
 def _rectangle(x0, w, h, nw, nh):
@@ -122,15 +130,6 @@ def test_faces_of_the_same_options_share_their_batches_gmsh_calls(monkeypatch):
     from cadedge.mesh.generate import mesh_faces
     from cadedge.mesh.gmsh_model import gmsh_session
 
-    calls = []
-    generate = gmsh.model.mesh.generate
-
-    def recorded(dim=3):
-        if dim == 2:
-            visible = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getVisibility(2, s)]
-            calls.append((visible, gmsh.option.getNumber("Mesh.MeshSizeFromCurvature")))
-        return generate(dim)
-
     def count(face: int) -> float:
         return 10.0 + face % 2
 
@@ -142,7 +141,7 @@ def test_faces_of_the_same_options_share_their_batches_gmsh_calls(monkeypatch):
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
         gmsh.model.mesh.generate(1)
-        monkeypatch.setattr(gmsh.model.mesh, "generate", recorded)
+        calls = _record_calls(monkeypatch, "Mesh.MeshSizeFromCurvature")
         mixed = mesh_faces(squares, {}, batch_started=lambda faces: None, prepare=prepare)
         assert all(o.ok for o in mixed.values()), mixed
         assert len(calls) == 5
