@@ -216,6 +216,50 @@ def test_check_names_faces_meeting_inside_their_boundaries_and_fails_only_cracks
     assert not crack.ok and crack.duplicate_nodes == 1 and not crack.meeting_faces
 
 
+def _squares_on_two_edges_between_two_vertices():
+    """Four unit squares in a compound: two on one edge from (0, 0, 0) to (1, 0, 0) and two on another
+    edge between the same two vertices, lying on it (a solid touching itself along a segment, as Voron
+    Trident's umbilical mount does where a hole's 0.00067 arc and a wall's line share their vertices)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import (BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeVertex,
+                                    BRepBuilderAPI_MakeWire)
+    from OCP.gp import gp_Pnt
+    from OCP.TopoDS import TopoDS_Compound
+
+    def vertex(p):
+        return BRepBuilderAPI_MakeVertex(gp_Pnt(*map(float, p))).Vertex()
+
+    a, b = vertex((0, 0, 0)), vertex((1, 0, 0))
+    one, two = BRepBuilderAPI_MakeEdge(a, b).Edge(), BRepBuilderAPI_MakeEdge(a, b).Edge()
+    compound, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(compound)
+    for edge, far in [(one, (0, -1, 0)), (one, (0, 0, 1)), (two, (0, 1, 0)), (two, (0, 0, -1))]:
+        c, d = vertex(np.add((1, 0, 0), far)), vertex(far)
+        wire = BRepBuilderAPI_MakeWire(edge, BRepBuilderAPI_MakeEdge(b, c).Edge(), BRepBuilderAPI_MakeEdge(c, d).Edge(),
+                                       BRepBuilderAPI_MakeEdge(d, a).Edge()).Wire()
+        builder.Add(compound, BRepBuilderAPI_MakeFace(wire, True).Face())
+    return compound
+
+
+def test_check_counts_a_segment_of_two_edges_for_both_edges_faces():
+    """Two B-rep edges between the same two vertices, lying on each other, share their one segment: the
+    faces of both put four triangles on it. The check expected one edge's two and failed the mesh (exit 1
+    on the umbilical mount); it now expects both edges' counts, and still fails a missing triangle."""
+    from cadedge.mesh import _multiplicity_from_grid
+
+    grid = cadedge.refine_shape(_squares_on_two_edges_between_two_vertices(), ald=ALD)
+    shared = [e for e in grid.edges if len(e.faces) == 2]
+    assert len(shared) == 2 and np.array_equal(shared[0].points, shared[1].points)
+    result = mesh_shape(grid)
+    assert result.check.ok and not any(s.bad_edges for s in result.check.shells)
+    multiplicity = _multiplicity_from_grid(result.nodes, grid)  # the raw check, from the grid alone
+    (segment,) = [pair for pair, n in multiplicity.items() if n == 4]
+    assert check_mesh(result.nodes, result.triangles, grid=grid).ok
+    on_segment = np.flatnonzero(np.isin(result.triangles, segment).sum(axis=1) == 2)
+    assert len(on_segment) == 4
+    assert not check_mesh(result.nodes, np.delete(result.triangles, on_segment[0], axis=0), grid=grid).ok
+
+
 def test_geo_export_meshes_in_gmsh(grids, tmp_path):
     out = tmp_path / "cyl.geo"
     result = mesh_shape(grids["cylinder"], output=out)

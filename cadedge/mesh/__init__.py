@@ -230,7 +230,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     from ..occt.empty import without_empty
     from ..occt.sameparam import in_step
     from ..occt.topology import Topology
-    from .check import check_triangles, twin_points
+    from .check import check_triangles, segment_uses, twin_points
     from .coincident import meshed_as, merged_shape
     from .gmsh_model import shape_to_brep
     from .isolate import run_isolated
@@ -273,7 +273,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
             pts = [e.points for e in meshed.edges
                    if e.id in imposed and e.faces and not failed.intersection(e.faces) and len(e.points)]
             grid_points = np.vstack(pts) if pts else np.zeros((0, 3))
-        multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
+        multiplicity = segment_uses(res.edge_pairs, res.edge_uses)
         check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
                                 grid_points=grid_points, edge_multiplicity=multiplicity, twins=twins)
     notes = list(res.notes)
@@ -386,7 +386,9 @@ def _face_grid_points(grid: ShapeGrid) -> np.ndarray:
 
 def _multiplicity_from_grid(nodes: np.ndarray, grid: ShapeGrid) -> dict[tuple[int, int], int]:
     """Expected triangle counts of grid segments found in a raw mesh (by exact coordinates; where several
-    nodes share a point, as on two B-rep edges lying on each other, every pair of them)."""
+    nodes share a point, as on two B-rep edges lying on each other, every pair of them; where one node
+    is at each end and two edges have that segment, both edges' counts, as
+    :func:`~cadedge.mesh.check.segment_uses`)."""
     from .check import row_keys
 
     keys = row_keys(nodes)
@@ -400,9 +402,11 @@ def _multiplicity_from_grid(nodes: np.ndarray, grid: ShapeGrid) -> dict[tuple[in
         lo, hi = np.searchsorted(ordered, k, side="left"), np.searchsorted(ordered, k, side="right")
         n = len(e.faces) if len(e.faces) > 1 else 0  # one face: free boundary or seam, both fine
         for i in range(len(k) - 1):
+            single = hi[i] - lo[i] == 1 and hi[i + 1] - lo[i + 1] == 1
             for a in order[lo[i]:hi[i]]:
                 for b in order[lo[i + 1]:hi[i + 1]]:
-                    out[(int(min(a, b)), int(max(a, b)))] = n
+                    pair = (int(min(a, b)), int(max(a, b)))
+                    out[pair] = out[pair] + n if single and pair in out else n
     return out
 
 

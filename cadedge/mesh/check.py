@@ -147,6 +147,24 @@ def twin_points(edges: list) -> tuple[np.ndarray, list[tuple[int, int]]]:
     return points[first[at[counts > 1]]], [(int(a), int(b)) for a, b in twins]
 
 
+def segment_uses(pairs: np.ndarray, uses: np.ndarray) -> dict[tuple[int, int], int]:
+    """Sorted node pairs (k, 2) of the curves' segments and their triangle counts (k,) as the check's
+    ``edge_multiplicity``: a pair that is a segment of two curves has both counts. Two B-rep edges may
+    share their two vertices and lie on each other (Voron Trident's umbilical mount: a hole's 0.00067 arc
+    on a wall's line, where the solid touches itself), and their faces put four triangles on the one
+    segment; the check expected the last curve's two and failed a conforming mesh.
+
+    >>> segment_uses(np.array([[0, 1], [1, 2], [0, 1]]), np.array([2, 2, 2]))
+    {(0, 1): 4, (1, 2): 2}
+    """
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if not len(pairs):
+        return {}
+    unique, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    total = np.bincount(inverse.ravel(), weights=np.asarray(uses, dtype=np.float64), minlength=len(unique))
+    return {(int(a), int(b)): int(n) for (a, b), n in zip(unique.tolist(), total.round().astype(np.int64).tolist())}
+
+
 def check_triangles(nodes: np.ndarray, triangles: np.ndarray, *, triangle_faces: np.ndarray | None = None,
                     grid_points: np.ndarray | None = None,
                     edge_multiplicity: dict[tuple[int, int], int] | None = None,
