@@ -185,3 +185,49 @@ def test_a_face_whose_edges_cross_is_meshed_laid_flat_on_its_grids_without_hangi
     assert smalls and all(a.forced for a in smalls)
     assert any("crosses itself" in a.reason for a in smalls)
     assert math.isfinite(row.area_deficit) and abs(row.area_deficit) < 0.1
+
+
+def _overshot_corner() -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """A unit square (counter-clockwise) whose top-right corner vertex sits 0.0014 above the top side, on the
+    right side's line, the right side's grid running on past the top's line to it and the top's grid
+    starting 0.0003 beyond the right side's line: the two sides cross at (1, 1) between finely spaced nodes
+    (a TraceParts USB socket's plane face 787, its vertex off both edges' lines)."""
+    right = [(1.0, y) for y in (0.0, 0.5, 0.99, 0.998, 0.9995, 0.99985, 1.0001, 1.0003, 1.0008, 1.0011)]
+    top = [(x, 1.0) for x in (1.0003, 1.00014, 0.99998, 0.9998, 0.9995, 0.999, 0.99, 0.5)]
+    plane = np.array([(0.0, 0.0)] + right + [(1.0, 1.0014)] + top + [(0.0, 1.0)])
+    return plane, [(k, (k + 1) % len(plane)) for k in range(len(plane))]
+
+
+def test_a_corner_whose_sides_overshoot_each_other_is_cut_off_not_turned_back():
+    """The small loop between the corner vertex and where its two sides cross is turned inside out. Moving one
+    node at a time across the other side's line sent the nodes back past their neighbours, and gmsh made no
+    triangles of the plane (the face failed after every strategy hung). The loop's nodes now go onto the
+    two sides' lines through the crossing, in order, each side's on its own (spread by length along both,
+    a node of the top side went onto the right side's line, and at 1e-3 the socket's face made a
+    triangle of three nodes of one straight edge)."""
+    from cadedge.mesh.flat import mesh_plane
+
+    plane, segments = _overshot_corner()
+    assert len(crossings(plane, segments)) == 1
+    moved, places = untangle(plane, segments, reach=0.01)
+    assert not len(crossings(moved, segments)) and len(places) == 1
+    steps = np.diff(np.vstack([moved, moved[:1]]), axis=0)
+    turns = np.einsum("ij,ij->i", steps, np.roll(steps, -1, axis=0)) / (
+        np.linalg.norm(steps, axis=1) * np.linalg.norm(np.roll(steps, -1, axis=0), axis=1))
+    assert turns.min() > -0.5  # no side turns back on itself
+    assert np.linalg.norm(moved - plane, axis=1).max() <= 0.0015  # within the corner's overshoot
+    # each side's nodes on its own line: three nodes of one straight edge in a triangle make it flat
+    right, top = plane[:, 0] == 1.0, (plane[:, 1] == 1.0) & (plane[:, 0] != 1.0)
+    assert np.allclose(moved[right, 0], 1.0, atol=1e-12) and np.allclose(moved[top, 1], 1.0, atol=1e-12)
+    gmsh = pytest.importorskip("gmsh")
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        got = mesh_plane(moved, segments, np.full(len(moved), 0.1), 6, lambda: None, {})
+    finally:
+        gmsh.finalize()
+    assert not isinstance(got, str)
+    points, triangles = got
+    corners = points[triangles]
+    twice = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(twice > 0) and 0.5 * twice.sum() == pytest.approx(1.0, abs=1e-5)
