@@ -776,6 +776,43 @@ def test_the_optimisers_budget_is_work_done_so_a_model_meshes_the_same_on_every_
     assert not all(np.array_equal(a, b) for a, b in zip(once, unbounded))
 
 
+def test_a_face_with_a_sliver_gets_all_its_rounds_in_the_first_sweep():
+    """The first sweep gives each face one round of the later stages and the second the rest, to the faces
+    that set the smallest angle, while the budget lasts. On a shard of 194 faces (Voron 0's Manta DIN
+    mount) the first sweep spent it and three faces kept 4.5-degree triangles one more round merged
+    away. A face under SLIVER_DEG now gets all STAGE_ROUNDS in the first sweep; others keep one."""
+    gmsh = pytest.importorskip("gmsh")
+    from types import SimpleNamespace
+
+    from cadedge.mesh import optimize
+    from cadedge.mesh.outcomes import FaceOutcome
+
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        for k in range(2):
+            gmsh.model.occ.addRectangle(5.0 * k, 0, 0, 4, 4)
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(2)
+        tags, xyz, uv = gmsh.model.mesh.getNodes(2, 2, includeBoundary=False, returnParametricCoord=True)
+        x, uv = np.reshape(xyz, (-1, 3)), np.reshape(uv, (-1, 2))
+        i = int(np.argmin(x[:, 1]))  # the node nearest the bottom side, moved almost onto it: a sliver
+        gmsh.model.mesh.setNode(int(tags[i]), [x[i, 0], 0.01, 0.0], [uv[i, 0], 0.01])
+        assert optimize._face_min_angle(2) < 5.0 < 20.0 < optimize._face_min_angle(1)
+        job = SimpleNamespace(options={}, share=1.0, finish_by=None)
+        ctx = SimpleNamespace(job=job, emap=SimpleNamespace(face_of_surface={}), progress=None, deliver=None,
+                              outcomes={s: FaceOutcome(face=s, surface=s, strategy="Frontal-Delaunay") for s in (1, 2)})
+        calls = []
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(optimize, "smooth_face", lambda s, **kw: calls.append((s, kw["passes"], kw["rounds"])) or False)
+            optimize.after_generate(ctx)
+    finally:
+        gmsh.finalize()
+    first = {s: rounds for s, passes, rounds in calls if passes}
+    assert first == {2: optimize.STAGE_ROUNDS, 1: 1}
+
+
 def test_focused_rounds_alone_lift_a_faces_worst_triangles():
     """The optimiser's first sweep on a process with many triangles (optimize.FOCUS_FIRST): rounds on
     the nodes near each face's worst triangles only, no pass over the whole face, no node added or

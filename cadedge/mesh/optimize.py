@@ -50,7 +50,7 @@ from .gridded import NAME as GRID
 from .moves import (CLIMB_BELOW, _near_bad, around, climb_nodes, flip_edges, flip_folds, smooth_nodes,
                     untangle_nodes)
 from .project import Projector
-from .quality import min_angles
+from .quality import SLIVER_DEG, min_angles
 from .work import Meter
 
 #: Passes (edge swaps, then smoothing) per face.
@@ -460,7 +460,10 @@ def after_generate(ctx) -> None:
     face one round of the later stages, a second the rest of :data:`STAGE_ROUNDS` to the faces it
     changed that set the mesh's smallest angle (within :data:`SWEEP_MARGIN`, under
     :data:`~cadedge.mesh.collapse.COLLAPSE_BELOW`), so one large face does not take the time of the
-    others; where the faces hold over :data:`FOCUS_FIRST` triangles, a sweep of focused rounds on every
+    others; a face with a sliver (under :data:`~cadedge.mesh.quality.SLIVER_DEG`) gets all its rounds in
+    the first sweep, before the budget goes to better faces (Voron 0's Manta DIN mount: the first sweep
+    over a shard's 194 faces spent it, and three faces kept 4.5-degree triangles one more round would
+    have merged away); where the faces hold over :data:`FOCUS_FIRST` triangles, a sweep of focused rounds on every
     face's worst triangles comes before them. The faces whose mesh changed land in ``ctx.smoothed``."""
     import gmsh
 
@@ -500,7 +503,8 @@ def after_generate(ctx) -> None:
             slack = STUCK_SLACK * target if target is not None and f in stuck else 0.0
             say(f"optimise {f}")
             if smooth_face(s, brep_area=area, target=target, slack=slack, own_slack=STUCK_OWN if slack else 0.0,
-                           passes=passes, rounds=rounds, focus_first=focus_first,
+                           passes=passes, rounds=STAGE_ROUNDS if passes and worst[s] < SLIVER_DEG else rounds,
+                           focus_first=focus_first,
                            meter=(part := meter.part(share))):
                 kept.append(f)
                 size[s] = ctx.outcomes[s].triangles = len(gmsh.model.mesh.getElementsByType(2, s)[0])
