@@ -260,6 +260,54 @@ def test_check_counts_a_segment_of_two_edges_for_both_edges_faces():
     assert not check_mesh(result.nodes, np.delete(result.triangles, on_segment[0], axis=0), grid=grid).ok
 
 
+def _faces_on_a_hooked_edge():
+    """Two unit-wide planar faces at right angles on one edge from (0, 0, 0) to (2, 0, 0) whose curve (a
+    degree-1 B-spline) runs out to x = 1, back to 0.9 and on: a hook along itself, as a SolidWorks
+    helix's or a TraceParts socket's edges make."""
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import (BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeVertex,
+                                    BRepBuilderAPI_MakeWire)
+    from OCP.Geom import Geom_BSplineCurve
+    from OCP.gp import gp_Pnt
+    from OCP.TColgp import TColgp_Array1OfPnt
+    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+    from OCP.TopoDS import TopoDS_Compound
+
+    along = [0.0, 1.0, 0.9, 2.0]
+    poles, knots, mults = TColgp_Array1OfPnt(1, 4), TColStd_Array1OfReal(1, 4), TColStd_Array1OfInteger(1, 4)
+    for i, x in enumerate(along, start=1):
+        poles.SetValue(i, gp_Pnt(x, 0.0, 0.0))
+        knots.SetValue(i, float(i))
+        mults.SetValue(i, 2 if i in (1, 4) else 1)
+    vertex = {name: BRepBuilderAPI_MakeVertex(gp_Pnt(*p)).Vertex() for name, p in
+              {"a": (0.0, 0.0, 0.0), "b": (2.0, 0.0, 0.0), "c": (2.0, -1.0, 0.0), "d": (0.0, -1.0, 0.0),
+               "e": (2.0, 0.0, 1.0), "f": (0.0, 0.0, 1.0)}.items()}
+    hook = BRepBuilderAPI_MakeEdge(Geom_BSplineCurve(poles, knots, mults, 1), vertex["a"], vertex["b"]).Edge()
+    compound, builder = TopoDS_Compound(), BRep_Builder()
+    builder.MakeCompound(compound)
+    for far, near in (("c", "d"), ("e", "f")):
+        wire = BRepBuilderAPI_MakeWire(hook, BRepBuilderAPI_MakeEdge(vertex["b"], vertex[far]).Edge(),
+                                       BRepBuilderAPI_MakeEdge(vertex[far], vertex[near]).Edge(),
+                                       BRepBuilderAPI_MakeEdge(vertex[near], vertex["a"]).Edge()).Wire()
+        builder.Add(compound, BRepBuilderAPI_MakeFace(wire, True).Face())
+    return compound
+
+
+def test_a_grid_point_where_the_edges_curve_turns_back_is_not_imposed():
+    """The refined grid follows a curve that hooks back along itself, a point at the hook's tip; both faces
+    on the edge then fill the hook (a SolidWorks DIN-rail mount at 1e-3: 48 segments with four triangles,
+    check FAILED), or gmsh fails on the grid and its own curve mesh replaces it (here, before). The tip is
+    dropped from the grid imposed on the faces, and a note says which edge turns back."""
+    grid = cadedge.refine_shape(_faces_on_a_hooked_edge(), ald=ALD)
+    (hooked,) = [e for e in grid.edges if len(e.faces) == 2]
+    assert np.allclose(hooked.points[:, 0], [0.0, 1.0, 0.9, 2.0])  # the refiner follows the curve
+    result = mesh_shape(grid)
+    assert result.check.ok and len(result.failures) == 0
+    assert any(n.startswith(f"edge {hooked.id}: the curve turns back on itself") for n in result.notes)
+    assert not any("gmsh's own curve mesh" in n for n in result.notes)
+    assert not np.any(np.all(np.isclose(result.nodes, [1.0, 0.0, 0.0]), axis=1))  # the tip is no node
+
+
 def test_geo_export_meshes_in_gmsh(grids, tmp_path):
     out = tmp_path / "cyl.geo"
     result = mesh_shape(grids["cylinder"], output=out)

@@ -26,6 +26,8 @@ from .boundary_fit import fit_curved, fit_grids, fit_planes, plane_room
 from .grading import grade_faces
 from .jobclock import JobClock
 from .proximity import fit_to_sizes
+from .shards import faces_text
+from .turnbacks import drop_turn_backs
 from .wedges import grade_wedges
 from .widths import fit_to_widths
 
@@ -68,4 +70,8 @@ def fit_node_grids(grid: ShapeGrid, refined: ShapeGrid, fidelity: dict, surface_
         grid = fit_grids(grid, surface_ald, brep_areas=areas, kinds=kinds, credit=credits)
     if clock.allows("the narrow corners' tips matched again"):
         grid = grade_wedges(grid)  # a fit above may have cut one tip of a corner
+    grid, hooked = drop_turn_backs(grid)  # last: a split inside a hook puts its tip back
+    if hooked:
+        notes.append(f"{faces_text(set(hooked), noun='edge')}: the curve turns back on itself; the grid "
+                     "imposed on the faces crosses the hook's base (both faces would fill the hook, back to back)")
     return grid, cap, notes
