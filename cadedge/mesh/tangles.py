@@ -110,6 +110,11 @@ def _cut_loops(x: np.ndarray, seg: np.ndarray, pairs: np.ndarray, reach: float) 
     for k, chain in enumerate(chains):
         for i, signed in enumerate(chain):
             where[signed if signed >= 0 else -signed - 1] = (k, i)
+    def ends(signed: int) -> tuple[int, int]:
+        """A segment's rows in the order its loop runs it (``signed`` as :func:`loops` gives it)."""
+        a, b = seg[signed if signed >= 0 else -signed - 1]
+        return (int(a), int(b)) if signed >= 0 else (int(b), int(a))
+
     moved = np.zeros(len(x), dtype=bool)
     out = []
     for s, t in pairs.tolist():
@@ -121,11 +126,6 @@ def _cut_loops(x: np.ndarray, seg: np.ndarray, pairs: np.ndarray, reach: float) 
             i, j = j, i
         if not 1 <= (j - i) % len(chain) <= SHORT_LOOP:
             continue
-
-        def ends(signed: int) -> tuple[int, int]:
-            a, b = seg[signed if signed >= 0 else -signed - 1]
-            return (int(a), int(b)) if signed >= 0 else (int(b), int(a))
-
         first, last = ends(chain[i]), ends(chain[j])
         inner = [ends(chain[(i + m) % len(chain)])[0] for m in range(1, (j - i) % len(chain) + 1)]
         if moved[inner].any() or moved[[first[0], last[1]]].any():
