@@ -269,9 +269,9 @@ def _faces_on_a_hooked_edge():
                                     BRepBuilderAPI_MakeWire)
     from OCP.Geom import Geom_BSplineCurve
     from OCP.gp import gp_Pnt
-    from OCP.TColgp import TColgp_Array1OfPnt
-    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
     from OCP.TopoDS import TopoDS_Compound
+
+    from cadedge.occt.compat import TColgp_Array1OfPnt, TColStd_Array1OfInteger, TColStd_Array1OfReal
 
     along = [0.0, 1.0, 0.9, 2.0]
     poles, knots, mults = TColgp_Array1OfPnt(1, 4), TColStd_Array1OfReal(1, 4), TColStd_Array1OfInteger(1, 4)
