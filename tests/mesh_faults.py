@@ -60,6 +60,14 @@ def hang_after_meshing(ctx) -> None:
         time.sleep(1)
 
 
+def idle_past_the_kill_point(ctx) -> None:
+    """Once the mesh is written, wait to halfway between the job's soft deadline and its ``finish_by`` (72.5%
+    of the timeout, past the 70% kill point), unless meshing faces again on an edge another process changed
+    (``job.adopt``)."""
+    if not ctx.job.adopt:
+        time.sleep(max(0.0, (ctx.job.deadline + ctx.job.finish_by) / 2 - time.time()))
+
+
 def lose_a_face_and_hang(ctx) -> None:
     """Once every face is meshed, clear face ``FAULT_FACE`` (as a re-mesh starts) and never return: the hard
     timeout delivers the other faces only."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import numpy as np
 import pytest
@@ -190,6 +191,28 @@ def test_a_neighbour_is_meshed_again_on_an_edge_another_process_changed(split_sm
         assert res.own_mesh_edges
     mesh = meshio.read(out)
     assert {"face 1", "face 2", "face 3"} <= set(mesh.field_data)
+
+
+def test_faces_meshed_again_after_the_shards_get_the_time_then_left(split_small_jobs, cylinder, tmp_path):
+    """The shards end past the job's kill point (their optimiser may run that long): the side, meshed again
+    on the cap's split curve, gets its share of the time then left (11 s of 40), and is meshed, not
+    stopped at its first attempt."""
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.isolate import KILL_SHARE, run_isolated
+    from cadedge.mesh.sizes import SizeField
+
+    first = next(k for k, s in enumerate(STRATEGIES) if s.split)
+    job = MeshJob(source="cyl", brep=shape_to_brep(cylinder.shape),
+                  grid=dataclasses.replace(cylinder, shape=None, curves=None), field=SizeField(cylinder), mode="nodes",
+                  skip={FAULT_FACE: {k: "barred by the test" for k in range(first)}},
+                  hooks={"after_mesh": ["mesh_faults:idle_past_the_kill_point"]})
+    timeout = 40.0
+    started = time.monotonic()
+    res = run_isolated(job, output=tmp_path / "c.msh", workers=2, timeout=timeout)
+    assert time.monotonic() - started > KILL_SHARE * timeout  # the shards did idle past the kill point
+    assert any("meshed again on the changed edge" in n for n in res.notes), res.notes
+    assert all(o.ok for o in res.faces), res.faces
+    assert sorted(np.unique(res.triangle_faces)) == [1, 2, 3]
 
 
 def test_a_split_job_past_its_timeout_joins_what_every_child_delivered(split_small_jobs, cylinder, tmp_path):

@@ -34,7 +34,8 @@ meshed faces, may go on past the soft deadline up to :data:`FINISH_SHARE`.
 
 A large job may be split (``workers``, :mod:`cadedge.mesh.shards`): its faces are meshed in several
 children at once, each under its own watchdog and restarts as above, all within the one ``timeout``;
-their meshes are joined by node coordinates and written with meshio.
+their meshes are joined by node coordinates and written with meshio. Faces meshed again after them, on
+an edge another shard changed, get the same shares of the time then left, where later than the job's own.
 
 The caller gets a :class:`~cadedge.mesh.worker.JobResult` in every case, never an exception from gmsh;
 hangs and crashes that cost a face are in ``result.notes`` and in that face's attempts. On
@@ -465,13 +466,16 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
 
     total = weight(range(1, job.grid.faces + 1), limits.segments)
 
-    def run(faces: frozenset[int], adopt: dict, folder: str) -> Part:
+    def run(faces: frozenset[int], adopt: dict, folder: str, late: bool = False) -> Part:
         os.makedirs(folder)
         share = weight(faces, limits.segments) / total
         sub = replace(job, faces=faces, adopt=adopt, skip={k: dict(v) for k, v in job.skip.items()},
                       known_ok=dict(job.known_ok), no_batch=set(job.no_batch), no_refine=set(job.no_refine),
                       share=share)
-        result = _supervise(sub, folder, None, limits, say, stop)
+        bounds = limits
+        if late:  # meshing again after the shards: on the time left (see _rest)
+            bounds, sub.deadline, sub.finish_by = _rest(limits, job)
+        result = _supervise(sub, folder, None, bounds, say, stop)
         return Part(faces=faces, result=result, edges=read_deliveries(os.path.join(folder, "faces"))[1],
                     adopted=frozenset(adopt))
 
@@ -505,12 +509,29 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
         say(f"restart {faces_text(redo)}: meshed again in a new process, on edges "
             f"{', '.join(map(str, sorted(adopt)))} as a neighbour's strategy changed them")
         notes.append(f"{faces_text(redo)}: {why}; meshed again on the changed edge")
-        parts.append(run(frozenset(redo), dict(adopted), os.path.join(tmp, f"again{rounds}")))
+        parts.append(run(frozenset(redo), dict(adopted), os.path.join(tmp, f"again{rounds}"), late=True))
     result, lines, line_edges = join(job.grid, parts, job.seams)
     result.notes = notes + result.notes
     if output is not None and len(result.triangles):
         write_meshio(Delivered(result, lines, line_edges), output)
     return result
+
+
+def _rest(limits: _Limits, job: MeshJob) -> tuple[_Limits, float, float]:
+    """Bounds for a child that starts now, after the shards: ``limits`` killing it at :data:`KILL_SHARE` of
+    the time left to the job's deadline, and its soft deadline and ``finish_by`` (``time.time()``) at
+    :data:`SOFT_SHARE` and :data:`FINISH_SHARE` of it; each only where later than the job's own.
+
+    The faces to mesh again on an edge another shard changed are known only once the shards end, and a
+    shard's face optimiser may run to :data:`FINISH_SHARE` of the timeout. On the job's own bounds the
+    child meshing them again was killed at its first attempt: the RPi DIN mount at 1e-3 (1.07 M
+    triangles, 2 cores, 300 s) lost 6 faces that way, which take 6 s to mesh.
+    """
+    now, wall = time.monotonic(), time.time()
+    left = max(limits.deadline - now, 0.0)
+    return (replace(limits, kill_at=max(limits.kill_at, now + KILL_SHARE * left)),
+            max(job.deadline or 0.0, wall + SOFT_SHARE * left),
+            max(job.finish_by or 0.0, wall + FINISH_SHARE * left))
 
 
 def _failed(reason: str, events: list[str]) -> JobResult:
