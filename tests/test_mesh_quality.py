@@ -325,6 +325,32 @@ def test_a_faces_widths_in_one_call_are_those_edge_by_edge(monkeypatch):
     assert sum(np.isfinite(w).sum() for w in whole.values()) > 20
 
 
+def test_later_passes_measure_only_the_faces_a_split_changed_and_split_alike(monkeypatch):
+    """After the first pass only the edges of faces a split changed are measured again: the same splits,
+    point for point, as measuring every face in every pass."""
+    from cadedge import refine_shape
+    from cadedge.mesh import widths
+
+    cubes = [cq.Workplane().box(2, 2, 2).translate((5 * k, 0, 0)).val() for k in range(6)]  # nothing to split
+    shim = cq.Workplane().box(10, 10, 0.05).translate((0, 10, 0)).val()  # thin sides
+    shape = cq.Compound.makeCompound([*cubes, shim])
+    grid = refine_shape(shape, ald=1e-2, max_growth=2.0)
+    few = widths.fit_to_widths(grid)
+    measure, asked = widths.face_widths, []
+
+    def everything(edges, *, reach=None, touches=None, only=None):
+        asked.append(only)
+        full = measure(edges, reach=reach, touches=touches)
+        return full if only is None else {i: full[i] for i in only if i in full}
+
+    monkeypatch.setattr(widths, "face_widths", everything)
+    every = widths.fit_to_widths(grid)
+    assert [e.points.tolist() for e in few.edges] == [e.points.tolist() for e in every.edges]
+    later = [o for o in asked if o is not None]
+    assert later and max(map(len, later)) < len(grid.edges) // 2  # later passes: a few edges each
+    assert every.segments > grid.segments
+
+
 def _flight_on_shaft():
     """A helical flight fused to a longer shaft: the flight's end line lies on the shaft cylinder's seam,
     2.3e-6 off it, its two vertices (tolerance 5e-6) on the seam, which is not split there."""
