@@ -31,6 +31,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..grid import row_norms
 from ..shapegrid import ShapeGrid, with_edges
 from ..splitting import split_segments
 from .budget import MAX_FACE_TRIANGLES
@@ -398,10 +399,11 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
                 ends.setdefault((f, e.vertices[0]), []).append((i, 0))
                 ends.setdefault((f, e.vertices[-1]), []).append((i, len(e.points) - 2))
         pieces = {i: np.ones(len(e.points) - 1, dtype=np.int64) for i, e in enumerate(edges) if len(e.points) >= 2}
-        for corner in ends.values():
-            if len(corner) < 2:
-                continue
-            lengths = np.array([edges[i].segment_lengths[k] for i, k in corner])
+        corners = [c for c in ends.values() if len(c) >= 2]
+        at = [(i, k) for c in corners for i, k in c]  # every corner's end segments, measured in one call
+        measured = row_norms(np.array([edges[i].points[k + 1] for i, k in at]).reshape(-1, 3)
+                             - np.array([edges[i].points[k] for i, k in at]).reshape(-1, 3))
+        for corner, lengths in zip(corners, np.split(measured, np.cumsum([len(c) for c in corners])[:-1])):
             short = lengths.min()
             for (i, k), length in zip(corner, lengths):
                 if length > ratio * short and length >= 2.0 * (1.0 - TIP_SLACK) * tips.get((i, k), 0.0):
