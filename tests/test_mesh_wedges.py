@@ -18,8 +18,8 @@ from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Vec  # noqa: E402
 
 from cadedge import refine_shape  # noqa: E402
 from cadedge.mesh.grading import cut_on_curve  # noqa: E402
-from cadedge.mesh.wedges import (MAX_JUMP, TIP_RATIO, _from_vertex, _jump, _segment_distances,  # noqa: E402
-                                 grade_wedges, narrow_corners, tip_length)
+from cadedge.mesh.narrow import from_vertex, narrow_corners, tip_length  # noqa: E402
+from cadedge.mesh.wedges import MAX_JUMP, TIP_RATIO, _jump, _segment_distances, grade_wedges  # noqa: E402
 from cadedge.mesh.widths import TIP_SLACK, WIDTH_RATIO, match_corners  # noqa: E402
 
 
@@ -67,7 +67,7 @@ def test_the_cusps_of_a_chamfer_are_found_and_graded_with_equal_tips_and_their_p
         assert {tuple(p) for p in before.points.round(12)} <= {tuple(p) for p in after.points.round(12)}
     assert graded.segments > grid.segments + 12 * 2 * 5
     for c in narrow_corners(list(graded.edges)):
-        one, two = (_from_vertex(graded.edges[k], s) for k, s in c.sides)
+        one, two = (from_vertex(graded.edges[k], s) for k, s in c.sides)
         tips = [np.linalg.norm(one[1] - one[0]), np.linalg.norm(two[1] - two[0])]
         assert max(tips) <= TIP_RATIO * min(tips) * 1.001  # the longer tip cut at the shorter's length
         for mine, other in ((one, two), (two, one)):
@@ -80,7 +80,7 @@ def test_the_cusps_of_a_chamfer_are_found_and_graded_with_equal_tips_and_their_p
 
 
 def _jumps(grid):
-    return [_jump(*(_from_vertex(grid.edges[k], s) for k, s in c.sides), WIDTH_RATIO)
+    return [_jump(*(from_vertex(grid.edges[k], s) for k, s in c.sides), WIDTH_RATIO)
             for c in narrow_corners(list(grid.edges))]
 
 
@@ -279,7 +279,7 @@ def test_a_cusps_tips_reach_the_points_the_edges_were_refined_with_where_the_are
     plain = grade_wedges(fitted, keep=refined, areas=areas, target=1e-2)
     wide = grade_wedges(fitted, keep=refined, areas=areas, target=1e-2, spare=lambda: np.full(len(areas), np.inf))
     for c in corners:
-        first = [float(np.linalg.norm(_from_vertex(refined.edges[k], s)[1] - _from_vertex(refined.edges[k], s)[0]))
+        first = [float(np.linalg.norm(from_vertex(refined.edges[k], s)[1] - from_vertex(refined.edges[k], s)[0]))
                  for k, s in c.sides]
         before = [tip_length(plain.edges[k], s) for k, s in c.sides]
         after = [tip_length(wide.edges[k], s) for k, s in c.sides]

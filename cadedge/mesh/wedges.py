@@ -44,11 +44,10 @@ import numpy as np
 
 from ..shapegrid import ShapeGrid, end_tolerances, recorded_targets, with_edges
 from .grading import cut_on_curve
+from .narrow import WEDGE_DEG, Corner, from_vertex, narrow_corners, tip_length, tip_segment
 from .proximity import _LazyCurves
 from .widths import BUDGET_FACTOR, MIN_BUDGET, WIDTH_RATIO, _segment_distances
 
-#: Corners of a face narrower than this many degrees (between its two edges' first segments) are graded.
-WEDGE_DEG = 20.0
 #: Tips within this ratio of each other are left as they are.
 TIP_RATIO = 1.2
 #: Corners sharing edge ends have their tips matched in at most this many rounds.
@@ -100,66 +99,6 @@ SAMPLES = 16
 LOOSE_SHARE = 0.05
 
 
-@dataclasses.dataclass(frozen=True)
-class Corner:
-    """A face's corner at a B-rep vertex: its two sides as (edge index, whether the edge starts there),
-    and the angle in degrees between the sides' first segments."""
-
-    face: int
-    vertex: int
-    sides: tuple[tuple[int, bool], tuple[int, bool]]
-    angle: float
-
-
-def _from_vertex(e, at_start: bool) -> np.ndarray:
-    """The edge grid's points, ordered from the corner's vertex."""
-    return e.points if at_start else e.points[::-1]
-
-
-def narrow_corners(edges: list, *, below: float = WEDGE_DEG) -> list[Corner]:
-    """Every corner where a face's boundary meets a B-rep vertex (degenerate edges and grids of fewer than
-    two points left out) between two edge ends whose first segments are under ``below`` degrees apart.
-    Where the boundary passes the vertex more than once (a hole touching the outline: four ends, two
-    cusps), the ends are paired closest first, each end in one corner."""
-    ends: dict[tuple[int, int], list[tuple[int, bool]]] = {}
-    for i, e in enumerate(edges):
-        if e.degenerate or len(e.points) < 2 or len(e.vertices) < 2:
-            continue
-        for f in e.faces:
-            ends.setdefault((f, e.vertices[0]), []).append((i, True))
-            ends.setdefault((f, e.vertices[-1]), []).append((i, False))
-    corners = [(key, sides) for key, sides in ends.items() if len(sides) >= 2]
-    if not corners:
-        return []
-    # every side's first segment from the vertex, in one array (a call per corner cost the Koch leader
-    # arm's 12 104 edges 10 s a pass)
-    seg = np.array([(edges[i].points[0], edges[i].points[1]) if s else (edges[i].points[-1], edges[i].points[-2])
-                    for _, sides in corners for i, s in sides]).reshape(-1, 2, 3)
-    d = seg[:, 1] - seg[:, 0]
-    norms = np.linalg.norm(d, axis=1)
-    units = d / np.where(norms > 0, norms, 1.0)[:, None]
-    count = np.array([len(sides) for _, sides in corners])
-    start = np.cumsum(count) - count
-    two = start[count == 2]  # most corners: one angle each, all at once
-    cos = np.einsum("ij,ij->i", units[two], units[two + 1])
-    angle_of = dict(zip(two.tolist(), np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).tolist()))
-    out = []
-    for ((f, v), sides), at in zip(corners, start.tolist()):
-        used = norms[at:at + len(sides)] <= 0
-        if len(sides) == 2:
-            if angle_of[at] < below and not used.any():
-                out.append(Corner(face=f, vertex=v, sides=(sides[0], sides[1]), angle=angle_of[at]))
-            continue
-        unit = units[at:at + len(sides)]
-        angles = np.degrees(np.arccos(np.clip(unit @ unit.T, -1.0, 1.0)))
-        pairs = sorted((angles[a, b], a, b) for a, b in zip(*np.triu_indices(len(sides), k=1)))
-        for angle, a, b in pairs:
-            if angle < below and not used[a] and not used[b]:
-                used[[a, b]] = True
-                out.append(Corner(face=f, vertex=v, sides=(sides[a], sides[b]), angle=float(angle)))
-    return out
-
-
 def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WIDTH_RATIO,
                  keep: ShapeGrid | None = None, areas: np.ndarray | None = None,
                  target: float | None = None, spare: Callable[[], np.ndarray] | None = None) -> ShapeGrid:
@@ -204,10 +143,10 @@ def grade_wedges(grid: ShapeGrid, *, below: float = WEDGE_DEG, ratio: float = WI
     tip_segments = {(k, tip_segment(edges[k], s)) for c in corners for k, s in c.sides}
     cuts: dict[int, dict[int, np.ndarray]] = {}  # edge index -> segment -> shares of it to cut at
     for c in corners:
-        if _jump(*(_from_vertex(edges[k], s) for k, s in c.sides), ratio) > MAX_JUMP:
+        if _jump(*(from_vertex(edges[k], s) for k, s in c.sides), ratio) > MAX_JUMP:
             continue
         for (i, s), (j, t) in (c.sides, c.sides[::-1]):
-            for k, shares in _graded_cuts(_from_vertex(edges[i], s), _from_vertex(edges[j], t), ratio).items():
+            for k, shares in _graded_cuts(from_vertex(edges[i], s), from_vertex(edges[j], t), ratio).items():
                 seg, shares = (k, shares) if s else (len(edges[i].points) - 2 - k, 1.0 - shares[::-1])
                 if (i, seg) in tip_segments:  # a short edge's far end: another narrow corner's tip stays whole
                     continue
@@ -422,7 +361,7 @@ def _reach(edges: list, c: Corner, kept: list, ratio: float) -> tuple[list, list
     which of them ``kept`` (the edges as refined) does not hold (they may be dropped) and the jumps of a
     tip ending at each inner point (:func:`_jumps`); and the tips' length, the shorter one's. None if an
     edge is not the refined one or a side has under 3 points."""
-    sides = [_from_vertex(edges[k], s) for k, s in c.sides]
+    sides = [from_vertex(edges[k], s) for k, s in c.sides]
     reach = []
     for (k, s), mine, other in zip(c.sides, sides, sides[::-1]):
         e, ref = edges[k], kept[k]
@@ -576,16 +515,6 @@ def _jumps(one: np.ndarray, two: np.ndarray, ratio: float) -> np.ndarray:
 def _jump(one: np.ndarray, two: np.ndarray, ratio: float) -> float:
     """The jump of ``one``'s tip as it is (see :func:`_jumps`)."""
     return float(_jumps(one[:3], two, ratio)[0]) if len(one) >= 3 else 0.0
-
-
-def tip_segment(e, at_start: bool) -> int:
-    """Index of the edge grid's segment at its start (``at_start``) or end."""
-    return 0 if at_start else len(e.points) - 2
-
-
-def tip_length(e, at_start: bool) -> float:
-    """Length of the edge grid's segment at its start (``at_start``) or end."""
-    return float(e.segment_lengths[tip_segment(e, at_start)])
 
 
 def _graded_cuts(mine: np.ndarray, other: np.ndarray, ratio: float) -> dict[int, np.ndarray]:

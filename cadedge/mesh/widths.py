@@ -380,7 +380,7 @@ def match_corners(grid: ShapeGrid, *, ratio: float = CORNER_RATIO, passes: int =
     edge OCCT cannot evaluate keeps its grid."""
     from ..errors import GeometryError
     from ..occt.compat import OCCT_ERRORS
-    from .wedges import narrow_corners, tip_length, tip_segment
+    from .narrow import narrow_corners, tip_length, tip_segment
 
     curves = curves if curves is not None else (grid.curves if grid.curves is not None else _LazyCurves(grid))
     edges = list(grid.edges)
