@@ -282,8 +282,9 @@ def test_thin_bands_over_the_split_budget_are_cut_alike(monkeypatch):
     fitted = widths.fit_to_widths(grid)
     circles = [e for e in fitted.edges if e.curve == "Circle"]
     assert len(circles) == 12
-    assert len({e.segments for e in circles}) == 1  # all at 162 (before: three at 624, nine left at 13)
-    assert circles[0].segments > 13 and fitted.segments - grid.segments <= 2_000 + 12 * circles[0].segments
+    counts = sorted(e.segments for e in circles)  # 162, one of each band's circles staggered (173) against
+    assert counts[-1] <= 1.1 * counts[0]  # the other (before the cap: three at 624, nine left at 13)
+    assert counts[0] > 13 and fitted.segments - grid.segments <= 2_000 + 12 * counts[-1]
     width = 0.01
     assert max(e.segment_lengths.max() for e in circles) <= widths.MAX_WIDTH_RATIO * width
 

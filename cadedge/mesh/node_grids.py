@@ -52,7 +52,7 @@ def fit_node_grids(grid: ShapeGrid, refined: ShapeGrid, fidelity: dict, surface_
     cap = cap or make_field(grid).max_size
     areas, kinds, credits = fidelity["brep_areas"], fidelity["meshed_kinds"], fidelity["curved_credits"]
     if clock.allows("the thin faces' splits"):
-        grid = fit_to_widths(grid)  # segments of thin faces no longer than the face is wide
+        grid = fit_to_widths(grid, keep=refined)  # segments of thin faces no longer than the face is wide
     if clock.allows("the face-wise grading"):
         grid = grade_faces(grid, growth=growth)  # each face's boundary graded from its own spacings
     if clock.allows("the grading into narrow corners"):  # segments shrink into a face's narrow corners

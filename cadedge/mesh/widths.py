@@ -27,6 +27,7 @@ undoes (42 once matched; gmsh alone, with near-uniform sizes, gets 40.4).
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -37,6 +38,7 @@ from ..splitting import split_segments
 from .budget import MAX_FACE_TRIANGLES
 from .proximity import Looseness, _LazyCurves
 from .segments import segment_feet
+from .stagger import stagger
 
 #: A segment is split when longer than this many times its face's width at its midpoint: a strip of
 #: width w cut into pieces of 2 w is filled by right triangles of 26.6 degrees.
@@ -64,6 +66,13 @@ MOST_ADDED = MAX_FACE_TRIANGLES // 8
 #: Where the splits at :data:`WIDTH_RATIO` do not fit the budget, the ratio is doubled until they do (up to
 #: this), so every thin face is cut alike rather than the first ones whole and the rest not at all.
 MAX_WIDTH_RATIO = 32.0
+#: Pieces of r w cut alike on both sides of a strip face each other, and fill it with right triangles of
+#: atan(1 / r): under 20 degrees above this ratio, which only the budget's doubling reaches (14.0 at 4).
+#: There the sides are staggered (:mod:`cadedge.mesh.stagger`): atan(2 / r), 26.6 at 4. Below it, the
+#: points the edges were refined with (graded towards the vertices) break the stagger into stretches
+#: with half pieces at their ends, and the corpus's smallest angles fell (the bracket 36.0 -> 33.7 at
+#: 1e-2, the spline prism 42.5 -> 40.3) with more triangles.
+STAGGER_RATIO = 1.0 / math.tan(math.radians(20.0))
 #: At a face corner the boundary segments ending there are made at most this ratio of the shortest of
 #: them (halved, at most :data:`CORNER_PASSES` times).
 CORNER_RATIO = 1.5
@@ -293,27 +302,41 @@ def face_widths(edges: list, *, reach: float | None = None, touches: dict[int, s
     return width
 
 
-def fit_to_widths(grid: ShapeGrid, *, ratio: float | None = None, passes: int = PASSES) -> ShapeGrid:
+def fit_to_widths(grid: ShapeGrid, *, ratio: float | None = None, passes: int = PASSES,
+                  keep: ShapeGrid | None = None) -> ShapeGrid:
     """A copy of ``grid`` whose boundary segments are at most ``ratio`` times their face's width (by
     default :data:`FINE_RATIO` where that adds at most :data:`FINE_SHARE` of the grid's segments and fits
     the budget, else :data:`WIDTH_RATIO`, doubled while the splits do not fit the budget, up to
-    :data:`MAX_WIDTH_RATIO`), its face corners matched (:func:`match_corners`)."""
+    :data:`MAX_WIDTH_RATIO`), above :data:`STAGGER_RATIO` each thin strip's sides staggered
+    (:func:`~cadedge.mesh.stagger.stagger`, which may lengthen a segment by
+    :data:`~cadedge.mesh.stagger.LONGEST` and moves no point of ``keep``, by default ``grid``), its face
+    corners matched (:func:`match_corners`)."""
     curves = grid.curves if grid.curves is not None else _LazyCurves(grid)
     touches = touching_vertices(grid)
     if ratio is not None:
-        return match_corners(_split_to_widths(grid, curves, touches, ratio, passes)[0], curves=curves)
+        fitted = _split_to_widths(grid, curves, touches, ratio, passes)[0]
+    else:
+        fitted, ratio = _fit_ratio(grid, curves, touches, passes)
+    if ratio > STAGGER_RATIO:
+        fitted = stagger(grid, fitted, curves=curves, touches=touches, keep=keep)
+    return match_corners(fitted, curves=curves)
+
+
+def _fit_ratio(grid: ShapeGrid, curves, touches: dict[int, set[int]], passes: int) -> tuple[ShapeGrid, float]:
+    """``grid`` split to the default ratio (:func:`fit_to_widths`), and that ratio."""
     # the widths out to 1 / FINE_RATIO serve every larger ratio's first pass as well
     first = face_widths(list(grid.edges), reach=1.0 / FINE_RATIO, touches=touches)
     fitted, short = _split_to_widths(grid, curves, touches, FINE_RATIO, passes, first)
-    if short or fitted.segments > (1.0 + FINE_SHARE) * grid.segments:
-        ratio = WIDTH_RATIO
+    if not short and fitted.segments <= (1.0 + FINE_SHARE) * grid.segments:
+        return fitted, FINE_RATIO
+    ratio = WIDTH_RATIO
+    coarse, tight = _split_to_widths(grid, curves, touches, ratio, passes, first)
+    while tight and ratio < MAX_WIDTH_RATIO:
+        ratio *= 2.0
         coarse, tight = _split_to_widths(grid, curves, touches, ratio, passes, first)
-        while tight and ratio < MAX_WIDTH_RATIO:
-            ratio *= 2.0
-            coarse, tight = _split_to_widths(grid, curves, touches, ratio, passes, first)
-        if short or fitted.segments > (1.0 + FINE_SHARE) * coarse.segments:
-            fitted = coarse
-    return match_corners(fitted, curves=curves)
+    if short or fitted.segments > (1.0 + FINE_SHARE) * coarse.segments:
+        return coarse, ratio
+    return fitted, FINE_RATIO
 
 
 def _split_to_widths(grid: ShapeGrid, curves, touches: dict[int, set[int]], ratio: float,
