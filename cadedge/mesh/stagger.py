@@ -80,9 +80,9 @@ def stagger(before: ShapeGrid, fitted: ShapeGrid, *, curves, touches: dict[int, 
     partner = _partners(edges, split, added, touches)
     colour = _two_colours({i: set(p[p >= 0].tolist()) & set(split) for i, p in partner.items()})
     loose = Looseness(fitted)
-    changed = False
+    changed, first = False, [j for j, c in colour.items() if c == 0]
     for i in sorted(k for k, c in colour.items() if c == 1):
-        faced = np.where(np.isin(partner[i], [j for j in colour if colour[j] == 0]), partner[i], -1)
+        faced = np.where(np.isin(partner[i], first), partner[i], -1)
         grid = _shifted(edges[i], added[i], faced, edges, curves[edges[i].id].evaluate, loose)
         if grid is not None:
             edges[i] = dataclasses.replace(edges[i], params=grid[0], points=grid[1])
