@@ -31,6 +31,7 @@ import numpy as np
 
 from ..grid import row_norms
 from ..shapegrid import ShapeGrid, with_edges
+from ..splitting import worst_growth
 from .proximity import Looseness
 from .segments import segment_feet
 
@@ -169,7 +170,7 @@ def _shifted(e, added: np.ndarray, faced: np.ndarray, edges: list, evaluate, loo
     start = np.flatnonzero(np.diff(label, prepend=-2) != 0)  # runs of one label
     for s, t in zip(start, np.append(start[1:], len(u)) - 1):
         old = seg[s - 1:t + 1]
-        if label[s] < 0 or np.any(np.maximum(old[1:], old[:-1]) > UNEVEN * np.minimum(old[1:], old[:-1])):
+        if label[s] < 0 or not worst_growth(p[s - 1:t + 2]) <= UNEVEN:
             continue
         nodes = _staggered(u, s - 1, t + 1, _projections(u, p, s - 1, t + 1, edges[label[s]].points))
         if nodes is not None:
