@@ -142,7 +142,9 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     at each step (refining edges, each face meshed, ...; the CLI's status line), from this process. A large
     job (at least :data:`~cadedge.mesh.shards.MIN_SEGMENTS` boundary segments, ``nodes`` mode) is meshed
     in up to ``workers`` gmsh processes at once (default: the CPUs this process may use; 1 meshes in one),
-    each face in one of them (see :mod:`cadedge.mesh.shards`). Raises
+    each face in one of them (see :mod:`cadedge.mesh.shards`). A face that is an earlier face placed again
+    (an assembly's repeated part, on the same edge grids moved) is not meshed in gmsh: it gets that face's
+    triangles, moved (see :mod:`cadedge.mesh.instances`; ``hooks`` see only the faces gmsh meshes). Raises
     :class:`InputError` on bad arguments or input; faces gmsh fails on, crashes and timeouts are returned
     in ``failures`` / ``error``, never raised.
     """
@@ -204,6 +206,7 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
                                                    make_field=make_field, cap=max_size or max_length,
                                                    clock=clock)
         notes += fit_notes
+        grid = unified(grid)
     if (left_out := clock.note()) is not None:
         notes.append(left_out)
     fidelity["grid_faces"] = grid_face_ids(grid, fidelity["meshed_kinds"], surface_ald,  # the boundary's
@@ -219,6 +222,17 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     return result
 
 
+def unified(grid: ShapeGrid) -> ShapeGrid:
+    """``grid`` with a repeated part's edges given its first instance's grids, moved
+    (:func:`cadedge.mesh.instances.unify`)."""
+    from ..occt.instances import edge_placements, face_placements
+    from .instances import unify
+
+    if grid.shape is None:
+        return grid
+    return unify(grid, face_placements(grid.shape), edge_placements(grid.shape))
+
+
 def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, clock: JobClock, *,
               face_timeout: float | None, hooks: dict[str, list[str]] | None,
               job_options: dict[str, Any] | None, say: Callable[[str], None],
@@ -228,13 +242,16 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
     import dataclasses
 
     from ..occt.empty import without_empty
+    from ..occt.instances import face_placements
     from ..occt.sameparam import in_step
     from ..occt.topology import Topology
     from .check import check_triangles, segment_uses, twin_points
     from .coincident import meshed_as, merged_shape
     from .gmsh_model import shape_to_brep
+    from .instances import copies
     from .isolate import run_isolated
     from .outcomes import FaceFailure
+    from .shards import coincident as shards_coincident
     from .shards import default_workers
     from .status import MeshStatus
     from .strategies import invalid_face_skips
@@ -249,13 +266,15 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
         meshed = dataclasses.replace(meshed, edges=[dataclasses.replace(e, tolerance=tolerance[e.id])
                                                     if e.id in tolerance else e for e in meshed.edges])
     invalid = _invalid_faces(grid, (job_options or {}).get("fidelity", {}).get("brep_areas"))
+    placed = {} if mode != "nodes" or coincident or shards_coincident(meshed) else \
+        copies(meshed, face_placements(grid.shape))
     job = MeshJob(source=grid.source, brep=shape_to_brep(shape), grid=meshed, field=field_, mode=mode,
                   hooks=dict(hooks or {}), options=dict(job_options or {}), coincident=coincident,
                   skip=invalid_face_skips(invalid), as_gmsh_alone=frozenset(invalid),
-                  seams=Topology(grid.shape).shared_seams())
+                  seams=Topology(grid.shape).shared_seams(), copies=placed)
     res = run_isolated(job, output=out, timeout=clock.timeout, face_timeout=face_timeout,
-                       progress=MeshStatus(say, faces=grid.faces), workers=workers or default_workers(),
-                       started=clock.started)
+                       progress=MeshStatus(say, faces=grid.faces - len(placed)),
+                       workers=workers or default_workers(), started=clock.started)
     faces = list(res.faces)
     if res.error is not None:
         failures = [FaceFailure(face=f, surface=f, reason=res.error) for f in range(1, grid.faces + 1)]

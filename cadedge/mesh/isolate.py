@@ -314,9 +314,12 @@ def run_isolated(job: MeshJob, *, output: Path | None = None, timeout: float = D
                        f"{KILL_SHARE:.0%} of --timeout ({timeout:g} s); gmsh was not started", [])
     job.attempt_bound = face_timeout
     _remove_orphaned_folders()
-    shards = plan(job.grid, workers, segments) if job.mode == "nodes" and job.faces is None else [job.faces]
+    if job.mode != "nodes" or job.faces is not None:
+        job.copies = {}
+    shards = plan(job.grid, workers, segments, leave=frozenset(job.copies)) \
+        if job.mode == "nodes" and job.faces is None else [job.faces]
     with tempfile.TemporaryDirectory(prefix=f"{FOLDER_PREFIX}{os.getpid()}-") as tmp:
-        if len(shards) > 1:
+        if len(shards) > 1 or job.copies:
             return _run_shards(job, shards, tmp, output, limits, progress)
         return _supervise(job, tmp, output, limits, progress)
 
@@ -455,6 +458,7 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
     write them to ``output``."""
     from concurrent.futures import ThreadPoolExecutor
 
+    from .instances import place, placed_note
     from .shards import ADOPT_ROUNDS, Part, conflicts, drop_faces, faces_text, join, weight
 
     lock, stop = threading.Lock(), threading.Event()
@@ -464,7 +468,7 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
             with lock:
                 progress(line)
 
-    total = weight(range(1, job.grid.faces + 1), limits.segments)
+    total = weight(frozenset().union(*shards), limits.segments)
 
     def run(faces: frozenset[int], adopt: dict, folder: str, late: bool = False) -> Part:
         os.makedirs(folder)
@@ -489,7 +493,7 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
     finally:
         pool.shutdown(wait=True)
     notes = [f"meshed in {len(shards)} processes at once (faces split by boundary segments: "
-             f"{', '.join(str(len(s)) for s in shards)} faces)"]
+             f"{', '.join(str(len(s)) for s in shards)} faces)"] if len(shards) > 1 else []
     adopted: dict = {}
     why = "a neighbour meshed in another process changed an edge they share (its strategy split the edge or " \
           "meshed it itself)"
@@ -511,6 +515,17 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
         notes.append(f"{faces_text(redo)}: {why}; meshed again on the changed edge")
         parts.append(run(frozenset(redo), dict(adopted), os.path.join(tmp, f"again{rounds}"), late=True))
     result, lines, line_edges = join(job.grid, parts, job.seams)
+    if job.copies:
+        say("place")
+        left = place(result, lines, line_edges, job.grid, job.copies, job.seams)
+        if left:  # their first face was meshed on other boundary nodes: each meshed on its own
+            say(f"restart {faces_text(left)}: placed again from faces meshed on other boundary nodes; "
+                "meshed on their own in a new process")
+            parts.append(run(frozenset(left), dict(adopted), os.path.join(tmp, "copies"), late=True))
+            result, lines, line_edges = join(job.grid, parts, job.seams)
+            place(result, lines, line_edges, job.grid, {f: c for f, c in job.copies.items() if f not in left},
+                  job.seams)
+        notes.append(placed_note(job.copies, left, result.faces))
     result.notes = notes + result.notes
     if output is not None and len(result.triangles):
         write_meshio(Delivered(result, lines, line_edges), output)

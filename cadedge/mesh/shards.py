@@ -60,9 +60,11 @@ def weight(faces, segments: dict[int, int]) -> int:
     return sum(segments.get(f, 0) + 1 for f in faces)
 
 
-def plan(grid, workers: int, segments: dict[int, int]) -> list[frozenset[int]]:
-    """The faces of ``grid`` in at most ``workers`` shards of about equal boundary ``segments`` (face ->
-    count); one shard with every face when ``workers`` is 1 or the job is small (:data:`MIN_SEGMENTS`).
+def plan(grid, workers: int, segments: dict[int, int], *, leave: frozenset[int] = frozenset()) -> list[frozenset[int]]:
+    """The faces of ``grid`` but those to ``leave`` (copies another face's mesh is moved to:
+    :mod:`cadedge.mesh.instances`) in at most ``workers`` shards of about equal boundary ``segments``
+    (face -> count); one shard with every face when ``workers`` is 1 or the job is small
+    (:data:`MIN_SEGMENTS`).
 
     Four faces in a row (edge 1 between faces 1 and 2, ...), then faces 1 and 2 bounded by edge 1 alone:
 
@@ -78,12 +80,13 @@ def plan(grid, workers: int, segments: dict[int, int]) -> list[frozenset[int]]:
     >>> plan(row, 2, {1: 3, 2: 3, 3: 1, 4: 1})
     [frozenset({1, 2, 3, 4})]
     """
-    every = frozenset(range(1, grid.faces + 1))
-    if workers < 2 or grid.faces < 2 or sum(segments.values()) < MIN_SEGMENTS or coincident(grid):
+    every = frozenset(range(1, grid.faces + 1)) - leave
+    if workers < 2 or len(every) < 2 or weight(every, segments) - len(every) < MIN_SEGMENTS or coincident(grid):
         return [every]
     units: dict[frozenset[int], list[int]] = {}
     for f, edges in sorted(face_edges(grid).items()):
-        units.setdefault(frozenset(edges) or frozenset({-f}), []).append(f)
+        if f in every:
+            units.setdefault(frozenset(edges) or frozenset({-f}), []).append(f)
     weights = {key: weight(faces, segments) for key, faces in units.items()}
     shards: list[list[int]] = [[] for _ in range(min(workers, len(units)))]
     loads = [0] * len(shards)

@@ -36,7 +36,7 @@ from collections.abc import Callable
 STEPS = {"import": "gmsh: importing the model", "map": "gmsh: matching its entities to the B-rep",
          "sizes": "gmsh: setting sizes", "curves": "gmsh: meshing the curves",
          "measure": "area target: measuring the faces", "read": "reading the mesh back",
-         "write": "writing the mesh"}
+         "write": "writing the mesh", "place": "placing the meshes of repeated faces"}
 #: Faces named in one status line, at most; the rest are counted.
 MAX_NAMED = 6
 

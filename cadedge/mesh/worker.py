@@ -92,6 +92,9 @@ class MeshJob:
     # edge -> the faces whose seam it is, for seams more than one face holds (a face repeated on the same
     # edges): each such face puts two triangles on each of its segments (see cadedge.mesh.shards.edge_uses)
     seams: dict[int, tuple[int, ...]] = field(default_factory=dict)
+    # face -> (first face, (3, 4) matrix): faces that are another face placed again, with its edge grids
+    # moved; the parent meshes only the first and moves its triangles (see cadedge.mesh.instances)
+    copies: dict[int, tuple[int, np.ndarray]] = field(default_factory=dict)
 
 
 @dataclass

@@ -1,0 +1,193 @@
+"""An assembly's repeated parts (one B-rep face under several locations) meshed once, their triangles
+moved to the other placements (cadedge.mesh.instances, cadedge.occt.instances)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+pytest.importorskip("gmsh")
+
+import cadedge  # noqa: E402
+from cadedge.mesh import mesh_shape  # noqa: E402
+from cadedge.mesh.areas import face_mesh_areas  # noqa: E402
+from cadedge.mesh.check import check_triangles  # noqa: E402
+from cadedge.mesh.instances import copies, moved, unify  # noqa: E402
+from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
+from cadedge.mesh.worker import MeshJob  # noqa: E402
+from cadedge.occt.instances import edge_placements, face_placements  # noqa: E402
+
+from conftest import FIXTURES  # noqa: E402
+
+
+def placed(path, motions):
+    """The shape of STEP file ``path`` placed once for each ``(angle about z, (dx, dy, dz), scale)``, as one
+    compound whose parts share their B-rep faces (an assembly's instances)."""
+    from OCP.BRep import BRep_Builder
+    from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt, gp_Trsf, gp_Vec
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS_Compound
+
+    shape = cadedge.refine_shape(path, ald=1e-1).shape
+    builder, compound = BRep_Builder(), TopoDS_Compound()
+    builder.MakeCompound(compound)
+    for angle, shift, scale in motions:
+        turn, move = gp_Trsf(), gp_Trsf()
+        turn.SetRotation(gp_Ax1(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1)), angle)
+        move.SetTranslation(gp_Vec(*shift))
+        move.Multiply(turn)
+        if scale != 1.0:
+            grow = gp_Trsf()
+            grow.SetScale(gp_Pnt(0, 0, 0), scale)
+            move.Multiply(grow)
+        builder.Add(compound, shape.Moved(TopLoc_Location(move)))
+    return compound
+
+
+THRICE = [(0.0, (0, 0, 0), 1.0), (0.7, (200, 37, 0), 1.0), (1.4, (400, 74, 5), 1.0)]
+
+
+@pytest.fixture(scope="module")
+def brackets():
+    """The bracket (14 faces) placed three times, the second and third turned."""
+    return placed(FIXTURES / "bracket.step", THRICE)
+
+
+@pytest.fixture(scope="module")
+def brackets_step(brackets, tmp_path_factory):
+    """The three brackets written by OCCT's STEP writer, which keeps one part placed three times."""
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+
+    from cadedge.occt.loading import quiet_occt
+
+    path = tmp_path_factory.mktemp("placed") / "brackets.step"
+    with quiet_occt():
+        writer = STEPControl_Writer()
+        writer.Transfer(brackets, STEPControl_AsIs)
+        writer.Write(str(path))
+    return path
+
+
+def test_faces_and_edges_placed_again_are_found_with_their_motion(brackets):
+    """Faces 15-42 are faces 1-14 moved; each motion maps the first face's vertices onto the copy's. A
+    scaled placement is no copy."""
+    grid = cadedge.refine_shape(brackets, ald=1e-2)
+    faces = face_placements(brackets)
+    assert sorted(faces) == list(range(15, 43))
+    assert {f: first for f, (first, _) in faces.items()} == {f: (f - 1) % 14 + 1 for f in range(15, 43)}
+    edges = edge_placements(brackets)
+    by_id = {e.id: e for e in grid.edges}
+    assert len(edges) == 2 * len(grid.edges) // 3
+    for eid, (first, matrix) in edges.items():
+        assert np.allclose(moved(by_id[first].points[[0, -1]], matrix), by_id[eid].points[[0, -1]], atol=1e-9)
+    scaled = placed(FIXTURES / "bracket.step", [(0.0, (0, 0, 0), 1.0), (0.0, (200, 0, 0), 2.0)])
+    assert face_placements(scaled) == {}
+
+
+def test_a_repeated_part_is_meshed_once_and_placed_on_its_own_boundary_nodes(brackets, tmp_path):
+    """Every face of the three brackets is meshed, the mesh watertight with every grid node in it; the
+    copies have their first face's triangles, areas and smallest angles; a note says so."""
+    out = tmp_path / "b.msh"
+    result = mesh_shape(brackets, ald=1e-2, output=out)
+    assert result.ok, result.problems(verbose=True)
+    assert result.check.missing_grid_nodes == 0 and all(s.watertight for s in result.check.shells)
+    assert len(result.check.shells) == 3
+    assert any(n.startswith("28 faces repeat 14 others") for n in result.notes), result.notes
+    count = np.bincount(result.triangle_faces, minlength=43)
+    areas = face_mesh_areas(result.nodes, result.triangles, result.triangle_faces, 42)
+    rows = {r.face: r for r in result.report.faces}
+    for face in range(15, 43):
+        first = (face - 1) % 14 + 1
+        assert count[face] == count[first] > 0
+        assert areas[face - 1] == pytest.approx(areas[first - 1], rel=1e-12)
+        assert rows[face].min_angle == pytest.approx(rows[first].min_angle, abs=1e-9)
+    assert out.stat().st_size > 0
+
+
+def test_grids_a_repeated_part_refined_differently_are_made_the_same(brackets):
+    """A copy's edge grid one node short of its first's (as a length at a threshold can make it) is
+    given the first's grid, moved, its end points its own; edges with no copy stay as they are."""
+    grid = cadedge.refine_shape(brackets, ald=1e-2)
+    faces, edges = face_placements(brackets), edge_placements(brackets)
+    eid = next(e for e in sorted(edges) if len(grid.edges[e - 1].points) > 3)
+    first, matrix = edges[eid]
+    edited = [dataclasses.replace(e, points=np.delete(e.points, 1, axis=0), params=np.delete(e.params, 1))
+              if e.id == eid else e for e in grid.edges]
+    short = dataclasses.replace(grid, edges=edited)
+    assert set(copies(short, faces)) < set(faces)
+    same = unify(short, faces, edges)
+    assert set(copies(same, faces)) == set(faces)
+    fixed = same.edges[eid - 1]
+    assert np.array_equal(fixed.points[[0, -1]], grid.edges[eid - 1].points[[0, -1]])
+    assert np.allclose(fixed.points, moved(grid.edges[first - 1].points, matrix), atol=1e-9)
+    assert all(a is b for a, b in zip(same.edges, short.edges) if a.id not in edges)
+
+
+def _job(grid, skip):
+    from cadedge.mesh.gmsh_model import shape_to_brep
+    from cadedge.mesh.sizes import SizeField
+
+    return MeshJob(source="cylinders", brep=shape_to_brep(grid.shape),
+                   grid=dataclasses.replace(grid, shape=None, curves=None), field=SizeField(grid), mode="nodes",
+                   skip=skip, copies=copies(grid, face_placements(grid.shape)))
+
+
+@pytest.fixture(scope="module")
+def cylinders():
+    """The cylinder fixture (side 1, caps 2 and 3) placed twice: faces 4-6 are faces 1-3 moved."""
+    shape = placed(FIXTURES / "cylinder.step", [(0.0, (0, 0, 0), 1.0), (0.3, (50, 0, 0), 1.0)])
+    return cadedge.refine_shape(shape, ald=1e-2, max_growth=2.0)
+
+
+def test_copies_of_a_face_meshed_on_split_curves_are_meshed_on_their_own(cylinders):
+    """Cap 2 meshed only by the strategy that splits its curve: side 1 is meshed again on it, so neither
+    has the boundary of its copy (5 and 4), which are meshed on their own; cap 3's copy 6 is placed. The
+    mesh conforms."""
+    from cadedge.mesh.isolate import run_isolated
+
+    split = next(k for k, s in enumerate(STRATEGIES) if s.split)
+    job = _job(cylinders, {2: {k: "barred by the test" for k in range(split)}})
+    assert sorted(job.copies) == [4, 5, 6]
+    res = run_isolated(job, workers=1)
+    assert all(o.ok for o in res.faces), res.faces
+    assert next(o for o in res.faces if o.face == 2).strategy == STRATEGIES[split].name
+    assert any("faces 4, 5 meshed on their own" in n for n in res.notes), res.notes
+    assert any(n.startswith("1 face repeats 1 other ") for n in res.notes), res.notes
+    multiplicity = {(int(a), int(b)): int(n) for (a, b), n in zip(res.edge_pairs, res.edge_uses)}
+    check = check_triangles(res.nodes, res.triangles, triangle_faces=res.triangle_faces,
+                            edge_multiplicity=multiplicity)
+    assert check.ok and len(check.shells) == 2 and all(s.watertight for s in check.shells)
+
+
+def test_a_copy_of_a_face_that_failed_fails_with_its_reason(cylinders):
+    """Every strategy barred on cap 2: its copy 5 fails too, naming face 2 and its reason; the other
+    copies are placed."""
+    from cadedge.mesh.isolate import run_isolated
+
+    job = _job(cylinders, {2: {k: "barred by the test" for k in range(len(STRATEGIES))}})
+    res = run_isolated(job, workers=1)
+    failed = {o.face: o.reason() for o in res.faces if not o.ok}
+    assert sorted(failed) == [2, 5]
+    assert "face 2, the same face placed elsewhere, failed: " in failed[5] and "barred by the test" in failed[5]
+    assert set(np.unique(res.triangle_faces)) == {1, 3, 4, 6}
+
+
+def test_a_step_assembly_is_meshed_with_every_placement_in_the_msh_and_the_report(brackets_step, tmp_path, capsys):
+    """``cadedge mesh`` on the STEP file: exit 0, every face a physical group with triangles, every face in
+    the report, and the summary's note on the placed faces."""
+    import json
+
+    meshio = pytest.importorskip("meshio")
+    from cadedge.cli import main
+
+    out, report = tmp_path / "b.msh", tmp_path / "b.json"
+    assert main(["mesh", str(brackets_step), "--ald", "1e-2", "-o", str(out), "--report", str(report)]) == 0
+    assert "note: 28 faces repeat 14 others" in capsys.readouterr().out
+    mesh = meshio.read(out)
+    tags = np.concatenate([t for (c, t) in zip(mesh.cells, mesh.cell_data["gmsh:physical"]) if c.type == "triangle"])
+    assert sorted(np.unique(tags)) == list(range(1, 43))
+    assert {f"face {f}" for f in range(1, 43)} <= set(mesh.field_data)
+    rows = json.loads(report.read_text())["faces"]
+    assert [r["face"] for r in rows] == list(range(1, 43)) and all(r["status"] == "ok" for r in rows)
