@@ -17,6 +17,7 @@ from cadedge.mesh.check import check_triangles  # noqa: E402
 from cadedge.mesh.instances import copies, moved, unify  # noqa: E402
 from cadedge.mesh.strategies import STRATEGIES  # noqa: E402
 from cadedge.mesh.worker import MeshJob  # noqa: E402
+from cadedge.occt.areas import face_areas  # noqa: E402
 from cadedge.occt.instances import edge_placements, face_placements  # noqa: E402
 
 from conftest import FIXTURES  # noqa: E402
@@ -84,6 +85,9 @@ def test_faces_and_edges_placed_again_are_found_with_their_motion(brackets):
         assert np.allclose(moved(by_id[first].points[[0, -1]], matrix), by_id[eid].points[[0, -1]], atol=1e-9)
     scaled = placed(FIXTURES / "bracket.step", [(0.0, (0, 0, 0), 1.0), (0.0, (200, 0, 0), 2.0)])
     assert face_placements(scaled) == {}
+    areas = face_areas(brackets)  # measured once, for the first placement
+    assert np.array_equal(areas[14:], np.tile(areas[:14], 2)) and areas.min() > 0
+    assert np.allclose(face_areas(scaled)[14:], 4 * face_areas(scaled)[:14], rtol=1e-6)
 
 
 def test_a_repeated_part_is_meshed_once_and_placed_on_its_own_boundary_nodes(brackets, tmp_path):

@@ -34,6 +34,12 @@ def edge_placements(shape: TopoDS_Shape) -> dict[int, tuple[int, np.ndarray]]:
     return _placements(shape, TopAbs_EDGE, oriented=False)
 
 
+def same_faces(shape: TopoDS_Shape) -> dict[int, int]:
+    """Face id -> the earlier face it is, placed again by a rigid motion, in either orientation (for
+    what a motion and a flip keep: a face's area)."""
+    return {face: first for face, (first, _) in _placements(shape, TopAbs_FACE, oriented=False).items()}
+
+
 def _placements(shape: TopoDS_Shape, kind, *, oriented: bool) -> dict[int, tuple[int, np.ndarray]]:
     shapes = indexed(shape, kind)
     bare = TopTools_IndexedMapOfShape()  # one entry per TShape (and orientation)
