@@ -2,7 +2,8 @@
 
 A STEP assembly that places a part several times holds one B-rep face under several locations
 (:func:`cadedge.occt.instances.face_placements`). Refined and fitted alike, such faces have the same edge
-grids, moved: meshing each again costs gmsh the same work for the same triangles. :func:`copies` keeps
+grids, moved (:func:`unify` makes them so where a length at a threshold gave one a node more): meshing
+each again costs gmsh the same work for the same triangles. :func:`copies` keeps
 the placed faces whose grids are their first face's moved point for point (within
 :data:`TOLERANCE` of the shortest boundary segment); the job meshes the first faces only
 (:mod:`cadedge.mesh.isolate`), and :func:`place` adds each copy's triangles, the first's moved, on the
@@ -13,7 +14,7 @@ copy's surface is the first's, moved.
 
 The Koch low-cost robot's leader arm (Fusion 360, servos and screws placed several times) has 4 704
 faces, 3 358 of them copies: at 1e-2 its job had taken the default 300 s on 2 cores, with faces left
-out of time.
+out of time; now 261 s, every face meshed.
 """
 
 from __future__ import annotations
@@ -117,6 +118,8 @@ def place(result, lines: np.ndarray, line_edges: np.ndarray, grid, placed: dict[
     ids, starts = np.unique(line_edges[order], return_index=True)
     stops = np.r_[starts[1:], len(order)]
     edge_nodes = {int(e): np.unique(lines[order[a:b]]) for e, a, b in zip(ids, starts, stops)}
+    lengths = np.linalg.norm(result.nodes[lines[order, 0]] - result.nodes[lines[order, 1]], axis=1)
+    edge_shortest = dict(zip(ids.tolist(), np.minimum.reduceat(lengths, starts).tolist())) if len(order) else {}
     by_face = np.argsort(result.triangle_faces, kind="stable")
     faces_sorted = result.triangle_faces[by_face]
 
@@ -145,8 +148,7 @@ def place(result, lines: np.ndarray, line_edges: np.ndarray, grid, placed: dict[
             left.add(face)
             continue
         gap, at = cKDTree(result.nodes[b_face]).query(moved(result.nodes[b_first], matrix))
-        mine = lines[np.isin(line_edges, sorted(edges_of[first]))]
-        shortest = float(np.linalg.norm(result.nodes[mine[:, 0]] - result.nodes[mine[:, 1]], axis=1).min())
+        shortest = min(edge_shortest[e] for e in edges_of[first])
         if gap.max() > TOLERANCE * shortest or len(np.unique(at)) != len(at):
             left.add(face)
             continue
