@@ -14,7 +14,7 @@ copy's surface is the first's, moved.
 
 The Koch low-cost robot's leader arm (Fusion 360, servos and screws placed several times) has 4 704
 faces, 3 358 of them copies: at 1e-2 its job had taken the default 300 s on 2 cores, with faces left
-out of time; now 261 s, every face meshed.
+out of time; now 216-261 s, every face meshed.
 """
 
 from __future__ import annotations
