@@ -195,3 +195,18 @@ def test_a_step_assembly_is_meshed_with_every_placement_in_the_msh_and_the_repor
     assert {f"face {f}" for f in range(1, 43)} <= set(mesh.field_data)
     rows = json.loads(report.read_text())["faces"]
     assert [r["face"] for r in rows] == list(range(1, 43)) and all(r["status"] == "ok" for r in rows)
+
+
+def test_copies_of_faces_a_stopped_job_delivered_are_placed_and_the_others_named(cylinders):
+    """A child that loses cap 2 and then hangs: the hard timeout delivers faces 1 and 3, whose copies 4 and
+    6 are placed; cap 2 fails for the time, and its copy 5 with it."""
+    result = mesh_shape(cylinders, hooks={"after_generate": ["mesh_faults:lose_a_face_and_hang"]}, timeout=20,
+                        face_timeout=100)
+    assert sorted(f.face for f in result.failures) == [2, 5]
+    reasons = {f.face: f.reason for f in result.failures}
+    assert "no result within 20 s" in reasons[2]
+    assert "face 2, the same face placed elsewhere, failed: " in reasons[5] and "no result within" in reasons[5]
+    assert set(np.unique(result.triangle_faces)) == {1, 3, 4, 6}
+    assert result.check.ok, result.check.problems
+    count = np.bincount(result.triangle_faces, minlength=7)
+    assert count[4] == count[1] and count[6] == count[3]
