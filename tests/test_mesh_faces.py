@@ -523,3 +523,30 @@ def test_a_degenerate_edge_takes_the_gmsh_curve_at_its_point_not_the_one_of_its_
     assert not any("match no gmsh curve" in n for n in result.notes), result.notes  # before: edge 5
     assert result.ok and result.check.missing_grid_nodes == 0, result.problems(verbose=True)
     assert abs(result.report.worst_deficit) <= ALD
+
+
+def test_a_face_left_folded_is_meshed_again_by_meshadapt_only_where_it_is_small(monkeypatch):
+    """A Frontal-Delaunay mesh whose folds are not undone goes to MeshAdapt, as gmsh's switch would send it,
+    only where it holds at most ``ADAPT_SHARE`` of the face budget; a larger one keeps its mesh, node for
+    node (a spring's 118 733-triangle coil face at 1e-3 was stopped as hung in MeshAdapt in every
+    strategy). Here a disk's folds are made up (``unfolds`` answers no) and the budget is its size."""
+    import gmsh
+
+    from cadedge.mesh import budget, generate, optimize
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    monkeypatch.setattr(optimize, "unfolds", lambda surface: False)
+    for share, remeshed in ((0.5, False), (2.0, True)):
+        with gmsh_session():
+            gmsh.model.occ.addDisk(0, 0, 0, 1.0, 1.0)
+            gmsh.model.occ.synchronize()
+            gmsh.option.setNumber("Mesh.MeshSizeMax", 0.1)
+            gmsh.option.setNumber("Mesh.Algorithm", 6)
+            gmsh.model.mesh.generate(2)
+            before = gmsh.model.mesh.getElementsByType(2, 1)[1].copy()
+            monkeypatch.setattr(budget, "MAX_FACE_TRIANGLES", len(before) // 3)  # the disk's triangles
+            monkeypatch.setattr(generate, "ADAPT_SHARE", share)
+            out = generate.keep_or_adapt([1], STRATEGIES[0])
+            after = gmsh.model.mesh.getElementsByType(2, 1)[1]
+            assert out == ({1: None} if remeshed else {})
+            assert (len(after) != len(before) or not np.array_equal(after, before)) == remeshed

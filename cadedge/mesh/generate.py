@@ -199,17 +199,31 @@ TRACE = False
 DELAUNAY_BASED = (5, 6)
 
 
+#: A Delaunay-based mesh left with folds is meshed again by MeshAdapt only where it holds at most this
+#: share of the face's triangle budget (:data:`cadedge.mesh.budget.MAX_FACE_TRIANGLES`: 32 000 triangles
+#: at the default bound on an attempt). MeshAdapt remakes a large face far slower than Frontal-Delaunay
+#: makes it: a spring's coil face (118 733 triangles in 5.7 s at 1e-3, its folds beside an edge 0.015
+#: off the face, 100 times its tolerance) was still in MeshAdapt's passes after 67 s, and every strategy
+#: that ended there was stopped as hung. A larger face keeps its Delaunay mesh; the report counts its
+#: folded triangles.
+ADAPT_SHARE = 0.08
+
+
 def keep_or_adapt(surfaces: list[int], strategy: Strategy) -> dict[int, str | None]:
     """Delaunay-based meshes of ``surfaces`` (by ``strategy``, made with gmsh's switch off) judged as gmsh's
     switch would judge them, but once their folds are undone (:func:`~cadedge.mesh.optimize.unfolds`): a
-    face left with a folded triangle is meshed again by MeshAdapt at the same sizes, as gmsh would. A
-    single fold near a pole (the half ellipsoids of gmsh's ellipses.brep: one triangle of 11 621, beside
-    the pole of a rational B-spline surface) sent every such face to MeshAdapt, 0.5 -> 13 s a face, and
-    at ALD 1e-3 a chunk of seven of them past the 60 s of an attempt; its fold is undone in a few moves.
-    Per surface, None if it passed, else the reason (the surface is then cleared)."""
+    face left with a folded triangle is meshed again by MeshAdapt at the same sizes, as gmsh would, if it
+    is small enough for MeshAdapt (:data:`ADAPT_SHARE`). A single fold near a pole (the half ellipsoids
+    of gmsh's ellipses.brep: one triangle of 11 621, beside the pole of a rational B-spline surface) sent
+    every such face to MeshAdapt, 0.5 -> 13 s a face, and at ALD 1e-3 a chunk of seven of them past the
+    60 s of an attempt; its fold is undone in a few moves. Per surface, None if it passed, else the
+    reason (the surface is then cleared)."""
+    from . import budget
     from .optimize import unfolds
 
-    again = [s for s in surfaces if not unfolds(s)]
+    most = ADAPT_SHARE * budget.MAX_FACE_TRIANGLES
+    again = [s for s in surfaces if not unfolds(s)
+             and len(gmsh.model.mesh.getElementsByType(2, s)[0]) <= most]
     if not again:
         return {}
     clear([(2, s) for s in again])
