@@ -3,6 +3,8 @@ B-rep ids as physical groups, the mesh report (real cadquery parts, real OCCT, r
 
 from __future__ import annotations
 
+import dataclasses
+
 import json
 
 import numpy as np
@@ -18,7 +20,7 @@ from cadedge.mesh.boundary_fit import (CONE_CREDIT, CURVED_CREDIT, _fit_boundari
                                        fit_boundaries, fit_curved)
 from cadedge.mesh.fidelity import AIM, brep_face_areas, meshed_kinds, not_converging, prepare, surface_types  # noqa: E402
 from cadedge.mesh.quality import triangle_angles  # noqa: E402
-from cadedge.mesh.report import build_report, tolerance_bands  # noqa: E402
+from cadedge.mesh.report import build_report, report_of, tolerance_bands  # noqa: E402
 
 from conftest import CORPUS, FIXTURES, stadium_cap  # noqa: E402
 
@@ -251,6 +253,16 @@ def test_a_gapped_box_meshes_to_its_closed_face_areas_and_names_its_tolerances(g
                        surface_ald=1e-9)
     assert not any("tolerances allow" in f.note for f in rep.over_target)
     assert {f.reason for f in rep.over_target} == {"planar"}  # a box: every face a plane
+    # edges stated tight but lying off their faces (a camera module's near-planar face, edges 0.13 off with
+    # tolerances of 8e-7): the report measures every face over target, and names the edges' distance
+    tight_grid = dataclasses.replace(result.grid, edges=[dataclasses.replace(e, tolerance=1e-9)
+                                                          for e in result.grid.edges])
+    opts = {"brep_areas": brep_face_areas(result.grid.shape), "surface_types": surface_types(result.grid.shape),
+            "surface_ald": 1e-9, "curved_faces": []}
+    rep = report_of(dataclasses.replace(result, grid=tight_grid), opts)
+    assert len(rep.over_target) == 6 and {f.reason for f in rep.over_target} == {"tolerances"}
+    assert all("from its boundary (their pcurves on its surface), beyond their tolerance (1e-09)" in f.note
+               for f in rep.over_target)
 
 
 def test_a_face_meshed_finer_into_its_target_is_never_taken_for_not_converging():
