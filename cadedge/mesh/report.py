@@ -28,14 +28,15 @@ WORST = 5
 AFTER_MESH_HOOK = "cadedge.mesh.fidelity:after_mesh"
 
 
-#: Why a face is over the target (``FaceReport.reason``): its deficit is within what its edges' tolerances,
-#: or their measured distances from its boundary, allow; its sizes were held above a floor on a sharp ridge of its surface; its mesh holds the face's
-#: triangle budget (not meshed finer); finer meshes did not reduce it (its meshed and B-rep areas
-#: disagree); beside edges whose grids gmsh's own curve mesh replaced; a planar face (its boundary polygon
-#: sets its area); still over after it was meshed again finer.
 #: Edges measured this many times farther from a face's boundary than their tolerance lie off the face
 #: beyond it (the note says so).
 BEYOND = 2.0
+#: Why a face is over the target (``FaceReport.reason``): its deficit is within what its edges' tolerances,
+#: or their measured distances from its boundary, allow; its sizes were held above a floor on a sharp
+#: ridge of its surface; its mesh holds the face's triangle budget (not meshed finer); finer meshes did
+#: not reduce it (its meshed and B-rep areas disagree); beside edges whose grids gmsh's own curve mesh
+#: replaced; a planar face (its boundary polygon sets its area); still over after it was meshed again
+#: finer.
 OVER_REASONS = ("tolerances", "size floor", "triangle budget", "gmsh's curves", "not converging", "planar",
                 "still over")
 
