@@ -191,14 +191,16 @@ def _copy_extras(extras: dict, done: list[tuple[int, int]]) -> None:
             hook[key].update({face: hook[key][first] for face, first in done if first in hook[key]})
 
 
-def placed_note(placed: dict[int, tuple[int, np.ndarray]], left: set[int], outcomes: list) -> str:
-    """The note on the copies: how many were placed from how many faces, and those meshed on their own."""
+def placed_note(placed: dict[int, tuple[int, np.ndarray]], left: set[int], outcomes: list) -> str | None:
+    """The note on the copies: how many were placed from how many faces, and those meshed on their own;
+    None where none was either (every first face failed)."""
     ok = {o.face for o in outcomes if o.ok}
     moved_to = [f for f in placed if f not in left and f in ok]
     firsts = len({placed[f][0] for f in moved_to})
-    note = (f"{len(moved_to)} face{'s repeat' if len(moved_to) != 1 else ' repeats'} {firsts} "
+    said = [f"{len(moved_to)} face{'s repeat' if len(moved_to) != 1 else ' repeats'} {firsts} "
             f"other{'s' if firsts != 1 else ''} (an assembly's parts placed again) on the same edge grids: "
-            "meshed once, the triangles moved")
+            "meshed once, the triangles moved"] if moved_to else []
     if left:
-        note += f"; {faces_text(left)} meshed on their own (the face they repeat was meshed on other boundary nodes)"
-    return note
+        said.append(f"{faces_text(left)} meshed on their own (the face they repeat was meshed on other boundary "
+                    "nodes)")
+    return "; ".join(said) or None

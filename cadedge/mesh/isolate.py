@@ -525,7 +525,8 @@ def _run_shards(job: MeshJob, shards: list[frozenset[int]], tmp: str, output: Pa
             result, lines, line_edges = join(job.grid, parts, job.seams)
             place(result, lines, line_edges, job.grid, {f: c for f, c in job.copies.items() if f not in left},
                   job.seams)
-        notes.append(placed_note(job.copies, left, result.faces))
+        if (note := placed_note(job.copies, left, result.faces)) is not None:
+            notes.append(note)
     result.notes = notes + result.notes
     if output is not None and len(result.triangles):
         write_meshio(Delivered(result, lines, line_edges), output)
