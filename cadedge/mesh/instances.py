@@ -42,8 +42,8 @@ def moved(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
 
 def unify(grid, faces: dict[int, tuple[int, np.ndarray]], edges: dict[int, tuple[int, np.ndarray]]):
     """``grid`` with each edge placed again (``edges``: edge -> first edge, matrix) whose faces are all
-    copies (``faces``) of its first edge's faces by the same motion given its first edge's grid, moved (its
-    own end points kept: its vertices' nodes). Refined and fitted on their own, a repeated part's grids
+    copies (``faces``) of its first edge's faces, by the same motion, given its first edge's grid moved
+    (its own end points kept: its vertices' nodes). Refined and fitted on their own, a repeated part's grids
     differ now and then by a node, where a length sits at a threshold (a bracket turned by 0.7 radians:
     3 of its 14 faces); each then costs gmsh a face of its own. The moved grid is as fine: the same curve,
     the same neighbourhood."""
