@@ -129,6 +129,19 @@ def test_grids_a_repeated_part_refined_differently_are_made_the_same(brackets):
     assert all(a is b for a, b in zip(same.edges, short.edges) if a.id not in edges)
 
 
+def test_a_placement_refined_to_a_target_of_its_own_keeps_its_grids(brackets):
+    """``ald_for`` on one placement's face (20, a copy of face 6): its edges keep their finer grids, so the
+    face is no copy and is meshed on its own; the other placement of face 6 (34) is still a copy."""
+    grid = cadedge.refine_shape(brackets, ald=1e-2, ald_for={("face", 20): 1e-4})
+    faces, edges = face_placements(brackets), edge_placements(brackets)
+    same = unify(grid, faces, edges)
+    mine = [e for e in grid.edges if 20 in e.faces]
+    assert all(same.edges[e.id - 1] is e for e in mine)
+    assert sum(len(e.points) for e in mine) > sum(len(e.points) for e in grid.edges if 6 in e.faces)
+    found = copies(same, faces)
+    assert 20 not in found and found[34][0] == 6
+
+
 def _job(grid, skip):
     from cadedge.mesh.gmsh_model import shape_to_brep
     from cadedge.mesh.sizes import SizeField

@@ -46,15 +46,19 @@ def unify(grid, faces: dict[int, tuple[int, np.ndarray]], edges: dict[int, tuple
     (its own end points kept: its vertices' nodes). Refined and fitted on their own, a repeated part's grids
     differ now and then by a node, where a length sits at a threshold (a bracket turned by 0.7 radians:
     3 of its 14 faces); each then costs gmsh a face of its own. The moved grid is as fine: the same curve,
-    the same neighbourhood."""
-    from ..shapegrid import with_edges
+    the same neighbourhood. An edge refined to a target of its own (``ald_for``, by edge or face:
+    :func:`cadedge.shapegrid.recorded_targets`) other than its first edge's keeps its grid."""
+    from ..shapegrid import recorded_targets, with_edges
 
     by_id = {e.id: e for e in grid.edges}
+    targets = recorded_targets(grid)
     new = {}
     for e in grid.edges:
         if e.degenerate or e.id not in edges or not e.faces:
             continue
         first, matrix = edges[e.id]
+        if targets[e.id] != targets[first]:
+            continue
         placed = [faces.get(f) for f in set(e.faces)]
         if any(p is None or not _same_motion(p[1], matrix) for p in placed) or \
                 {p[0] for p in placed} != set(by_id[first].faces):
