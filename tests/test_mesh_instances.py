@@ -161,13 +161,18 @@ def cylinders():
 def test_copies_of_a_face_meshed_on_split_curves_are_meshed_on_their_own(cylinders):
     """Cap 2 meshed only by the strategy that splits its curve: side 1 is meshed again on it, so neither
     has the boundary of its copy (5 and 4), which are meshed on their own; cap 3's copy 6 is placed. The
-    mesh conforms."""
+    mesh conforms, and the status line's count takes in the faces meshed late: it never passes its total
+    and ends at 5 of 5."""
     from cadedge.mesh.isolate import run_isolated
+    from cadedge.mesh.status import MeshStatus
 
     split = next(k for k, s in enumerate(STRATEGIES) if s.split)
     job = _job(cylinders, {2: {k: "barred by the test" for k in range(split)}})
     assert sorted(job.copies) == [4, 5, 6]
-    res = run_isolated(job, workers=1)
+    shown: list[str] = []
+    res = run_isolated(job, workers=1, progress=MeshStatus(shown.append, faces={1, 2, 3}))
+    counts = [tuple(map(int, t.split()[2].split("/"))) for t in shown if t.startswith("meshing faces: ")]
+    assert all(done <= total for done, total in counts) and counts[-1] == (5, 5), counts
     assert all(o.ok for o in res.faces), res.faces
     assert next(o for o in res.faces if o.face == 2).strategy == STRATEGIES[split].name
     assert any("faces 4, 5 meshed on their own" in n for n in res.notes), res.notes

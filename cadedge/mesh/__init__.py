@@ -273,7 +273,7 @@ def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t
                   skip=invalid_face_skips(invalid), as_gmsh_alone=frozenset(invalid),
                   seams=Topology(grid.shape).shared_seams(), copies=placed)
     res = run_isolated(job, output=out, timeout=clock.timeout, face_timeout=face_timeout,
-                       progress=MeshStatus(say, faces=grid.faces - len(placed)),
+                       progress=MeshStatus(say, faces=set(range(1, grid.faces + 1)) - set(placed)),
                        workers=workers or default_workers(), started=clock.started)
     faces = list(res.faces)
     if res.error is not None:

@@ -4,14 +4,15 @@ The gmsh child writes terse lines for the parent's watchdog (``face 7 0``, ``bat
 ok``, ``refine 2 9``; see :mod:`cadedge.mesh.worker`), and the parent adds ``restart EVENT`` when it
 carries on in a new child (see :mod:`cadedge.mesh.isolate`; EVENT says what went wrong and what is done
 about it, and is shown as it is). :class:`MeshStatus` keeps the count of faces meshed across restarts and
-hands ``show`` one line per step, e.g. ``meshing faces: 12/40 meshed, face 13``. Lines it does not know
-are left out.
+hands ``show`` one line per step, e.g. ``meshing faces: 12/40 meshed, face 13``. A face the child names
+beyond those it was given (a repeated face meshed on its own after all: :mod:`cadedge.mesh.instances`)
+joins the count, so the count never passes its total. Lines it does not know are left out.
 
 >>> lines = []
->>> status = MeshStatus(lines.append, faces=3)
+>>> status = MeshStatus(lines.append, faces=[1, 2, 3])
 >>> for line in ("import", "curves", "batch 1 2", "result 1 0 ok", "result 2 0 ok", "face 3 0",
 ...              "result 3 0 fail gmsh error", "face 3 1", "result 3 1 ok", "measure", "refine 2",
-...              "optimise 3", "read"):
+...              "optimise 3", "read", "face 4 0", "result 4 0 ok"):
 ...     status(line)
 >>> print("\\n".join(lines))
 gmsh: importing the model
@@ -26,11 +27,13 @@ area target: measuring the faces
 meshing face 2 again
 improving the triangles: face 3
 reading the mesh back
+meshing faces: 3/4 meshed, face 4
+meshing faces: 4/4 meshed
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 #: Steps of the worker that are shown as they are.
 STEPS = {"import": "gmsh: importing the model", "map": "gmsh: matching its entities to the B-rep",
@@ -43,10 +46,10 @@ MAX_NAMED = 6
 
 class MeshStatus:
     """A ``progress(line)`` callback for :func:`~cadedge.mesh.isolate.run_isolated` that calls ``show(text)``
-    with what the job is doing and how many of its ``faces`` are meshed."""
+    with what the job is doing and how many of its ``faces`` (ids) are meshed."""
 
-    def __init__(self, show: Callable[[str], None], *, faces: int):
-        self.show, self.faces = show, faces
+    def __init__(self, show: Callable[[str], None], *, faces: Iterable[int]):
+        self.show, self.faces = show, set(faces)
         self.meshed: set[int] = set()
         self.doing = ""
 
@@ -58,14 +61,17 @@ class MeshStatus:
         if head in STEPS:
             self.show(STEPS[head])
         elif head == "face" and len(args) == 2:
+            self.faces.add(int(args[0]))
             attempt = int(args[1])
             self.doing = f"face {args[0]}" + (f" (attempt {attempt + 1})" if attempt else "")
             self._faces()
         elif head == "batch" and args:
+            self.faces.update(map(int, args))
             self.doing = f"faces {_named(args)} together" if len(args) > 1 else f"face {args[0]}"
             self._faces()
         elif head == "result" and len(args) >= 3 and args[2] == "ok":
             self.meshed.add(int(args[0]))
+            self.faces.add(int(args[0]))
             self._faces()
         elif head == "refine" and args:
             self.show(f"meshing face{'s' if len(args) > 1 else ''} {_named(args)} again")
@@ -75,8 +81,8 @@ class MeshStatus:
             self.show(line.split(None, 1)[1])  # what the watchdog saw and did, in its own words
 
     def _faces(self) -> None:
-        done = len(self.meshed)
-        self.show(f"meshing faces: {done}/{self.faces} meshed" + (f", {self.doing}" if done < self.faces else ""))
+        done, total = len(self.meshed), len(self.faces)
+        self.show(f"meshing faces: {done}/{total} meshed" + (f", {self.doing}" if done < total else ""))
 
 
 def _named(ids: list[str]) -> str:
