@@ -103,6 +103,29 @@ def test_a_short_cylinder_side_is_split_within_its_target_on_its_surface():
         assert np.array_equal(read_face(side).tri, after.tri)
 
 
+def test_a_face_read_back_holds_each_seam_node_once_with_its_parameters():
+    """gmsh lists a cylinder side's seam nodes twice (the seam bounds the side on both sides): read back,
+    each node is one row used by a triangle, and every node finds its parameters without a projection
+    (``getParametrization``, 2 ms a node on a B-spline face, was run on every unused copy)."""
+    from unittest import mock
+
+    from cadedge.mesh.folds import node_params
+    from cadedge.mesh.gmsh_model import gmsh_session
+
+    with gmsh_session():
+        side, face = _coarse_cylinder_side()
+        listed = gmsh.model.mesh.getNodes(2, side, includeBoundary=True)[0]
+        assert len(listed) > len(set(listed))  # gmsh's own list has the seam's nodes twice
+        assert len(np.unique(face.tags)) == len(face.tags) == len(set(listed))
+        assert np.all(np.bincount(face.tri.ravel(), minlength=len(face.tags)) > 0)
+        projected: list[int] = []
+        real = gmsh.model.getParametrization
+        with mock.patch.object(gmsh.model, "getParametrization",
+                               lambda dim, tag, x: projected.append(len(x) // 3) or real(dim, tag, x)):
+            uv = node_params(side, face.x, face.uv, face.tags)
+        assert not np.isnan(uv).any() and sum(projected) <= 2  # the curves' end points at most
+
+
 def test_middles_across_a_seam_are_taken_the_short_way_round_only_where_the_surface_closes_up():
     """A cylinder's side closes up across its seam (u = 0 and 2 pi give the same points): the middle of
     an edge from u = 0.1 to u = 2 pi - 0.1 lies on the seam, not at u = pi across the cylinder. A box's

@@ -42,7 +42,11 @@ def read_face(surface: int) -> FaceMesh | None:
     if not len(tri_tags):
         return None
     tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
-    tags = np.asarray(tags, dtype=np.int64)
+    # a seam's nodes come twice (its curve bounds the face on both sides): each node once, or the copies
+    # no triangle uses are projected on the surface for their parameters (2 ms a node on a B-spline face)
+    tags, first = np.unique(np.asarray(tags, dtype=np.int64), return_index=True)
+    order = np.sort(first)
+    tags, coords = tags[np.argsort(first)], np.asarray(coords, dtype=float).reshape(-1, 3)[order]
     lookup = node_lookup(tags)
     tri_tags = np.asarray(tri_tags, dtype=np.int64)
     if tri_tags.max() >= len(lookup) or (lookup[tri_tags] < 0).any():
@@ -64,7 +68,7 @@ def read_face(surface: int) -> FaceMesh | None:
     pinned, creases = crease_nodes(surface, uv, tri, tags)
     movable &= ~pinned
     fixed.update(creases)
-    return FaceMesh(tags, np.asarray(coords, dtype=float).reshape(-1, 3), tri,
+    return FaceMesh(tags, coords, tri,
                     movable, uv, np.asarray(el_tags, dtype=np.int64), fixed, pinned)
 
 
