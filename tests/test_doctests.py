@@ -7,7 +7,8 @@ import pytest
 
 MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments",
            "cadedge.mesh.shards", "cadedge.mesh.report",
-           "cadedge.mesh.coincident", "cadedge.mesh.quality", "cadedge.mesh.gridded", "cadedge.mesh.torus_fit"]
+           "cadedge.mesh.coincident", "cadedge.mesh.quality", "cadedge.mesh.gridded", "cadedge.mesh.torus_fit",
+           "cadedge.mesh.moves"]
 
 
 @pytest.mark.parametrize("name", MODULES)
