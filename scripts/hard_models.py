@@ -23,7 +23,10 @@ face at one point; and a sphere and a revolved spline cut to 270 degrees (a face
 turn between two poles). A seventh: a flat coil (a rectangle swept along a helix), whose helicoidal bands'
 boundary slivers cancel. An eighth: a key blade as an Alias export (every face a B-spline
 surface, its top wall's section through square notches). A ninth: a fillet dying out along an edge, one
-B-spline strip whose parameters stretch about 200 times more along it than across.
+B-spline strip whose parameters stretch about 200 times more along it than across. A tenth, features
+not tried before: text embossed on a plate and cut into a cylinder, variable-radius fillets, a vertex
+blend of three fillets of unequal radii, a conical spring, a plate with 240 chamfered holes and a sphere
+grazed by a hole.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -468,6 +471,92 @@ def vanishing_fillet() -> object:
     return BRepBuilderAPI_MakeFace(surface, 1e-7).Face()
 
 
+def text_plate() -> object:
+    """Serif text ("Rg&@%8 Qx", 10 mm, DejaVu Serif or the system's fallback) embossed 1.2 mm on an
+    80 x 24 x 4 plate with filleted corners: glyph outlines of short B-spline edges with sharp serifs."""
+    import build123d as bd
+
+    with bd.BuildPart() as part:
+        bd.Box(80, 24, 4)
+        bd.fillet(part.edges().filter_by(bd.Axis.Z), 3)
+        with bd.BuildSketch(bd.Plane.XY.offset(2)):
+            bd.Text("Rg&@%8 Qx", font_size=10, font="DejaVu Serif")
+        bd.extrude(amount=1.2)
+    return part.part.wrapped
+
+
+def text_cylinder() -> object:
+    """Bold text ("CAD 3S", 9 mm) cut 0.7 mm deep into a cylinder of radius 15, radially: the glyphs'
+    side faces meet the cylinder in B-spline curves, their floors a cylinder of radius 14.3."""
+    import build123d as bd
+
+    with bd.BuildSketch(bd.Plane.XZ) as text:
+        bd.Text("CAD 3S", font_size=9, font="DejaVu Sans", font_style=bd.FontStyle.BOLD)
+    glyphs = bd.extrude(text.sketch, amount=20, both=True)
+    return (bd.Cylinder(15, 40) - (glyphs & bd.Cylinder(16, 40)) + bd.Cylinder(14.3, 40)).wrapped
+
+
+def variable_fillet() -> object:
+    """A 40 x 30 x 20 box whose four vertical edges are filleted with radii running from 1-4 mm at the
+    bottom to 6-3 mm at the top (OCCT's evolving fillets: B-spline faces)."""
+    import build123d as bd
+    from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+
+    box = bd.Box(40, 30, 20)
+    fillet = BRepFilletAPI_MakeFillet(box.wrapped)
+    for i, edge in enumerate(box.edges().filter_by(bd.Axis.Z)):
+        fillet.Add(1.0 + i, 6.0 - i, edge.wrapped)
+    fillet.Build()
+    return fillet.Shape()
+
+
+def vertex_blend() -> object:
+    """A 30 mm cube whose three edges at one corner are filleted 2, 5 and 9 mm: the corner closed by a
+    vertex blend between fillets of unequal radii."""
+    import build123d as bd
+    from OCP.BRepFilletAPI import BRepFilletAPI_MakeFillet
+
+    cube = bd.Box(30, 30, 30)
+    fillet = BRepFilletAPI_MakeFillet(cube.wrapped)
+    corner = [e for e in cube.edges() if sum(abs(c - 15) < 1e-6 for c in tuple(e.center())) == 2]
+    for radius, edge in zip((2.0, 5.0, 9.0), corner):
+        fillet.Add(radius, edge.wrapped)
+    fillet.Build()
+    return fillet.Shape()
+
+
+def conical_spring() -> object:
+    """A 0.8 mm circle swept along a conical helix (radius 12, pitch 5, 30 high, narrowing at 12 degrees):
+    one B-spline face 500 mm long round a tube 5 mm round, with its seam along the sweep."""
+    import build123d as bd
+
+    helix = bd.Helix(pitch=5, height=30, radius=12, cone_angle=-12)
+    section = bd.Plane(origin=helix @ 0, z_dir=helix % 0) * bd.Circle(0.8)
+    return bd.sweep(section, path=helix, is_frenet=True).wrapped
+
+
+def perforated_plate() -> object:
+    """A 100 x 44 x 2 plate with 24 x 10 holes of 1.2 mm on a 4 mm pitch, their top rims chamfered 0.2:
+    486 faces, 240 narrow cones among them."""
+    import build123d as bd
+
+    with bd.BuildPart() as part:
+        bd.Box(100, 44, 2)
+        with bd.GridLocations(4, 4, 24, 10):
+            bd.Hole(0.6)
+        bd.chamfer(part.edges().filter_by(bd.GeomType.CIRCLE).group_by(bd.Axis.Z)[-1], 0.2)
+    return part.part.wrapped
+
+
+def grazing_sphere() -> object:
+    """A sphere of radius 20 cut by a 5 mm cylinder 15 mm off its centre and by a 4 mm one whose side
+    grazes the sphere's top (0.001 mm inside it): a near-tangent intersection."""
+    import build123d as bd
+
+    body = bd.Sphere(20) - bd.Cylinder(5, 60).moved(bd.Location((15, 0, 0)))
+    return (body - bd.Cylinder(4, 60, rotation=(90, 0, 0)).moved(bd.Location((0, 0, 15.999)))).wrapped
+
+
 def key_blade() -> object:
     """A key blade 40 x 10 x 2.5 mm as an Alias export: its top one B-spline curve through square notches
     and a rounded bump (C0 at their corners, 90 degrees at the notches), the block converted so that every
@@ -672,6 +761,9 @@ MODELS: dict[str, Callable[[], object]] = {
     "tangent_inlet_tee": tangent_inlet_tee, "pipe_tee_equal": pipe_tee_equal,
     "sphere_sector": sphere_sector, "revolved_sector": revolved_sector, "key_blade": key_blade,
     "vanishing_fillet": vanishing_fillet,
+    "text_plate": text_plate, "text_cylinder": text_cylinder, "variable_fillet": variable_fillet,
+    "vertex_blend": vertex_blend, "conical_spring": conical_spring, "perforated_plate": perforated_plate,
+    "grazing_sphere": grazing_sphere,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
