@@ -17,6 +17,8 @@ import time
 
 import numpy as np
 
+from .interior import CONSTANT_CURVATURE
+
 #: A curved face whose |deficit| is under this share of the level is meshed again coarser.
 BELOW = 0.75
 #: The coarser mesh aims at this share of the level.
@@ -35,7 +37,7 @@ SAVING_SHARE = 0.1
 #: whose curvature (``cos(half angle) / radius``) changes only along the axis, smoothly, as the samples
 #: follow it. A narrow chamfer's cone has its triangles from its circles: the perforated plate's 240 at
 #: 1e-3 were each meshed three more times for the same triangles (36 s of 160), and are now left alone.
-PREDICTED = frozenset({"Plane", "Cylinder", "Sphere", "Torus", "Cone"})
+PREDICTED = CONSTANT_CURVATURE | {"Cone"}
 #: Passes: a face kept coarser is tried coarser again while it stays under ``BELOW * level``
 #: (mesh_T106_V3's blade face at 1e-3, its deficit set by its loose boundary more than by its triangles:
 #: 3.35e-4 at 4 604 triangles after one pass, 3.6e-4 at 2 902 after three; the model 8 961 -> 6 611).

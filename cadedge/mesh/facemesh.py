@@ -44,9 +44,9 @@ def read_face(surface: int) -> FaceMesh | None:
     tags, coords, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
     # a seam's nodes come twice (its curve bounds the face on both sides): each node once, or the copies
     # no triangle uses are projected on the surface for their parameters (2 ms a node on a B-spline face)
-    tags, first = np.unique(np.asarray(tags, dtype=np.int64), return_index=True)
-    order = np.sort(first)
-    tags, coords = tags[np.argsort(first)], np.asarray(coords, dtype=float).reshape(-1, 3)[order]
+    tags = np.asarray(tags, dtype=np.int64)
+    once = np.sort(np.unique(tags, return_index=True)[1])
+    tags, coords = tags[once], np.asarray(coords, dtype=float).reshape(-1, 3)[once]
     lookup = node_lookup(tags)
     tri_tags = np.asarray(tri_tags, dtype=np.int64)
     if tri_tags.max() >= len(lookup) or (lookup[tri_tags] < 0).any():

@@ -213,8 +213,9 @@ def _in_sorted(keys: np.ndarray, query: np.ndarray) -> np.ndarray:
     >>> _in_sorted(np.array([2, 5, 9]), np.array([9, 1, 5, 10]))
     array([ True, False,  True, False])
     """
-    at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
-    return keys[at] == query if len(keys) else np.zeros(len(query), dtype=bool)
+    if not len(keys):
+        return np.zeros(len(query), dtype=bool)
+    return keys[np.minimum(np.searchsorted(keys, query), len(keys) - 1)] == query
 
 
 def _swappable(tri: np.ndarray, n: int, fixed_keys: np.ndarray) -> tuple[np.ndarray, ...]:
