@@ -11,10 +11,15 @@ Each file exercises one kind of topology the OCCT layer must handle:
 - ``two_solids.step``: a two-solid compound (an assembly of a box and a cylinder).
 - ``open_face.step``: an open shell: a single B-spline face.
 - ``helix_wire.step``: loose edges: a helix wire with no faces.
+- ``misread/dimpled_ball.step``: a sphere with 22 dimples, one sphere face with 22 holes, that OCCT's own STEP
+  reader misreads: its shape healing takes holes for faces of their own and drops the rest of the face
+  (23 faces read as 43, one solid as 21; the loader warns). It lies in a folder of its own, out of the
+  benchmarks that take every fixture.
 """
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -31,6 +36,18 @@ def bracket() -> cq.Workplane:
     body = body.edges("|Y").edges(cq.selectors.NearestToPointSelector((-24, 0, 6))).fillet(4.0)
     body = body.faces(">Z[-2]").workplane().pushPoints([(10, 10), (10, -10)]).hole(6.0)
     return body.faces("<X").workplane(centerOption="CenterOfBoundBox").center(0, 6).hole(8.0)
+
+
+def dimpled_ball(count: int = 22, radius: float = 21.35) -> cq.Shape:
+    """A ball with ``count`` spherical dimples 0.5 deep on a Fibonacci lattice (each cutting sphere's
+    axis radial, so its seam stays clear of the dimple's rim)."""
+    ball = cq.Solid.makeSphere(radius, angleDegrees1=-90)
+    golden = math.pi * (3 - math.sqrt(5))
+    for i in range(count):
+        z = 1 - 2 * (i + 0.5) / count
+        at = cq.Vector(math.sqrt(1 - z * z) * math.cos(golden * i), math.sqrt(1 - z * z) * math.sin(golden * i), z)
+        ball = ball.cut(cq.Solid.makeSphere(3.0, at * (radius + 2.5), at, angleDegrees1=-90))
+    return ball
 
 
 def shapes() -> dict[str, cq.Shape | cq.Workplane]:
@@ -50,6 +67,7 @@ def shapes() -> dict[str, cq.Shape | cq.Workplane]:
         "two_solids": compound,
         "open_face": face,
         "helix_wire": helix,
+        "misread/dimpled_ball": dimpled_ball(),
     }
 
 
@@ -57,6 +75,7 @@ def main() -> int:
     OUT.mkdir(exist_ok=True)
     for name, obj in shapes().items():
         path = OUT / f"{name}.step"
+        path.parent.mkdir(exist_ok=True)
         cq.exporters.export(obj, str(path), exportType="STEP")
         print(f"{path.relative_to(OUT.parent)}: {path.stat().st_size} bytes")
     return 0

@@ -8,7 +8,7 @@ import pytest
 MODULES = ["cadedge.refine", "cadedge.yardsticks.reference", "cadedge.mesh.status", "cadedge.mesh.segments",
            "cadedge.mesh.shards", "cadedge.mesh.report",
            "cadedge.mesh.coincident", "cadedge.mesh.quality", "cadedge.mesh.gridded", "cadedge.mesh.torus_fit",
-           "cadedge.mesh.moves"]
+           "cadedge.mesh.moves", "cadedge.occt.step"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -160,6 +160,25 @@ def test_every_entity_of_the_only_solid_lost_is_corrupt_even_when_allowed(tmp_pa
         assert "corrupt STEP file: nothing transferred" in msg and "14 of 14 faces" in msg
 
 
+def test_faces_occts_healing_splits_are_named_in_a_warning(capsys):
+    """misread/dimpled_ball.step (scripts/build_fixtures.py) holds one solid of 23 faces, a sphere face with 22
+    holes among them. OCCT's STEP reader heals that face into its holes as faces of their own and drops
+    the rest (43 faces, 21 solids, 6% of the area left): nothing is refused, since a split can also be harmless,
+    but the first warning says what the healing did; a file read as it is written has no such warning."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    loaded = load_shape(FIXTURES / "misread" / "dimpled_ball.step")
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(loaded.shape, props)
+    assert props.Mass() < 0.1 * 5741.3  # the shape as OCCT read it: the ball's own area is 5741.3
+    assert loaded.warnings[0].startswith("OCCT's shape healing read the file's 23 faces as 43 and its 1 solid "
+                                         "as 21: it split faces the file holds whole")
+    assert not any("shape healing" in w for w in load_shape(FIXTURES / "bracket.step").warnings)
+    assert main(["info", str(FIXTURES / "misread" / "dimpled_ball.step")]) == 0
+    assert "warning: OCCT's shape healing read the file's 23 faces as 43" in capsys.readouterr().err
+
+
 def test_missing_reference_without_lost_faces_is_still_refused(tmp_path):
     # the cut removes only the representation context: every face transfers, but the file is damaged
     path = cut(FIXTURES / "cylinder.step", tmp_path / "cyl.step", 0.9)
