@@ -550,3 +550,35 @@ def test_a_face_left_folded_is_meshed_again_by_meshadapt_only_where_it_is_small(
             after = gmsh.model.mesh.getElementsByType(2, 1)[1]
             assert out == ({1: None} if remeshed else {})
             assert (len(after) != len(before) or not np.array_equal(after, before)) == remeshed
+
+
+def test_a_curved_face_with_many_holes_is_meshed_by_delaunay_first():
+    """gmsh's Frontal-Delaunay takes time on a curved face in proportion to its triangles times its holes
+    (:data:`~cadedge.mesh.strategies.HOLED_ORDER`): a tube's walls, each with 18 holes, are meshed by
+    Delaunay first; a plate's faces with as many holes, and the tube's faces with none, keep
+    Frontal-Delaunay; every face meets the target."""
+    import cadquery as cq
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.GeomAbs import GeomAbs_Cylinder, GeomAbs_Plane
+
+    from cadedge.mesh.strategies import HOLES
+
+    tube = cq.Workplane().circle(10).circle(9).extrude(30)
+    for k in range(18):  # three rows of six radial holes
+        hole = (cq.Workplane("YZ").center(0, 6 + 9 * (k // 6)).circle(0.8).extrude(15)
+                .rotate((0, 0, 0), (0, 0, 1), 60 * k + 30 * (k // 6)))
+        tube = tube.cut(hole)
+    plate = cq.Workplane().box(40, 30, 2).faces(">Z").workplane().rarray(6, 6, 6, 3).hole(1.6).translate((40, 0, 0))
+    shape = cq.Compound.makeCompound([tube.val(), plate.val()])
+    result = mesh_shape(shape, ald=ALD)
+    _every_face(result)
+    assert result.report.worst_deficit <= ALD
+    faces = {f.face: f for f in result.faces}
+    kinds = {}
+    for i, face in enumerate(shape.Faces(), start=1):
+        kind = BRepAdaptor_Surface(face.wrapped).GetType()
+        holes = len(face.innerWires())
+        kinds.setdefault((kind, holes >= HOLES, holes > 0), []).append(faces[i].strategy)
+    assert kinds[(GeomAbs_Cylinder, True, True)] == ["Delaunay"] * 2  # the tube's walls
+    assert set(kinds[(GeomAbs_Plane, True, True)]) == {"Frontal-Delaunay"}  # the plate's top and bottom
+    assert "Frontal-Delaunay" in kinds[(GeomAbs_Cylinder, False, False)]  # the holes' own walls
