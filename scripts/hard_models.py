@@ -26,7 +26,10 @@ surface, its top wall's section through square notches). A ninth: a fillet dying
 B-spline strip whose parameters stretch about 200 times more along it than across. A tenth, features
 not tried before: text embossed on a plate and cut into a cylinder, variable-radius fillets, a vertex
 blend of three fillets of unequal radii, a conical spring, a plate with 240 chamfered holes and a sphere
-grazed by a hole.
+grazed by a hole. An eleventh: curved faces with many holes (a ball with 150 dimples, written as BREP since
+OCCT's STEP reader misreads it, and a tube with 96 holes), a torus elbow with a branch, a square-to-circle
+loft, an oblique extrusion, a B-spline face whose parameter speed varies 100 times and a shelled vase
+with a window.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -557,6 +560,126 @@ def grazing_sphere() -> object:
     return (body - bd.Cylinder(4, 60, rotation=(90, 0, 0)).moved(bd.Location((0, 0, 15.999)))).wrapped
 
 
+
+def perforated_tube() -> object:
+    """A tube of radii 20 and 18, 100 long, with 96 radial holes of 2 mm in 8 staggered rows: two cylinder
+    faces with 92 and 93 holes."""
+    import build123d as bd
+
+    holes = [bd.Cylinder(2, 50, rotation=(0, 90, 0), align=(bd.Align.CENTER, bd.Align.CENTER, bd.Align.MIN))
+             .moved(bd.Location((0, 0, -40 + 11 * k), (0, 0, 30 * j + 15 * (k % 2))))
+             for k in range(8) for j in range(12)]
+    return (bd.Cylinder(20, 100) - bd.Cylinder(18, 100) - holes).wrapped
+
+
+def golf_ball() -> object:
+    """A ball of radius 21.35 with 150 spherical dimples 0.5 deep on a Fibonacci lattice: one sphere face
+    with 150 holes (each cutting sphere's axis radial, so its seam stays clear of the dimple's rim)."""
+    import build123d as bd
+
+    count, radius = 150, 21.35
+    golden = math.pi * (3 - math.sqrt(5))
+    cuts = []
+    for i in range(count):
+        z = 1 - 2 * (i + 0.5) / count
+        at = bd.Vector(math.sqrt(1 - z * z) * math.cos(golden * i), math.sqrt(1 - z * z) * math.sin(golden * i), z)
+        cuts.append(bd.Solid.make_sphere(3.0, plane=bd.Plane(origin=at * (radius + 2.5), z_dir=at)))
+    return (bd.Sphere(radius) - cuts).wrapped
+
+
+def write_golf_ball(path: Path) -> None:
+    """:func:`golf_ball` as OCCT BREP: OCCT's STEP reader misreads it (its shape healing takes the sphere
+    face's holes for faces of their own and drops the rest: 151 faces read as 295, 41% of the area left)."""
+    from OCP.BRepTools import BRepTools
+
+    if not BRepTools.Write_s(golf_ball(), str(path)):
+        raise RuntimeError(f"OCCT could not write {path}")
+
+
+def elbow_branch() -> object:
+    """A 90-degree torus elbow (bend radius 30, pipe radius 8) with a 4 mm branch on its outer side: a
+    torus-cylinder intersection curve."""
+    import build123d as bd
+
+    elbow = bd.Torus(30, 8) & bd.Box(60, 60, 30, align=(bd.Align.MIN, bd.Align.MIN, bd.Align.CENTER))
+    a = math.radians(40)
+    branch = bd.Cylinder(4, 30, rotation=(0, 90, 0), align=(bd.Align.CENTER, bd.Align.CENTER, bd.Align.MIN))
+    return (elbow + branch.moved(bd.Location((30 * math.cos(a), 30 * math.sin(a), 0), (0, 0, 40)))).wrapped
+
+
+def transition_duct() -> object:
+    """A loft from a 40 mm square to a circle of radius 15, 50 mm on: B-spline faces from the square's
+    sharp corners to the circle."""
+    import build123d as bd
+
+    with bd.BuildPart() as part:
+        with bd.BuildSketch():
+            bd.Rectangle(40, 40)
+        with bd.BuildSketch(bd.Plane.XY.offset(50)):
+            bd.Circle(15)
+        bd.loft()
+    return part.part.wrapped
+
+
+def oblique_extrusion() -> object:
+    """A closed spline extruded 30 mm along (0.6, 0.3, 1): a surface of linear extrusion slanted to its
+    section."""
+    import build123d as bd
+
+    with bd.BuildPart() as part:
+        with bd.BuildSketch():
+            with bd.BuildLine():
+                bd.Spline((0, 0), (12, -4), (25, 3), (20, 14), (8, 16), (-3, 8), periodic=True)
+            bd.make_face()
+        bd.extrude(amount=30, dir=(0.6, 0.3, 1))
+    return part.part.wrapped
+
+
+def skewed_patch() -> object:
+    """One wavy B-spline face 80 x 30 whose parameter runs about 100 times faster at one end than at
+    the other (poles spaced as the cube of their index)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.Geom import Geom_BSplineSurface
+    from OCP.TColgp import TColgp_Array2OfPnt
+    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+    from OCP.gp import gp_Pnt
+
+    nu, nv = 12, 8
+    poles = TColgp_Array2OfPnt(1, nu, 1, nv)
+    for i in range(nu):
+        for j in range(nv):
+            s = (i / (nu - 1)) ** 3
+            x, y = 80 * s, 30 * (j / (nv - 1)) ** 0.5 * (1 + 0.3 * s)
+            poles.SetValue(i + 1, j + 1, gp_Pnt(x, y, 6 * math.sin(x / 9) * math.cos(y / 8)))
+
+    def knots(n: int) -> tuple:
+        values, mults = TColStd_Array1OfReal(1, n - 2), TColStd_Array1OfInteger(1, n - 2)
+        for a in range(n - 2):
+            values.SetValue(a + 1, a / (n - 3))
+            mults.SetValue(a + 1, 4 if a in (0, n - 3) else 1)
+        return values, mults
+
+    (uk, um), (vk, vm) = knots(nu), knots(nv)
+    return BRepBuilderAPI_MakeFace(Geom_BSplineSurface(poles, uk, vk, um, vm, 3, 3), 1e-7).Face()
+
+
+def vase_window() -> object:
+    """A spline profile revolved into a vase, shelled to 1.2 mm open at the top, a window cut through
+    its side: a surface of revolution and its offset, trimmed by planes."""
+    import build123d as bd
+
+    with bd.BuildPart() as part:
+        with bd.BuildSketch(bd.Plane.XZ):
+            with bd.BuildLine():
+                side = bd.Spline((14, 0), (18, 20), (9, 45), (12, 60))
+                bd.Polyline(side @ 1, (0, 60), (0, 0), side @ 0)
+            bd.make_face()
+        bd.revolve(axis=bd.Axis.Z)
+        bd.offset(amount=-1.2, openings=part.faces().sort_by(bd.Axis.Z)[-1])
+        with bd.Locations((0, 0, 30)):
+            bd.Box(40, 10, 14, align=(bd.Align.MIN, bd.Align.CENTER, bd.Align.CENTER), mode=bd.Mode.SUBTRACT)
+    return part.part.wrapped
+
 def key_blade() -> object:
     """A key blade 40 x 10 x 2.5 mm as an Alias export: its top one B-spline curve through square notches
     and a rounded bump (C0 at their corners, 90 degrees at the notches), the block converted so that every
@@ -764,12 +887,15 @@ MODELS: dict[str, Callable[[], object]] = {
     "text_plate": text_plate, "text_cylinder": text_cylinder, "variable_fillet": variable_fillet,
     "vertex_blend": vertex_blend, "conical_spring": conical_spring, "perforated_plate": perforated_plate,
     "grazing_sphere": grazing_sphere,
+    "perforated_tube": perforated_tube, "elbow_branch": elbow_branch, "transition_duct": transition_duct,
+    "oblique_extrusion": oblique_extrusion, "skewed_patch": skewed_patch, "vase_window": vase_window,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
 #: Models written in another format, by their own writer: name -> (suffix, writer).
 OTHER_FORMATS: dict[str, tuple[str, Callable[[Path], None]]] = {
-    "very_loose": (".brep", write_very_loose), "iges_trimmed": (".igs", write_iges_trimmed)}
+    "very_loose": (".brep", write_very_loose), "iges_trimmed": (".igs", write_iges_trimmed),
+    "golf_ball": (".brep", write_golf_ball)}
 NAMES = list(MODELS) + list(XDE_WRITERS) + list(OTHER_FORMATS)
 
 
