@@ -89,8 +89,7 @@ CROSSED_ORDER = PARAMETERS + tuple(k for k in GMSH_ORDER if k not in PARAMETERS)
 #: 1e-3, past an attempt's 60 s: it failed, and Delaunay, at the same sizes as the attempt that ran out
 #: of time, was not tried.
 HOLES = 16
-DELAUNAY = next(k for k, s in enumerate(STRATEGIES) if s.name == "Delaunay")
-HOLED_ORDER = (DELAUNAY,) + tuple(k for k in GMSH_ORDER if k != DELAUNAY)
+HOLED_ORDER = tuple(sorted(GMSH_ORDER, key=lambda k: STRATEGIES[k].name != "Delaunay"))  # the rest in order
 #: A face OCCT's check finds invalid (a wire not closed or crossing itself) is tried only as gmsh alone
 #: would mesh it, on the imposed curves and on its own, sized as gmsh alone sizes them (from its boundary
 #: field: ``MeshJob.as_gmsh_alone``; on the grids' spacings two tees' run faces, whose wires cross at the
@@ -130,7 +129,7 @@ def face_order(surface: int) -> tuple[int, ...]:
         return NARROW_CONE_ORDER if cone.sin < NARROW else APEX_CONE_ORDER
     if is_extrusion(surface):
         return EXTRUSION_ORDER
-    return HOLED_ORDER if holes(surface) >= HOLES and gmsh.model.getType(2, surface) != "Plane" else GMSH_ORDER
+    return HOLED_ORDER if gmsh.model.getType(2, surface) != "Plane" and holes(surface) >= HOLES else GMSH_ORDER
 
 
 def holes(surface: int) -> int:
