@@ -640,9 +640,9 @@ def skewed_patch() -> object:
     the other (poles spaced as the cube of their index)."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
     from OCP.Geom import Geom_BSplineSurface
-    from OCP.TColgp import TColgp_Array2OfPnt
-    from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
     from OCP.gp import gp_Pnt
+
+    from cadedge.occt.compat import TColgp_Array2OfPnt, TColStd_Array1OfInteger, TColStd_Array1OfReal
 
     nu, nv = 12, 8
     poles = TColgp_Array2OfPnt(1, nu, 1, nv)
