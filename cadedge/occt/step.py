@@ -136,7 +136,7 @@ def _read(path: Path, given: str, tail: bytes, note: Callable[[str], None]) -> T
     done = Completeness(faces=(got_faces, faces + unresolved), solids=(got_solids, solids),
                         roots=(done_roots, roots), unresolved=max(unresolved, unresolved_references(load)),
                         truncated=cut_short(load), skipped=skipped_entities(transfer))
-    if (split := _split_by_healing(got_faces, faces + unresolved, got_solids, solids)) is not None:
+    if (split := _split_by_healing(done.faces, done.solids)) is not None:
         warnings.insert(0, split)
     units = UNIT_NAMES.get(reader.SystemLengthUnit(), f"{reader.SystemLengthUnit():g} mm")
     mm_per_unit = _file_unit_mm(reader)
@@ -144,8 +144,9 @@ def _read(path: Path, given: str, tail: bytes, note: Callable[[str], None]) -> T
     return Transferred(shape=shape, done=done, units=units, warnings=warnings, declared=declared_mm)
 
 
-def _split_by_healing(got_faces: int, faces: int, got_solids: int, solids: int) -> str | None:
-    """A warning when the shape holds more faces than the file defines, else None.
+def _split_by_healing(faces: tuple[int, int], solids: tuple[int, int]) -> str | None:
+    """A warning when the shape holds more faces than the file defines, else None (``faces``, ``solids``:
+    (transferred, defined), as :class:`~cadedge.occt.loading.Completeness` counts them).
 
     The STEP reader's only process is OCCT's shape healing (``FixShape``), so more faces mean it split
     faces the file holds whole. Seen where that loses a face: a sphere with 40 dimples, written and read
@@ -153,15 +154,16 @@ def _split_by_healing(got_faces: int, faces: int, got_solids: int, solids: int) 
     and the rest of it dropped (89% of the area lost), and OCCT says only "Improperly connected shell
     split into parts".
 
-    >>> _split_by_healing(79, 41, 39, 1)[:73]
+    >>> _split_by_healing((79, 41), (39, 1))[:73]
     "OCCT's shape healing read the file's 41 faces as 79 and its 1 solid as 39"
-    >>> _split_by_healing(6, 6, 1, 1) is None
+    >>> _split_by_healing((6, 6), (1, 1)) is None
     True
     """
-    if not faces or got_faces <= faces:
+    (got_faces, defined), (got_solids, solids) = faces, solids
+    if not defined or got_faces <= defined:
         return None
     solid = f" and its {solids} solid{'s' * (solids != 1)} as {got_solids}" if got_solids > solids else ""
-    return (f"OCCT's shape healing read the file's {faces} faces as {got_faces}{solid}: it split faces the file "
+    return (f"OCCT's shape healing read the file's {defined} faces as {got_faces}{solid}: it split faces the file "
             "holds whole, which can lose a face's area (its holes taken for faces of their own); check the shape "
             "read")
 
