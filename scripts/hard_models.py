@@ -560,7 +560,6 @@ def grazing_sphere() -> object:
     return (body - bd.Cylinder(4, 60, rotation=(90, 0, 0)).moved(bd.Location((0, 0, 15.999)))).wrapped
 
 
-
 def perforated_tube() -> object:
     """A tube of radii 20 and 18, 100 long, with 96 radial holes of 2 mm in 8 staggered rows: two cylinder
     faces with 92 and 93 holes."""
@@ -573,18 +572,11 @@ def perforated_tube() -> object:
 
 
 def golf_ball() -> object:
-    """A ball of radius 21.35 with 150 spherical dimples 0.5 deep on a Fibonacci lattice: one sphere face
-    with 150 holes (each cutting sphere's axis radial, so its seam stays clear of the dimple's rim)."""
-    import build123d as bd
+    """A ball of radius 21.35 with 150 spherical dimples 0.5 deep: one sphere face with 150 holes
+    (``build_fixtures.dimpled_ball``, whose 22-dimple ball is the fixture OCCT's STEP reader misreads)."""
+    from build_fixtures import dimpled_ball
 
-    count, radius = 150, 21.35
-    golden = math.pi * (3 - math.sqrt(5))
-    cuts = []
-    for i in range(count):
-        z = 1 - 2 * (i + 0.5) / count
-        at = bd.Vector(math.sqrt(1 - z * z) * math.cos(golden * i), math.sqrt(1 - z * z) * math.sin(golden * i), z)
-        cuts.append(bd.Solid.make_sphere(3.0, plane=bd.Plane(origin=at * (radius + 2.5), z_dir=at)))
-    return (bd.Sphere(radius) - cuts).wrapped
+    return dimpled_ball(150).wrapped
 
 
 def write_golf_ball(path: Path) -> None:
@@ -679,6 +671,7 @@ def vase_window() -> object:
         with bd.Locations((0, 0, 30)):
             bd.Box(40, 10, 14, align=(bd.Align.MIN, bd.Align.CENTER, bd.Align.CENTER), mode=bd.Mode.SUBTRACT)
     return part.part.wrapped
+
 
 def key_blade() -> object:
     """A key blade 40 x 10 x 2.5 mm as an Alias export: its top one B-spline curve through square notches
