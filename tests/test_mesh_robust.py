@@ -106,6 +106,34 @@ def test_a_face_that_hung_once_gets_a_shorter_bound_on_its_later_attempts():
     assert retry_share("batch 2 3", skip) == retry_share("refine 2", skip) == 1.0
 
 
+def test_a_hang_bars_the_strategies_the_face_has_not_tried_on_the_same_or_finer_sizes():
+    """What a hang bars follows the face's own order, not the list's: a curved face with many holes tries
+    Delaunay first, and its hang bars Frontal-Delaunay and MeshAdapt at the same sizes; what the face
+    tried already keeps the reason it failed with."""
+    from cadedge.mesh.isolate import _bar, _Run
+    from cadedge.mesh.strategies import HOLED_ORDER
+
+    names = [s.name for s in STRATEGIES]
+    fd, ma, dl, finer = (names.index(n) for n in ("Frontal-Delaunay", "MeshAdapt", "Delaunay",
+                                                  "Frontal-Delaunay, finer sizes"))
+    assert HOLED_ORDER[0] == dl
+    hung = _Run(result=None, status="hung", last=f"face 7 {dl}", detail="hung: no result within 60 s")
+    skip: dict[int, dict[int, str]] = {}
+    _bar(skip, 7, dl, hung)
+    assert skip[7][dl] == hung.detail
+    assert skip[7][fd] == skip[7][ma] == "not tried: Delaunay hung on the same sizes"
+    assert skip[7][finer] == "not tried: Delaunay hung; finer sizes take longer"
+    assert names.index("MeshAdapt, coarser sizes") not in skip[7]  # coarser sizes are still tried
+
+    skip = {7: {fd: "failed: 3 triangles folded"}}  # tried first (learned from the child's progress)
+    _bar(skip, 7, ma, dataclasses.replace(hung, last=f"face 7 {ma}"))
+    assert skip[7][fd] == "failed: 3 triangles folded" and skip[7][dl].startswith("not tried: MeshAdapt hung")
+    crashed = dataclasses.replace(hung, status="crashed", detail="gmsh crashed (SIGSEGV)")
+    skip = {}
+    _bar(skip, 7, fd, crashed)
+    assert skip == {7: {fd: "gmsh crashed (SIGSEGV)"}}  # a crash bars that attempt only
+
+
 def test_a_crash_outside_the_faces_fails_the_run_not_the_caller(cylinder, tmp_path):
     out = tmp_path / "c.msh"
     result = mesh_shape(cylinder, output=out, hooks={"before_generate": ["mesh_faults:crash_before_meshing"]})

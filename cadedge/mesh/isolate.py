@@ -395,17 +395,21 @@ def _supervise(job: MeshJob, tmp: str, output: Path | None, limits: _Limits,
 
 def _bar(skip: dict[int, dict[int, str]], face: int, k: int, run: _Run) -> None:
     """Record in ``skip`` that strategy ``k`` of ``face`` hung or crashed (``run``); after a hang, also the
-    later strategies on the same sizes (the other algorithms tend to hang on them too) and on finer ones
-    (they take longer still)."""
+    other strategies on the same sizes (the other algorithms tend to hang on them too) and on finer ones
+    (they take longer still) that the face has not tried yet. Those it tried are in ``skip`` already
+    (:func:`_learn`), so what is barred follows the face's own order (:func:`~.strategies.face_order`):
+    a curved face with many holes tries Delaunay first, and a hang there bars Frontal-Delaunay too."""
     barred = skip.setdefault(face, {})
     barred[k] = run.detail
     if run.status == "hung":
         kind = STRATEGIES[k].sizes
-        same = [j for j, s in enumerate(STRATEGIES) if j > k and s.sizes == kind]
-        barred.update({j: f"not tried: {STRATEGIES[k].name} hung on the same sizes" for j in same})
-        finer = [j for j, s in enumerate(STRATEGIES)  # below the base sizes and the hung ones
-                 if j > k and s.size_factor < min(1.0, STRATEGIES[k].size_factor)]
-        barred.update({j: f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer" for j in finer})
+        for j, s in enumerate(STRATEGIES):
+            if j == k:
+                continue
+            if s.sizes == kind:
+                barred.setdefault(j, f"not tried: {STRATEGIES[k].name} hung on the same sizes")
+            elif s.size_factor < min(1.0, STRATEGIES[k].size_factor):  # below the base sizes and the hung ones
+                barred.setdefault(j, f"not tried: {STRATEGIES[k].name} hung; finer sizes take longer")
 
 
 def _deliver_or_fail(path: str, job: MeshJob, known_ok: dict[int, int], reason: str, events: list[str],
