@@ -129,6 +129,45 @@ def test_grids_a_repeated_part_refined_differently_are_made_the_same(brackets):
     assert all(a is b for a, b in zip(same.edges, short.edges) if a.id not in edges)
 
 
+def test_the_copies_are_set_aside_while_the_grids_are_fitted_and_get_the_same_grids(brackets, monkeypatch):
+    """The grids' fits to the faces fit the first bracket only: faces 15-42 and their edges are set aside
+    (the edges bound no face while the passes run) and get the first bracket's fitted grids, moved. The
+    grids gmsh is given are the ones fitting every placement gave, edge for edge."""
+    import cadedge.mesh as M
+    from cadedge.mesh.instances import SetAside, set_aside
+
+    grid = cadedge.refine_shape(brackets, ald=1e-2, max_growth=2.0)
+    faces, edges = face_placements(brackets), edge_placements(brackets)
+    aside = set_aside(grid, faces, edges)
+    assert aside.faces == {f: (f - 1) % 14 + 1 for f in range(15, 43)} and set(aside.edges) == set(edges)
+    apart = aside.apart(grid)
+    assert {f for e in apart.edges for f in e.faces} == set(range(1, 15))
+    assert all(not e.faces for e in apart.edges if e.id in edges) and aside.hide(np.ones(42)).sum() == 14
+    back = aside.back(apart)
+    assert [e.faces for e in back.edges] == [e.faces for e in grid.edges]
+
+    class Imposed(Exception):
+        pass
+
+    def imposed(whole: bool) -> list:
+        def stop(g, *args, **kwargs):
+            raise Imposed(g)
+
+        monkeypatch.setattr(M, "_run_gmsh", stop)
+        if whole:  # nothing set aside: every placement fitted, then unify
+            found = M._set_aside
+            monkeypatch.setattr(M, "_set_aside", lambda g: SetAside({}, {}, {}, found(g).placements))
+        with pytest.raises(Imposed) as got:
+            mesh_shape(grid, ald=1e-2)
+        return got.value.args[0].edges
+
+    once, every = imposed(False), imposed(True)
+    assert sum(len(e.points) for e in once) > sum(len(e.points) for e in grid.edges)  # fitted
+    for a, b in zip(once, every):
+        assert a.faces == b.faces and len(a.points) == len(b.points), a.id
+        assert np.allclose(a.points, b.points, atol=1e-9), a.id
+
+
 def test_a_placement_refined_to_a_target_of_its_own_keeps_its_grids(brackets):
     """``ald_for`` on one placement's face (20, a copy of face 6): its edges keep their finer grids, so the
     face is no copy and is meshed on its own; the other placement of face 6 (34) is still a copy."""

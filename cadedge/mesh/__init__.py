@@ -36,6 +36,7 @@ from ..shapegrid import ShapeGrid
 
 if TYPE_CHECKING:  # gmsh, trimesh and scipy load only when a mesh is made (``cadedge --help`` stays fast)
     from .check import MeshCheck
+    from .instances import SetAside
     from .jobclock import JobClock
     from .outcomes import FaceFailure
     from .sizes import SizeField
@@ -191,8 +192,9 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         surface_ald = float(grid.options.get("ald") or ald) if isinstance(source, ShapeGrid) else ald
     say("area target: measuring the B-rep faces and fitting their boundaries")
     refined = grid
+    aside = _set_aside(grid) if mode == "nodes" else None  # an assembly's copies: fitted as their firsts
     grid, fidelity = prepare(grid, surface_ald,  # faces' area target: boundary fit, curvature sizes
-                             fit=clock.allows("the boundary fit for the area target"))
+                             fit=clock.allows("the boundary fit for the area target"), aside=aside)
     hooks = {stage: HOOKS.get(stage, []) + (hooks or {}).get(stage, []) for stage in {*HOOKS, *(hooks or {})}}
     if mode == "sizes":  # failed faces get their curves meshed at other sizes before the surface target
         hooks["after_generate"] = ["cadedge.mesh.sizes:retry_failed_faces"] + hooks.get("after_generate", [])
@@ -204,9 +206,10 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
         say("fitting the edge grids to the face sizes")
         grid, max_size, fit_notes = fit_node_grids(grid, refined, fidelity, surface_ald, growth=growth,
                                                    make_field=make_field, cap=max_size or max_length,
-                                                   clock=clock)
+                                                   clock=clock, aside=aside)
         notes += fit_notes
-        grid = unified(grid)
+        if aside is not None:
+            grid = aside.back(grid)
     if (left_out := clock.note()) is not None:
         notes.append(left_out)
     fidelity["grid_faces"] = grid_face_ids(grid, fidelity["meshed_kinds"], surface_ald,  # the boundary's
@@ -222,15 +225,15 @@ def mesh_shape(source: Any, *, ald: float = 1e-3, output: str | os.PathLike | No
     return result
 
 
-def unified(grid: ShapeGrid) -> ShapeGrid:
-    """``grid`` with a repeated part's edges given its first instance's grids, moved
-    (:func:`cadedge.mesh.instances.unify`)."""
+def _set_aside(grid: ShapeGrid) -> SetAside | None:
+    """The copies of an assembly's repeated parts in ``grid`` (:func:`cadedge.mesh.instances.set_aside`),
+    fitted as their first faces and given their grids after; None without an OCCT shape."""
     from ..occt.instances import edge_placements, face_placements
-    from .instances import unify
+    from .instances import set_aside
 
     if grid.shape is None:
-        return grid
-    return unify(grid, face_placements(grid.shape), edge_placements(grid.shape))
+        return None
+    return set_aside(grid, face_placements(grid.shape), edge_placements(grid.shape))
 
 
 def _run_gmsh(grid: ShapeGrid, field_: SizeField, mode: str, out: Path | None, t0: float, clock: JobClock, *,

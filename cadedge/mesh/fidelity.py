@@ -94,18 +94,22 @@ def without_degenerate(grid, areas: np.ndarray) -> np.ndarray:
     return np.where(np.abs(areas) < DEGENERATE_AREA * perimeter ** 2, 0.0, areas)
 
 
-def prepare(grid, surface_ald: float, *, fit: bool = True) -> tuple[object, dict]:
+def prepare(grid, surface_ald: float, *, fit: bool = True, aside=None) -> tuple[object, dict]:
     """Everything the surface target needs before meshing, in the caller's process (OCCT): the B-rep face
     areas (:func:`without_degenerate`) and surface types, the boundary-fitted grid
     (:func:`cadedge.mesh.boundary_fit.fit_boundaries`; with ``fit`` False the grid as it is, no credits:
-    out of time, see :mod:`cadedge.mesh.jobclock`) and the job settings."""
+    out of time, see :mod:`cadedge.mesh.jobclock`) and the job settings. ``aside``
+    (:class:`~cadedge.mesh.instances.SetAside`): an assembly's copies, left out of the fit (the grid
+    returned is ``aside.apart``; their areas and types are measured as any face's)."""
     from .boundary_fit import fit_boundaries
 
     areas = without_degenerate(grid, brep_face_areas(grid.shape))
     kinds = surface_types(grid.shape)
     meshed_as = meshed_kinds(grid.shape, kinds)
-    fitted, credits = (fit_boundaries(grid, surface_ald, brep_areas=areas, kinds=meshed_as) if fit
-                       else (grid, {}))
+    if aside is not None:
+        grid = aside.apart(grid)
+    fitted, credits = (fit_boundaries(grid, surface_ald, brep_areas=areas if aside is None else aside.hide(areas),
+                                      kinds=meshed_as) if fit else (grid, {}))
     opts = settings(surface_ald, areas, meshed_as)
     opts["curved_credits"] = credits  # the later boundary fits keep the curved faces' cancellation
     opts["surface_types"] = kinds  # the report names OCCT's types

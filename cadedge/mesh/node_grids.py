@@ -24,6 +24,7 @@ from ..shapegrid import ShapeGrid
 from .apex import grade_to_apexes
 from .boundary_fit import fit_curved, fit_grids, fit_planes, plane_room
 from .grading import grade_faces
+from .instances import SetAside
 from .jobclock import JobClock
 from .proximity import fit_to_sizes
 from .shards import faces_text
@@ -34,16 +35,20 @@ from .widths import fit_to_widths
 
 def fit_node_grids(grid: ShapeGrid, refined: ShapeGrid, fidelity: dict, surface_ald: float, *, growth: float,
                    make_field: Callable[[ShapeGrid], object], cap: float | None,
-                   clock: JobClock) -> tuple[ShapeGrid, float, list[str]]:
+                   clock: JobClock, aside: SetAside | None = None) -> tuple[ShapeGrid, float, list[str]]:
     """``grid`` (the boundary-fitted grid of :func:`cadedge.mesh.fidelity.prepare`, whose ``fidelity``
     settings it updates) with its segments fitted to the face sizes, for imposing as boundary nodes:
     split near small features, across thin faces, graded face by face (``growth``) and into narrow
     corners and cone tips, the planar, credited curved and gridded faces' polygons fitted again to the
     area target ``surface_ald``, then the narrow corners' tips matched again (module doc). ``refined`` is
     the grid as the edges were refined (the points a corner's tips keep). Each pass runs only while
-    ``clock`` allows it. Returns the grid, the size cap (``cap``, or the size field's largest size before
-    the thin faces' splits: they must not shrink it) and notes for the user."""
+    ``clock`` allows it. ``aside``: an assembly's copies, left out as by
+    :func:`~cadedge.mesh.fidelity.prepare` (``grid`` is ``aside.apart`` already). Returns the grid, the
+    size cap (``cap``, or the size field's largest size before the thin faces' splits: they must not
+    shrink it) and notes for the user."""
     notes = []
+    if aside is not None:  # the proximity split's size field feels the copies as fitted
+        grid = aside.follow(grid)
     try:
         if clock.allows("the splits near small features"):
             grid = fit_to_sizes(grid, make_field)
@@ -51,6 +56,8 @@ def fit_node_grids(grid: ShapeGrid, refined: ShapeGrid, fidelity: dict, surface_
         notes.append(f"long boundary segments near small features were not split: OCCT failed ({exc})")
     cap = cap or make_field(grid).max_size
     areas, kinds, credits = fidelity["brep_areas"], fidelity["meshed_kinds"], fidelity["curved_credits"]
+    if aside is not None:
+        areas, refined = aside.hide(areas), aside.apart(refined)
     if clock.allows("the thin faces' splits"):
         grid = fit_to_widths(grid, keep=refined)  # segments of thin faces no longer than the face is wide
     if clock.allows("the face-wise grading"):
@@ -58,7 +65,8 @@ def fit_node_grids(grid: ShapeGrid, refined: ShapeGrid, fidelity: dict, surface_
     if clock.allows("the grading into narrow corners"):  # segments shrink into a face's narrow corners
         grid = grade_wedges(grid, keep=refined, areas=areas, target=surface_ald,
                             spare=lambda: plane_room(grid, surface_ald, brep_areas=areas, kinds=kinds))
-    cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1) if kind == "Cone"]
+    cones = [i for i, kind in enumerate(fidelity["surface_types"], start=1)
+             if kind == "Cone" and (aside is None or i not in aside.faces)]
     if cones and clock.allows("the grading into cone tips"):
         grid = grade_to_apexes(grid, apex_cones(grid.shape, cones))  # segments shrink into a narrow cone's tip
     if clock.allows("the planar faces' second fit"):  # the splits moved planar faces' polygons
