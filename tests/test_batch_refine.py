@@ -54,6 +54,24 @@ def test_corpus_batched_equals_per_edge(monkeypatch, path):
         _same(refine_shape(shape, ald=ald), _per_edge(monkeypatch, shape, ald=ald))
 
 
+@pytest.mark.parametrize("path", FIXTURE_FILES, ids=lambda p: p.name)
+@pytest.mark.parametrize("max_growth", [2.0, 1.2])
+def test_fixtures_batched_equals_per_edge_with_max_growth(monkeypatch, path, max_growth):
+    """With ``max_growth`` (the mesher's 2, and 1.2, under which most grids are graded) the compiled path
+    keeps the grids that grow less than it and leaves the others to the per-edge path: the same grids."""
+    shape = load_shape(path).shape
+    for ald in (1e-2, 1e-4):
+        _same(refine_shape(shape, ald=ald, max_growth=max_growth),
+              _per_edge(monkeypatch, shape, ald=ald, max_growth=max_growth))
+
+
+@pytest.mark.parametrize("path", corpus_params(CORPUS_FILES), )
+def test_corpus_batched_equals_per_edge_with_max_growth(monkeypatch, path):
+    shape = load_shape(path).shape
+    for ald in [1e-2] if path.name in LARGE else [1e-2, 1e-3]:
+        _same(refine_shape(shape, ald=ald, max_growth=2.0), _per_edge(monkeypatch, shape, ald=ald, max_growth=2.0))
+
+
 def test_local_targets_batched_equals_per_edge(monkeypatch):
     path = next(p for p in FIXTURE_FILES if p.name == "bracket.step")
     shape = load_shape(path).shape

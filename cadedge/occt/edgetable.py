@@ -331,9 +331,8 @@ class TableCurves(Mapping):
         if curve is None:
             r = self._row[eid]  # KeyError for an id with no curve
             t = self._table
-            rows = np.full(1, r, dtype=np.int64)
             curve = EdgeCurve.from_parts(self._edges[t.rows[r]], eid, t.adaptor(r), tuple(t.domain[r].tolist()),
-                                         t.kinds[r], lambda u: t.evaluate(np.broadcast_to(rows, len(u)), u))
+                                         t.kinds[r], lambda u: t.evaluate(np.full(len(u), r, dtype=np.int64), u))
             self._ready[eid] = curve
         return curve
 

@@ -98,9 +98,11 @@ def _chord_under(evaluate, u0: float, u1: float, near: np.ndarray, dist: float, 
     return np.array([lo]), p_lo
 
 
-def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | None, float | None],
+def _fix_edge(e: ShapeEdgeGrid, curves: Mapping[int, EdgeCurve], g: float, caps: tuple[float | None, float | None],
               floor: float) -> tuple[ShapeEdgeGrid, int, bool]:
-    """``e`` split until caps and growth hold: (the new grid, points inserted, all limits met).
+    """``e`` split on its curve (``curves[e.id]``, built only when a split is needed: most edges take
+    none, and the compiled path builds none) until caps and growth hold: (the new grid, points
+    inserted, all limits met).
 
     No piece shorter than ``floor`` is made, which bounds the work; for ``g < sqrt(2)`` that can
     leave a limit unmet.
@@ -118,7 +120,7 @@ def _fix_edge(e: ShapeEdgeGrid, curve: EdgeCurve, g: float, caps: tuple[float | 
         dist = 0.5 * seg[j] if halves[j] else allowed[j]
         fwd = bool(short_at_start[j])
         near = points[j] if fwd else points[j + 1]
-        u_new, p_new = _chord_under(curve.evaluate, params[j], params[j + 1], near, dist, from_start=fwd)
+        u_new, p_new = _chord_under(curves[e.id].evaluate, params[j], params[j + 1], near, dist, from_start=fwd)
         evaluations += PLACE_SAMPLES * PLACE_ROUNDS
         if np.linalg.norm(p_new[0] - near) > STUCK * seg[j]:
             break  # the segment's end lies off its curve by about its length: no split shortens it
@@ -265,7 +267,7 @@ def _split_ends(edges: list[ShapeEdgeGrid], curves: Mapping[int, EdgeCurve], g: 
             if settled.get(k) == ends:  # the same edge under the same caps takes no split again (the
                 continue  # tetrakaidecahedron lattice's refinement: 71 -> 69 s, the splits being most of it)
             floor = max(lowest, min([float(e.segment_lengths.min())] + [c / g for c in ends if c is not None]) / g)
-            edges[k], inserted, met[k] = _fix_edge(e, curves[e.id], g, ends, floor)
+            edges[k], inserted, met[k] = _fix_edge(e, curves, g, ends, floor)
             changed = changed or inserted > 0
             if inserted:
                 settled.pop(k, None)
