@@ -66,6 +66,38 @@ def test_a_deflection_occt_refuses_gives_no_domain_area():
     assert domain_area(face, 0.01) == pytest.approx(4 * math.pi, rel=1e-6)
 
 
+def test_the_area_check_stops_at_its_node_bound(monkeypatch):
+    """A check triangulation over CHECK_NODES nodes is not integrated, and a level whose last one had
+    over a third of them is not meshed: a revolved spline of ten sine waves took 141 s over its four
+    levels, and its shell's offset face 92 s on the first, before anything was meshed."""
+    from cadedge.occt import areas
+
+    face = wavy_offset_face()
+    truth = rectangle_area(face)
+    deflection = areas.CHECK_DEFLECTION * math.sqrt(truth)
+    value, nodes = areas._domain_area(face, deflection)
+    assert value == pytest.approx(truth, rel=1e-7) and nodes > 30
+    meshed: list[int] = []
+    original = areas._domain_area
+
+    def counting(f, d):
+        got = original(f, d)
+        meshed.append(got[1])
+        return got
+
+    monkeypatch.setattr(areas, "_domain_area", counting)
+    monkeypatch.setattr(areas, "CHECK_NODES", nodes - 1)
+    assert areas.domain_area(face, deflection) is None
+    assert areas.settled_domain_area(face, deflection, (0.0,)) is None and len(meshed) == 2
+    meshed.clear()
+    monkeypatch.setattr(areas, "CHECK_NODES", 2 * nodes)  # the first level only: the next would be over
+    assert areas.settled_domain_area(face, deflection, (0.0,)) is None and meshed == [nodes]
+    meshed.clear()
+    monkeypatch.setattr(areas, "CHECK_NODES", 100 * nodes)  # levels until two agree
+    assert areas.settled_domain_area(face, deflection, (0.0,)) == pytest.approx(truth, rel=1e-6)
+    assert len(meshed) == 2
+
+
 def test_an_offset_face_gets_its_integrated_area():
     """OCCT's adaptive integration gains 3.8e-4 on this face (1641.30 for 1640.68); the area returned
     is the integral to 1e-7."""
