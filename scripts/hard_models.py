@@ -29,7 +29,11 @@ blend of three fillets of unequal radii, a conical spring, a plate with 240 cham
 grazed by a hole. An eleventh: curved faces with many holes (a ball with 150 dimples, written as BREP since
 OCCT's STEP reader misreads it, and a tube with 96 holes), a torus elbow with a branch, a square-to-circle
 loft, an oblique extrusion, a B-spline face whose parameter speed varies 100 times and a shelled vase
-with a window.
+with a window. A twelfth: a tapered pipe thread, a torus knot piped as one face, a revolved sine profile
+(solid, and shelled: its inner face an offset folding on itself), two cylinders crossing at 8 degrees,
+a crowned hex nut, a block with every edge filleted 0.05, a plate with 0.1 mm ribs, a spherical cap with
+36 slots, four fillets meeting at a pyramid's apex, a diamond knurl, a bent sheet with reliefs, a
+bevel gear whose teeth meet the blank at cusps, and a shelled multi-section sweep.
 
     python scripts/hard_models.py OUTDIR            # writes OUTDIR/<name>.step (.brep, .igs) for every model
 
@@ -858,6 +862,199 @@ def write_pmi_step(path: Path) -> None:
         raise RuntimeError(f"XDE could not write {path}")
 
 
+def tapered_thread() -> object:
+    """NPT-like tapered pipe thread: a triangle swept along a conical helix (taper 1.79 deg), fused to a cone core."""
+    import build123d as bd
+
+    pitch, length, r0 = 1.8, 12.0, 8.0
+    cone_angle = 1.79
+    helix = bd.Helix(pitch=pitch, height=length, radius=r0, cone_angle=cone_angle)
+    d = 1.0
+    prof = bd.Plane.XZ * bd.Polygon((r0 - 0.05, -0.4 * pitch), (r0 + d, 0), (r0 - 0.05, 0.4 * pitch), align=None)
+    thread = bd.sweep(prof, path=helix, is_frenet=True)
+    r_top = r0 + length * math.tan(math.radians(cone_angle))
+    core = bd.Solid.make_cone(r0 + 0.02 - 0.1 * math.tan(math.radians(cone_angle)), r_top + 0.02, length + 2,
+                              bd.Plane.XY.offset(-1))
+    body = core.fuse(thread)
+    bore = bd.Cylinder(5, 40)
+    return (body - bore).wrapped
+
+
+def torus_knot() -> object:
+    """A (3,2) torus knot (R=12, r=5) as a 200-point periodic spline; a 1.5 mm circle piped along it
+    (BRepOffsetAPI_MakePipe on the closed path: one closed B-spline face, exported as a closed shell)."""
+    import build123d as bd
+
+    from OCP.BRepOffsetAPI import BRepOffsetAPI_MakePipe
+    pts = []
+    for i in range(200):
+        t = 2 * math.pi * i / 200
+        rr = 12 + 5 * math.cos(3 * t)
+        pts.append((rr * math.cos(2 * t), rr * math.sin(2 * t), -5 * math.sin(3 * t)))
+    path = bd.Wire([bd.Spline(*pts, periodic=True)])
+    sec = (bd.Plane(origin=path @ 0, z_dir=path % 0) * bd.Circle(1.5)).wire()
+    mp = BRepOffsetAPI_MakePipe(path.wrapped, sec.wrapped)
+    mp.Build()
+    return mp.Shape()
+
+
+def sine_revolve() -> object:
+    """A sine profile r = 10 + 2 sin(z*2pi/6) over 60 mm (10 waves, 20 inflections), revolved a full turn, shelled 0.8."""
+    pts = [(10 + 2 * math.sin(2 * math.pi * z / 6.0), 0, z) for z in [i * 0.25 for i in range(241)]]
+    prof = (cq.Workplane("XZ").moveTo(0, 0).lineTo(pts[0][0], 0).spline([(x, z) for x, _, z in pts[1:]], includeCurrent=True)
+            .lineTo(0, 60).close())
+    solid = prof.revolve(360, (0, 0, 0), (0, 1, 0))
+    return solid.faces(">Z").shell(-0.8).val().wrapped
+
+
+def sine_revolve_solid() -> object:
+    """sine_revolve without the shell: the same revolved sine profile as a solid (no offset surface)."""
+    pts = [(10 + 2 * math.sin(2 * math.pi * z / 6.0), 0, z) for z in [i * 0.25 for i in range(241)]]
+    prof = (cq.Workplane("XZ").moveTo(0, 0).lineTo(pts[0][0], 0).spline([(x, z) for x, _, z in pts[1:]], includeCurrent=True)
+            .lineTo(0, 60).close())
+    return prof.revolve(360, (0, 0, 0), (0, 1, 0)).val().wrapped
+
+
+def skew_cylinders() -> object:
+    """Two cylinders, radii 10 and 9.9, axes crossing at 8 degrees through one point, fused."""
+    a = cq.Solid.makeCylinder(10, 120, cq.Vector(0, 0, -60), cq.Vector(0, 0, 1))
+    ang = math.radians(8)
+    d = cq.Vector(math.sin(ang), 0, math.cos(ang))
+    b = cq.Solid.makeCylinder(9.9, 120, cq.Vector(0, 0, 0) - d * 60, d)
+    return a.fuse(b).clean().wrapped
+
+
+def nut_sphere() -> object:
+    """A 24 mm hex prism 12 high, chamfered 1 mm on its vertical edges, intersected with a sphere R=14.5 (nut crowning), M12 bore with 1 mm chamfers."""
+    hexp = cq.Workplane("XY").polygon(6, 24 / math.cos(math.pi / 6)).extrude(12).translate((0, 0, -6))
+    hexp = hexp.edges("|Z").chamfer(1.0)
+    sph = cq.Workplane("XY").sphere(14.5)
+    body = hexp.intersect(sph)
+    body = body.faces(">Z").workplane().hole(12)
+    body = body.faces(">Z or <Z").edges("%CIRCLE").edges(cq.selectors.RadiusNthSelector(0)).chamfer(0.8)
+    return body.val().wrapped
+
+
+def tiny_fillets() -> object:
+    """A 100 x 60 x 20 block with a 40 x 20 x 10 pocket and 4 bosses; every edge filleted 0.05."""
+    w = cq.Workplane("XY").box(100, 60, 20)
+    w = w.faces(">Z").workplane().rect(40, 20).cutBlind(-10)
+    w = w.faces(">Z").workplane().rarray(70, 40, 2, 2).circle(4).extrude(5)
+    w = w.edges().fillet(0.05)
+    return w.val().wrapped
+
+
+def thin_ribs() -> object:
+    """A 200 x 150 x 3 plate with 9 ribs 0.1 mm thick and 8 mm high across it and 1 along it (crossing)."""
+    w = cq.Workplane("XY").box(200, 150, 3).translate((0, 0, 1.5))
+    for i in range(9):
+        x = -80 + 20 * i
+        w = w.union(cq.Workplane("XY").box(0.1, 140, 8).translate((x, 0, 3 + 4)))
+    w = w.union(cq.Workplane("XY").box(190, 0.1, 8).translate((0, 0, 3 + 4)))
+    return w.val().wrapped
+
+
+def cap_slots() -> object:
+    """A spherical cap (R=30, 2 mm thick, 40 deg half-angle) with 3 rings of radial slots (6, 12, 18), rounded ends, cut straight down."""
+    outer = cq.Workplane("XY").sphere(30)
+    inner = cq.Workplane("XY").sphere(28)
+    shell = outer.cut(inner)
+    h = 30 * math.cos(math.radians(40))
+    cap = shell.intersect(cq.Workplane("XY").box(80, 80, 40).translate((0, 0, h + 20)))
+    for ring, (n, rad) in enumerate([(6, 6.0), (12, 11.5), (18, 16.5)]):
+        for k in range(n):
+            a = 360.0 * k / n + 7.0 * ring
+            slot = (cq.Workplane("XY").workplane(offset=h - 10).center(rad, 0).slot2D(3.0, 1.0, 0)
+                    .extrude(40).rotate((0, 0, 0), (0, 0, 1), a))
+            cap = cap.cut(slot)
+    return cap.val().wrapped
+
+
+def four_fillet_vertex() -> object:
+    """A square pyramid (30 mm base, 20 high, to a point) on a 30 x 30 x 10 block, its 4 slanted edges
+    filleted 3 mm: four fillets running into the apex vertex."""
+    V = cq.Vector
+    base = [V(-15, -15, 10), V(15, -15, 10), V(15, 15, 10), V(-15, 15, 10)]
+    apex = V(0, 0, 30)
+    faces = [cq.Face.makeFromWires(cq.Wire.makePolygon([base[i], base[(i + 1) % 4], apex], close=True)) for i in range(4)]
+    faces.append(cq.Face.makeFromWires(cq.Wire.makePolygon(base[::-1], close=True)))
+    pyr = cq.Solid.makeSolid(cq.Shell.makeShell(faces))
+    body = cq.Workplane("XY").box(30, 30, 10).translate((0, 0, 5)).union(cq.Workplane().add(pyr)).clean()
+    body = body.edges(cq.selectors.BoxSelector((-16, -16, 10.5), (16, 16, 30.5))).fillet(3.0)
+    return body.val().wrapped
+
+
+def diamond_knurl() -> object:
+    """A cylinder R=10, 20 long, with 10 left- and 10 right-hand helical V-grooves (pitch 60, 0.6 deep): a diamond knurl."""
+    import build123d as bd
+
+    body = bd.Cylinder(10, 20, align=(bd.Align.CENTER, bd.Align.CENTER, bd.Align.MIN))
+    cutters = []
+    for hand in (False, True):
+        helix = bd.Helix(pitch=60, height=30, radius=10, lefthand=hand).moved(bd.Location((0, 0, -5)))
+        p0 = helix @ 0
+        t0 = helix % 0
+        pl = bd.Plane(origin=p0, x_dir=(p0.X, p0.Y, 0), z_dir=t0)
+        prof = pl * bd.Polygon((-0.6, 0), (0.8, -0.7), (0.8, 0.7), align=None)
+        g = bd.sweep(prof, path=helix, is_frenet=True)
+        for k in range(10):
+            cutters.append(g.rotate(bd.Axis.Z, 36 * k))
+    for c in cutters:
+        body = body - c
+    return body.wrapped
+
+
+def sheet_bend() -> object:
+    """A 1 mm sheet bent 90 deg (inner radius 1) between a 40 and a 30 mm flange, 50 wide, with two
+    rectangular bend reliefs 2 wide at the bend's ends and a 10 mm slot across the bend."""
+    t, r = 1.0, 1.0
+    prof = (cq.Workplane("XZ").moveTo(-40, 0).lineTo(0, 0)
+            .radiusArc((r + t, r + t), -(r + t)).lineTo(r + t, 30).lineTo(r, 30).lineTo(r, r)
+            .radiusArc((0, t), r).lineTo(-40, t).close())
+    sheet = prof.extrude(-50)
+    for y in (1, 47):
+        sheet = sheet.cut(cq.Workplane("XY").box(4, 2, 4).translate((0, y + 1, 1.5)))
+    sheet = sheet.cut(cq.Workplane("XY").box(6, 10, 8, centered=(False, True, False)).translate((-2, 25, -1)))
+    return sheet.val().wrapped
+
+
+def bevel_gear() -> object:
+    """A 20-tooth straight bevel gear: trapezoid teeth lofted toward the cone apex (outer module 2.5,
+    face width 12) on a conical frustum, with a 10 mm bore."""
+    n, r_out, depth = 20, 25.0, 2.5
+    apex_h = 25.0  # 45-degree pitch cone
+    k = 1 - 12 / (r_out * math.sqrt(2))  # inner scale
+    def tooth(scale):
+        c = 2 * math.pi * r_out / n * scale
+        pts = [(-0.3 * c, 0), (-0.12 * c, depth * scale * 1.8), (0.12 * c, depth * scale * 1.8), (0.3 * c, 0)]
+        # tooth in a plane normal to the cone generatrix at the pitch point
+        z = apex_h * (1 - scale)
+        rr = r_out * scale
+        pl = cq.Plane(origin=(rr, 0, z), xDir=(0, -1, 0), normal=(-1, 0, 1))
+        return cq.Wire.makePolygon([pl.toWorldCoords((x, y - 0.5 * depth * scale)) for x, y in pts], close=True)
+    t = cq.Solid.makeLoft([tooth(1.0), tooth(k)], True)
+    blank = cq.Solid.makeCone(r_out, r_out * k, apex_h * (1 - k), cq.Vector(0, 0, 0), cq.Vector(0, 0, 1))
+    body = cq.Workplane().add(blank)
+    for i in range(n):
+        body = body.union(cq.Workplane().add(t.rotate(cq.Vector(), cq.Vector(0, 0, 1), 360 * i / n)))
+    body = body.cut(cq.Workplane("XY").circle(5).extrude(100).translate((0, 0, -50)))
+    return body.val().wrapped
+
+
+def swept_shell() -> object:
+    """A section changing from a circle R=8 via an ellipse 10x4 to a circle R=3 swept along a 3-D spline
+    (multi-section sweep), shelled 0.6 mm open at both ends."""
+    import build123d as bd
+
+    path = bd.Spline((0, 0, 0), (20, 10, 15), (40, -5, 30), (60, 0, 35))
+    secs = []
+    for u, mk in ((0, lambda: bd.Circle(8)), (0.5, lambda: bd.Ellipse(10, 4)), (1, lambda: bd.Circle(3))):
+        secs.append((bd.Plane(origin=path @ u, z_dir=path % u) * mk()).wire())
+    solid = cq.Solid.sweep_multi([cq.Wire(w.wrapped) for w in secs], cq.Wire.assembleEdges([cq.Edge(path.wrapped)]), makeSolid=True)
+    s = cq.Workplane().add(solid)
+    return s.faces("<X or >X").shell(-0.6).val().wrapped
+
+
 MODELS: dict[str, Callable[[], object]] = {
     "spring": spring, "flat_coil": flat_coil, "revolved_spline": revolved_spline, "lofted_spline": lofted_spline,
     "twisted_blade": twisted_blade, "hooked_wing": hooked_wing, "razor_wing": razor_wing,
@@ -882,6 +1079,11 @@ MODELS: dict[str, Callable[[], object]] = {
     "grazing_sphere": grazing_sphere,
     "perforated_tube": perforated_tube, "elbow_branch": elbow_branch, "transition_duct": transition_duct,
     "oblique_extrusion": oblique_extrusion, "skewed_patch": skewed_patch, "vase_window": vase_window,
+    "tapered_thread": tapered_thread, "torus_knot": torus_knot, "sine_revolve": sine_revolve,
+    "sine_revolve_solid": sine_revolve_solid, "skew_cylinders": skew_cylinders, "nut_sphere": nut_sphere,
+    "tiny_fillets": tiny_fillets, "thin_ribs": thin_ribs, "cap_slots": cap_slots,
+    "four_fillet_vertex": four_fillet_vertex, "diamond_knurl": diamond_knurl, "sheet_bend": sheet_bend,
+    "bevel_gear": bevel_gear, "swept_shell": swept_shell,
 }
 #: Models written through XDE rather than cadquery's shape exporter.
 XDE_WRITERS: dict[str, Callable[[Path], None]] = {"pmi_ap242": write_pmi_step, "xde_assembly": write_xde_assembly}
