@@ -64,13 +64,13 @@ CHECK_ANGLE = 0.2
 #: the deflection three times coarser (down to the :data:`CHECK_LEVELS`-th).
 CHECK_AGREE = 2e-4
 CHECK_LEVELS = 4
-#: The most nodes a check triangulation may have; a level is not meshed where a third of its
-#: deflection's last level had over a third of this (its nodes grow about threefold a level). On the
-#: corpus, the fixtures and the Koch leader arm a check stays under 6 000; a revolved spline of 10 sine waves (radius of
-#: curvature 0.46) took 14 139, 60 316, 106 357 and 363 221 nodes over its four levels, 141 s in all
-#: (BRepMesh 68 s on the last), and the 0.8 mm shell's offset of it, whose curvature radius goes below
-#: its offset (a surface folding on itself), 215 266 at the first level: its area was measured for
-#: minutes before anything was meshed.
+#: The most nodes a check triangulation may have; a level is not meshed where the level before it had
+#: over a third of this (the nodes about triple a level). On the corpus, the fixtures and the Koch leader
+#: arm a check stays under 6 000 nodes. A revolved spline of 10 sine waves (radius of curvature 0.46) took
+#: 14 139, 60 316, 106 357 and 363 221 nodes over its four levels, 141 s in all (BRepMesh 68 s on the
+#: last), and the 0.8 mm shell's offset of it, whose curvature radius goes below its offset (a surface
+#: folding on itself), 215 266 at the first level: its areas were measured for minutes before anything
+#: was meshed.
 CHECK_NODES = 100_000
 #: The 6-point degree-4 rule on a triangle (Dunavant): barycentric points and weights summing to 1.
 _A1, _B1, _A2, _B2 = 0.445948490915965, 0.108103018168070, 0.091576213509771, 0.816847572980459
