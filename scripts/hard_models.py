@@ -898,21 +898,23 @@ def torus_knot() -> object:
     return mp.Shape()
 
 
-def sine_revolve() -> object:
-    """A sine profile r = 10 + 2 sin(z*2pi/6) over 60 mm (10 waves, 20 inflections), revolved a full turn, shelled 0.8."""
-    pts = [(10 + 2 * math.sin(2 * math.pi * z / 6.0), 0, z) for z in [i * 0.25 for i in range(241)]]
-    prof = (cq.Workplane("XZ").moveTo(0, 0).lineTo(pts[0][0], 0).spline([(x, z) for x, _, z in pts[1:]], includeCurrent=True)
+def _sine_revolved() -> cq.Workplane:
+    """A profile r = 10 + 2 sin(z 2 pi / 6) over 60 mm (10 waves, 20 inflections) revolved a full turn."""
+    pts = [(10 + 2 * math.sin(2 * math.pi * z / 6.0), z) for z in [i * 0.25 for i in range(241)]]
+    prof = (cq.Workplane("XZ").moveTo(0, 0).lineTo(pts[0][0], 0).spline(pts[1:], includeCurrent=True)
             .lineTo(0, 60).close())
-    solid = prof.revolve(360, (0, 0, 0), (0, 1, 0))
-    return solid.faces(">Z").shell(-0.8).val().wrapped
+    return prof.revolve(360, (0, 0, 0), (0, 1, 0))
+
+
+def sine_revolve() -> object:
+    """:func:`sine_revolve_solid` shelled 0.8 mm open at the top: its inner face is an offset by 0.8 of a
+    surface whose radius of curvature goes down to 0.46, so it folds on itself."""
+    return _sine_revolved().faces(">Z").shell(-0.8).val().wrapped
 
 
 def sine_revolve_solid() -> object:
-    """sine_revolve without the shell: the same revolved sine profile as a solid (no offset surface)."""
-    pts = [(10 + 2 * math.sin(2 * math.pi * z / 6.0), 0, z) for z in [i * 0.25 for i in range(241)]]
-    prof = (cq.Workplane("XZ").moveTo(0, 0).lineTo(pts[0][0], 0).spline([(x, z) for x, _, z in pts[1:]], includeCurrent=True)
-            .lineTo(0, 60).close())
-    return prof.revolve(360, (0, 0, 0), (0, 1, 0)).val().wrapped
+    """A sine profile revolved as a solid (no offset surface): see :func:`_sine_revolved`."""
+    return _sine_revolved().val().wrapped
 
 
 def skew_cylinders() -> object:
@@ -925,7 +927,8 @@ def skew_cylinders() -> object:
 
 
 def nut_sphere() -> object:
-    """A 24 mm hex prism 12 high, chamfered 1 mm on its vertical edges, intersected with a sphere R=14.5 (nut crowning), M12 bore with 1 mm chamfers."""
+    """A 24 mm hex prism 12 high, chamfered 1 mm on its vertical edges, intersected with a sphere R=14.5
+    (nut crowning), an M12 bore with 1 mm chamfers."""
     hexp = cq.Workplane("XY").polygon(6, 24 / math.cos(math.pi / 6)).extrude(12).translate((0, 0, -6))
     hexp = hexp.edges("|Z").chamfer(1.0)
     sph = cq.Workplane("XY").sphere(14.5)
@@ -955,7 +958,8 @@ def thin_ribs() -> object:
 
 
 def cap_slots() -> object:
-    """A spherical cap (R=30, 2 mm thick, 40 deg half-angle) with 3 rings of radial slots (6, 12, 18), rounded ends, cut straight down."""
+    """A spherical cap (R=30, 2 mm thick, 40 deg half-angle) with 3 rings of radial slots (6, 12, 18),
+    rounded ends, cut straight down."""
     outer = cq.Workplane("XY").sphere(30)
     inner = cq.Workplane("XY").sphere(28)
     shell = outer.cut(inner)
@@ -976,7 +980,8 @@ def four_fillet_vertex() -> object:
     V = cq.Vector
     base = [V(-15, -15, 10), V(15, -15, 10), V(15, 15, 10), V(-15, 15, 10)]
     apex = V(0, 0, 30)
-    faces = [cq.Face.makeFromWires(cq.Wire.makePolygon([base[i], base[(i + 1) % 4], apex], close=True)) for i in range(4)]
+    faces = [cq.Face.makeFromWires(cq.Wire.makePolygon([base[i], base[(i + 1) % 4], apex], close=True))
+             for i in range(4)]
     faces.append(cq.Face.makeFromWires(cq.Wire.makePolygon(base[::-1], close=True)))
     pyr = cq.Solid.makeSolid(cq.Shell.makeShell(faces))
     body = cq.Workplane("XY").box(30, 30, 10).translate((0, 0, 5)).union(cq.Workplane().add(pyr)).clean()
@@ -985,7 +990,8 @@ def four_fillet_vertex() -> object:
 
 
 def diamond_knurl() -> object:
-    """A cylinder R=10, 20 long, with 10 left- and 10 right-hand helical V-grooves (pitch 60, 0.6 deep): a diamond knurl."""
+    """A cylinder R=10, 20 long, with 10 left- and 10 right-hand helical V-grooves (pitch 60, 0.6 deep): a
+    diamond knurl."""
     import build123d as bd
 
     body = bd.Cylinder(10, 20, align=(bd.Align.CENTER, bd.Align.CENTER, bd.Align.MIN))
@@ -1050,7 +1056,8 @@ def swept_shell() -> object:
     secs = []
     for u, mk in ((0, lambda: bd.Circle(8)), (0.5, lambda: bd.Ellipse(10, 4)), (1, lambda: bd.Circle(3))):
         secs.append((bd.Plane(origin=path @ u, z_dir=path % u) * mk()).wire())
-    solid = cq.Solid.sweep_multi([cq.Wire(w.wrapped) for w in secs], cq.Wire.assembleEdges([cq.Edge(path.wrapped)]), makeSolid=True)
+    solid = cq.Solid.sweep_multi([cq.Wire(w.wrapped) for w in secs], cq.Wire.assembleEdges([cq.Edge(path.wrapped)]),
+                                 makeSolid=True)
     s = cq.Workplane().add(solid)
     return s.faces("<X or >X").shell(-0.6).val().wrapped
 

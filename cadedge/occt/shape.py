@@ -26,8 +26,8 @@ from ..errors import CadedgeWarning, CurveEvaluationError, GeometryError, InputE
 from ..grid import polyline_length
 from ..options import refine_options
 from ..refine import refine_curve
-from ..splitting import worst_growth
 from ..shapegrid import ShapeEdgeGrid, ShapeGrid, VertexGrid, vertex_spacings
+from ..splitting import worst_growth
 from ..target import MIN_CLOSED_SEGMENTS
 from .edgecurve import EdgeCurve
 from .edgetable import EdgeTable, TableCurves, refine_table
@@ -46,8 +46,8 @@ CHUNK = 256
 #: ``1 - GROWTH_MARGIN`` is refined again by the per-edge path, which grades it. The per-edge path judges
 #: the grid before its ends are put on the vertices, the compiled one after: the margin keeps the two
 #: judgements alike unless snapping an end moves its segment's length by more than this share. The mesher
-#: refines with ``max_growth`` 2 (the Koch leader arm: 13 of 12 104 edges over it; the per-edge path for
-#: all of them took 6 s of the 10.5 that refining took, now about 2).
+#: refines with ``max_growth`` 2 (the Koch leader arm: 13 of 12 104 edges over it; reading and refining
+#: it took 9.5 s with the per-edge path for all of them, now 6.0).
 GROWTH_MARGIN = 1e-3
 
 
@@ -103,7 +103,8 @@ def _refine_edge(topo: Topology, i: int, vpoints: np.ndarray, src: str, opts: di
 
 
 def _refine_rows(table: EdgeTable, rows: slice, targets: np.ndarray, vpoints: np.ndarray, topo: Topology,
-                 tolerance: list[float], max_growth: float | None = None) -> list[tuple[ShapeEdgeGrid, str | None] | None]:
+                 tolerance: list[float],
+                 max_growth: float | None = None) -> list[tuple[ShapeEdgeGrid, str | None] | None]:
     """Grids of the table's ``rows`` in one compiled call, anchored on their vertices: per row, its grid and the
     note it adds (or None), or None where the per-edge path must refine the edge (the compiled path could not
     finish it alike, a closed edge got fewer than ``MIN_CLOSED_SEGMENTS`` segments: see refine_target, or
